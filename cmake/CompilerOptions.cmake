@@ -1,0 +1,22 @@
+# Per-target warnings (as KISS-ICP's cmake/CompilerOptions.cmake) and the sanitizer build.
+function(lasercell_set_options target)
+  target_compile_options(${target} PRIVATE -Wall -Wextra -Wpedantic)
+  if(LASERCELL_WERROR)
+    target_compile_options(${target} PRIVATE -Werror)
+  endif()
+endfunction()
+
+if(LASERCELL_SANITIZE)
+  add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  add_link_options(-fsanitize=address,undefined)
+endif()
+
+# One library per module folder: lasercell_<name>, alias lasercell::<name>.
+function(lasercell_add_library name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;PUBLIC_DEPS;PRIVATE_DEPS" ${ARGN})
+  add_library(lasercell_${name} ${ARG_SOURCES})
+  add_library(lasercell::${name} ALIAS lasercell_${name})
+  target_include_directories(lasercell_${name} PUBLIC ${PROJECT_SOURCE_DIR})
+  target_link_libraries(lasercell_${name} PUBLIC ${ARG_PUBLIC_DEPS} PRIVATE ${ARG_PRIVATE_DEPS})
+  lasercell_set_options(lasercell_${name})
+endfunction()

@@ -1,0 +1,189 @@
+#pragma once
+// The cell's frame graph (ARCHITECTURE.md): a tree of named frames (lower snake case) joined by
+//  - static edges `parent_from_child` from calibrations, each with provenance and an optional
+//    6x6 covariance, and
+//  - dynamic edges `base_from_flange` driven by a named robot's joint values (rad) through a
+//    KinematicModel.
+// Transform(to, from, joints) composes the path: it returns to_from_from, so
+// p_in_to = graph.Transform("to", "from", joints) * p_in_from.
+// Covariance convention: 6x6 over the perturbation xi = [rotation vector (rad); translation
+// (mm)] applied on the left: parent_from_child_true = Exp(xi) * parent_from_child.
+//
+// A static edge stores its pose as the cell file holds it: a unit quaternion `rotation` and a
+// `translation_mm`. The matrix is derived (StaticEdge::ParentFromChild); a matrix given by a
+// calibration is converted once (StaticEdge::SetParentFromChild). Reading a file keeps the
+// quaternion's coefficients exactly as written, so nothing is lost between file and memory.
+//
+// File (cell.yaml, see FrameGraphToYaml): format "lasercell.cell", version 1, in this order:
+//   format, version, frames (sorted), robots (sorted by name), then edges: first the static
+//   edges in insertion order (a replaced edge keeps its place; reading a file inserts them in
+//   file order), then the dynamic edges in insertion order (a file listing them interleaved is
+//   rewritten in this order). Poses are {translation_mm: [x, y, z], rotation_wxyz: [w, x, y,
+//   z]}; numbers are printed as the shortest text that reads back to the same double; the file
+//   is written atomically. Every tool updates only its own edges, hence only their lines.
+// Round trip: for any file FrameGraphToYaml wrote, FrameGraphFromYaml then FrameGraphToYaml
+//   gives the identical text, and reading that again gives the identical doubles (static
+//   edges hold the file's quaternion and translation themselves; for robots' mounting
+//   transforms see FrameGraph::read_mount_rotations_). So for a graph built in memory,
+//   write -> read -> write gives identical text, and a static edge's quaternion and
+//   translation read back bit-exactly.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/kinematics.hpp"
+#include "core/se3.hpp"
+
+namespace lasercell {
+
+/// Where a static edge came from.
+struct EdgeProvenance {
+  std::string tool;              ///< e.g. "lasercell calibrate spheres 0.1.0".
+  std::string date;              ///< ISO 8601 UTC, e.g. "2026-11-26T10:00:00Z".
+  std::string input_digest;      ///< Digest of the inputs (e.g. "sha256:..."), may be empty.
+  std::string residual_summary;  ///< One line, e.g. "rms 0.021 mm over 4 spheres".
+};
+
+/// A fixed transform between two frames, parent_from_child (p_in_parent = T * p_in_child),
+/// stored as the cell file holds it: a unit quaternion and a translation.
+struct StaticEdge {
+  std::string parent;  ///< Frame the pose maps into.
+  std::string child;   ///< Frame the pose maps from.
+  /// Rotation of parent_from_child, a unit quaternion (|q| within 1e-9 of 1). Kept exactly as
+  /// given or read, never renormalized; SetParentFromChild stores the canonical sign
+  /// (CanonicalQuaternion).
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  /// Translation of parent_from_child: the child's origin in parent coordinates, mm.
+  Eigen::Vector3d translation_mm = Eigen::Vector3d::Zero();
+  EdgeProvenance provenance;
+  std::optional<Matrix6d> covariance;  ///< Over [rotvec rad; translation mm], left perturbation.
+
+  /// parent_from_child as a matrix, built from the normalized `rotation` (as PoseFromQuaternion
+  /// does); the stored coefficients stay untouched.
+  Eigen::Isometry3d ParentFromChild() const;
+  /// Sets `rotation` and `translation_mm` from a matrix: one conversion to the canonical unit
+  /// quaternion (CanonicalQuaternion). Throws InputError, naming the edge, unless the pose is
+  /// finite with an orthonormal, right-handed rotation (|R^T R - I| < 1e-9).
+  void SetParentFromChild(const Eigen::Isometry3d& parent_from_child);
+};
+
+/// A transform driven by a robot's joints: parent = robot base, child = robot flange.
+struct DynamicEdge {
+  std::string parent;  ///< Robot base frame, e.g. "vision_base".
+  std::string child;   ///< Robot flange frame, e.g. "vision_flange".
+  std::string robot;   ///< Robot name, key into JointValues, e.g. "vision_robot".
+};
+
+/// Joint values (rad) per robot name.
+using JointValues = std::map<std::string, std::vector<double>>;
+
+/// Named frames joined by static and dynamic edges; a forest without cycles.
+class FrameGraph {
+ public:
+  FrameGraph() = default;
+  FrameGraph(const FrameGraph& other);
+  FrameGraph& operator=(const FrameGraph& other);
+  FrameGraph(FrameGraph&&) noexcept = default;
+  FrameGraph& operator=(FrameGraph&&) noexcept = default;
+
+  /// Adds a frame (no-op when present). Throws InputError for names that are not lower snake
+  /// case ([a-z][a-z0-9_]*).
+  void AddFrame(const std::string& name);
+  bool HasFrame(const std::string& name) const;
+  /// All frames in sorted order.
+  std::vector<std::string> Frames() const;
+
+  /// Adds or replaces the static edge between edge.parent and edge.child (in either direction;
+  /// a replaced edge takes the new direction and keeps its place in the file). Frames are added
+  /// when missing. The pose is stored as given (no renormalization). Throws InputError when the
+  /// edge would close a cycle, the quaternion or translation is not finite, |rotation| is off 1
+  /// by more than 1e-9, or the covariance is not finite and symmetric.
+  void SetStaticEdge(const StaticEdge& edge);
+  /// Adds or replaces the dynamic edge of `edge.robot`. The robot must be registered.
+  void SetDynamicEdge(const DynamicEdge& edge);
+  /// Registers (or replaces) the kinematic model of a robot.
+  void SetRobot(const std::string& robot, const KinematicModel& model);
+  /// Removes the edge between a and b (either direction); returns false when there was none.
+  bool RemoveEdge(const std::string& a, const std::string& b);
+
+  const std::vector<StaticEdge>& static_edges() const { return static_edges_; }
+  const std::vector<DynamicEdge>& dynamic_edges() const { return dynamic_edges_; }
+  /// The robot's model; throws InputError when unknown.
+  const KinematicModel& Robot(const std::string& robot) const;
+  /// Robot names in sorted order.
+  std::vector<std::string> Robots() const;
+
+  /// to_from_from along the unique path. Throws InputError for unknown frames, frames in
+  /// different trees ("not connected"), or a path through a dynamic edge whose robot has no
+  /// (or the wrong number of) joint values in `joints`.
+  Eigen::Isometry3d Transform(const std::string& to, const std::string& from,
+                              const JointValues& joints = {}) const;
+  /// Robots whose dynamic edges lie on the path from `from` to `to`.
+  std::vector<std::string> RobotsOnPath(const std::string& to, const std::string& from) const;
+  /// True when a path exists.
+  bool Connected(const std::string& a, const std::string& b) const;
+
+ private:
+  struct Step {
+    bool is_static;
+    std::size_t index;  // into static_edges_ or dynamic_edges_
+    bool forward;       // true: walking parent -> child (apply parent_from_child)
+  };
+  std::vector<Step> Path(const std::string& to, const std::string& from) const;
+  void CheckNoCycle(const std::string& a, const std::string& b) const;
+
+  std::vector<std::string> frames_;
+  std::vector<StaticEdge> static_edges_;
+  std::vector<DynamicEdge> dynamic_edges_;
+  std::map<std::string, std::unique_ptr<KinematicModel>> robots_;
+
+  // Robots' mounting rotations (DhChain base_from_chain, chain_from_flange) as the file they
+  // were read from holds them (first), each with the matrix the reader built from it (second).
+  // DhChain stores matrices, and matrix -> quaternion -> matrix is not exact in floating point;
+  // so while a model still holds exactly (bit for bit) such a matrix, FrameGraphToYaml writes
+  // the quaternion that was read, and read -> write reproduces the text. Matched by the matrix
+  // alone, so replacing a robot needs no bookkeeping here. (Once DhChain stores its mounts as
+  // quaternion + translation, like StaticEdge, this goes away.)
+  std::vector<std::pair<Eigen::Quaterniond, Eigen::Matrix3d>> read_mount_rotations_;
+  friend FrameGraph FrameGraphFromYaml(const std::string& text, const std::string& name);
+  friend std::string FrameGraphToYaml(const FrameGraph& graph);
+};
+
+/// Cell-file format name (the `format:` field) and current version.
+inline constexpr const char* kCellFormatName = "lasercell.cell";
+inline constexpr int kCellFormatVersion = 1;
+
+/// Serializes a frame graph as cell.yaml text: deterministic, in the order given at the top of
+/// this file; a static edge's quaternion and translation are written exactly as stored. Throws
+/// InputError for non-finite values or a robot model without a file form.
+std::string FrameGraphToYaml(const FrameGraph& graph);
+/// Parses cell.yaml text; `name` appears in error messages. Static edges keep the quaternion
+/// coefficients as written (checked, not renormalized). Throws FileError naming the file and
+/// the problem: unknown format/version, an edge naming an undeclared frame, a cycle, a
+/// non-unit quaternion (|q| off 1 by more than 1e-9), malformed numbers or fields.
+FrameGraph FrameGraphFromYaml(const std::string& text, const std::string& name);
+/// Reads cell.yaml.
+FrameGraph LoadFrameGraph(const std::string& path);
+/// Writes cell.yaml atomically.
+void SaveFrameGraph(const std::string& path, const FrameGraph& graph);
+
+/// The unit quaternion of a rotation matrix, with the canonical sign: the first nonzero of
+/// (w, x, y, z) is positive (w >= 0; x > 0 when w == 0; ...), and no coefficient is -0.
+Eigen::Quaterniond CanonicalQuaternion(const Eigen::Matrix3d& rotation);
+
+/// Pose in the file notation, one line: {translation_mm: [x, y, z], rotation_wxyz: [w, x, y, z]},
+/// with the coefficients exactly as given.
+std::string PoseToFileNotation(const Eigen::Quaterniond& rotation,
+                               const Eigen::Vector3d& translation_mm);
+/// The same for a matrix, through CanonicalQuaternion(pose.linear()).
+std::string PoseToFileNotation(const Eigen::Isometry3d& pose);
+/// Formats a double with the shortest text that reads back to the same value.
+std::string FormatDouble(double value);
+
+}  // namespace lasercell

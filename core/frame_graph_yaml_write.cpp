@@ -1,0 +1,200 @@
+// cell.yaml writing (format "lasercell.cell", version 1; the reader is frame_graph_yaml_read.cpp).
+//
+// Writing is by hand, so the text is deterministic: frames sorted, robots sorted, static edges
+// in insertion order followed by dynamic edges in insertion order; numbers by FormatDouble
+// (shortest text that reads back to the same double); strings double-quoted and escaped.
+//
+// A static edge holds the file's quaternion and translation, which are written as they are:
+// reading them back gives the same doubles, and writing again the same text. A robot's
+// mounting transforms are matrices (DhChain); they are written with the quaternion read from
+// the file while the model still holds exactly the matrix built from it (FrameGraph's
+// read_mount_rotations_), else with their canonical quaternion.
+
+#include <algorithm>
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <utility>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/frame_graph.hpp"
+#include "core/io/file_util.hpp"
+
+namespace lasercell {
+
+namespace {
+
+/// Rotations read from a file with the matrices built from them (FrameGraph's notes).
+using ReadRotations = std::vector<std::pair<Eigen::Quaterniond, Eigen::Matrix3d>>;
+
+std::string Quoted(const std::string& text) {
+  static const char* kHex = "0123456789ABCDEF";
+  std::string out = "\"";
+  for (const char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c < 0x20 || c == 0x7f) {
+      out += std::string("\\x") + kHex[c >> 4] + kHex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
+}
+
+/// Names plain when they are lower snake case (and not YAML's `null`), quoted otherwise.
+std::string NameToken(const std::string& name) {
+  const bool plain = !name.empty() && name != "null" && name[0] >= 'a' && name[0] <= 'z' &&
+                     std::all_of(name.begin(), name.end(), [](char c) {
+                       return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+                     });
+  return plain ? name : Quoted(name);
+}
+
+/// FormatDouble for the writer: refuses non-finite values, naming them.
+std::string Number(double value, const std::string& what) {
+  if (!std::isfinite(value)) {
+    throw InputError("cannot write " + what + ": the value is not finite (" +
+                     std::to_string(value) + "); fix it before saving");
+  }
+  return FormatDouble(value);
+}
+
+/// Refuses a pose with non-finite entries, naming it.
+void CheckFinitePose(bool finite, const std::string& what) {
+  if (!finite) {
+    throw InputError("cannot write " + what + ": the pose is not finite; fix it before saving");
+  }
+}
+
+/// A robot's mounting transform in the file notation: the rotation read from the file when
+/// `pose` still holds exactly (bit for bit) the matrix built from it, else the canonical one.
+std::string MountPose(const Eigen::Isometry3d& pose, const ReadRotations& read,
+                      const std::string& what) {
+  CheckFinitePose(pose.matrix().topRows<3>().allFinite(), what);
+  const Eigen::Matrix3d rotation = pose.linear();
+  for (const auto& [file_rotation, matrix] : read) {
+    if (std::memcmp(matrix.data(), rotation.data(), sizeof(double) * 9) == 0) {
+      return PoseToFileNotation(file_rotation, pose.translation());
+    }
+  }
+  return PoseToFileNotation(pose);
+}
+
+void WriteRobot(std::string& out, const std::string& name, const KinematicModel& model,
+                const ReadRotations& read) {
+  const auto* chain = dynamic_cast<const DhChain*>(&model);
+  if (chain == nullptr) {
+    throw InputError("cannot write robot '" + name + "': its kinematic model type '" +
+                     model.TypeName() + "' has no cell-file form (this lasercell writes 'dh')");
+  }
+  const std::string what = "robot '" + name + "'";
+  out += "  " + NameToken(name) + ":\n    model: dh\n";
+  out += std::string("    convention: ") +
+         (chain->convention() == DhConvention::kStandard ? "standard" : "modified") + "\n";
+  out += "    base_from_chain: " + MountPose(chain->base_from_chain(), read, what) + "\n";
+  out += "    chain_from_flange: " + MountPose(chain->chain_from_flange(), read, what) + "\n";
+  if (chain->joints().empty()) {
+    out += "    joints: []\n";
+    return;
+  }
+  out += "    joints:\n";
+  for (std::size_t i = 0; i < chain->joints().size(); ++i) {
+    const DhJoint& j = chain->joints()[i];
+    const std::string joint = what + " joint " + std::to_string(i + 1);
+    out += "      - {a_mm: " + Number(j.a_mm, joint) +
+           ", alpha_rad: " + Number(j.alpha_rad, joint) + ", d_mm: " + Number(j.d_mm, joint) +
+           ", theta_offset_rad: " + Number(j.theta_offset_rad, joint) +
+           ", joint_offset_rad: " + Number(j.joint_offset_rad, joint) + "}\n";
+  }
+}
+
+void WriteStaticEdge(std::string& out, const StaticEdge& edge) {
+  const std::string what = "static edge " + edge.parent + " <- " + edge.child;
+  CheckFinitePose(edge.rotation.coeffs().allFinite() && edge.translation_mm.allFinite(), what);
+  out += "  - parent: " + NameToken(edge.parent) + "\n    child: " + NameToken(edge.child) +
+         "\n    type: static\n    parent_from_child: " +
+         PoseToFileNotation(edge.rotation, edge.translation_mm) + "\n";
+  if (edge.covariance) {
+    out += "    covariance: [";
+    for (int r = 0; r < 6; ++r) {
+      if (r > 0) out += ",\n                 ";
+      for (int c = 0; c < 6; ++c) {
+        out += (c > 0 ? ", " : "") + Number((*edge.covariance)(r, c), what + " covariance");
+      }
+    }
+    out += "]\n";
+  }
+  const EdgeProvenance& p = edge.provenance;
+  out += "    provenance: {tool: " + Quoted(p.tool) + ", date: " + Quoted(p.date) +
+         ", input_digest: " + Quoted(p.input_digest) +
+         ", residual_summary: " + Quoted(p.residual_summary) + "}\n";
+}
+
+}  // namespace
+
+std::string FormatDouble(double value) {
+  std::array<char, 64> buffer{};
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  return std::string(buffer.data(), result.ptr);
+}
+
+std::string PoseToFileNotation(const Eigen::Quaterniond& rotation,
+                               const Eigen::Vector3d& translation_mm) {
+  const Eigen::Vector3d& t = translation_mm;
+  const Eigen::Quaterniond& q = rotation;
+  return "{translation_mm: [" + FormatDouble(t.x()) + ", " + FormatDouble(t.y()) + ", " +
+         FormatDouble(t.z()) + "], rotation_wxyz: [" + FormatDouble(q.w()) + ", " +
+         FormatDouble(q.x()) + ", " + FormatDouble(q.y()) + ", " + FormatDouble(q.z()) + "]}";
+}
+
+std::string PoseToFileNotation(const Eigen::Isometry3d& pose) {
+  return PoseToFileNotation(CanonicalQuaternion(pose.linear()), pose.translation());
+}
+
+std::string FrameGraphToYaml(const FrameGraph& graph) {
+  std::string out = std::string("format: ") + kCellFormatName +
+                    "\nversion: " + std::to_string(kCellFormatVersion) + "\nframes: [";
+  const std::vector<std::string> frames = graph.Frames();
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    out += (i > 0 ? ", " : "") + NameToken(frames[i]);
+  }
+  out += "]\n";
+  const std::vector<std::string> robots = graph.Robots();
+  out += robots.empty() ? "robots: {}\n" : "robots:\n";
+  for (const std::string& robot : robots) {
+    WriteRobot(out, robot, graph.Robot(robot), graph.read_mount_rotations_);
+  }
+  const bool no_edges = graph.static_edges().empty() && graph.dynamic_edges().empty();
+  out += no_edges ? "edges: []\n" : "edges:\n";
+  for (const StaticEdge& edge : graph.static_edges()) WriteStaticEdge(out, edge);
+  for (const DynamicEdge& edge : graph.dynamic_edges()) {
+    out += "  - parent: " + NameToken(edge.parent) + "\n    child: " + NameToken(edge.child) +
+           "\n    type: dynamic\n    robot: " + NameToken(edge.robot) + "\n";
+  }
+  return out;
+}
+
+void SaveFrameGraph(const std::string& path, const FrameGraph& graph) {
+  std::string text;
+  try {
+    text = FrameGraphToYaml(graph);  // Complete before anything touches the disk.
+  } catch (const FileError&) {
+    throw;
+  } catch (const InputError& e) {
+    throw FileError(path, std::string(e.what()) + "; nothing was written");
+  }
+  io::WriteFileAtomically(path, text);
+}
+
+}  // namespace lasercell

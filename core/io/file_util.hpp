@@ -1,0 +1,20 @@
+#pragma once
+// Whole-file reads and atomic writes (temp file in the same folder + fsync + rename), so a
+// crash or a failed write never leaves a half-written calibration, cell file or cloud behind.
+
+#include <string>
+#include <string_view>
+
+namespace lasercell::io {
+
+/// Reads a whole file into memory. Throws FileError when it is missing or unreadable.
+std::string ReadFileBytes(const std::string& path);
+
+/// Writes `bytes` to `path` atomically: to `path.tmp-XXXXXX` beside it, flushed, then renamed
+/// over `path`. On failure nothing at `path` changes and FileError is thrown.
+void WriteFileAtomically(const std::string& path, std::string_view bytes);
+
+/// Lower-case file extension with the dot, e.g. ".ply" (empty when none).
+std::string LowerExtension(const std::string& path);
+
+}  // namespace lasercell::io

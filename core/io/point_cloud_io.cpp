@@ -1,0 +1,59 @@
+// File-level entry points: read the bytes, dispatch on the extension, add the unit hint;
+// validate, encode and write atomically.
+#include "core/io/point_cloud_io.hpp"
+
+#include "core/error.hpp"
+#include "core/io/codec.hpp"
+#include "core/io/file_util.hpp"
+
+namespace lasercell::io {
+namespace {
+
+enum class Format { kPly, kPcd };
+
+Format FormatOf(const std::string& path, bool allow_pcd) {
+  const std::string ext = LowerExtension(path);
+  if (ext == ".ply") return Format::kPly;
+  if (ext == ".pcd" && allow_pcd) return Format::kPcd;
+  throw FileError(path, "unsupported extension '" + ext + "'; use " +
+                            (allow_pcd ? ".ply or .pcd" : ".ply (meshes are PLY only)"));
+}
+
+}  // namespace
+
+PointCloud ReadPointCloud(const std::string& path, ReadReport* report) {
+  const Format format = FormatOf(path, true);
+  const std::string bytes = ReadFileBytes(path);
+  ReadReport local;
+  PointCloud cloud = format == Format::kPly ? std::move(ParsePly(bytes, path, &local).vertices)
+                                            : ParsePcd(bytes, path, &local);
+  local.unit_hint = detail::UnitHint(cloud);
+  if (report != nullptr) *report = std::move(local);
+  return cloud;
+}
+
+TriangleMesh ReadPlyMesh(const std::string& path, ReadReport* report) {
+  FormatOf(path, false);
+  const std::string bytes = ReadFileBytes(path);
+  ReadReport local;
+  TriangleMesh mesh = ParsePly(bytes, path, &local);
+  local.unit_hint = detail::UnitHint(mesh.vertices);
+  if (report != nullptr) *report = std::move(local);
+  return mesh;
+}
+
+void WritePointCloud(const std::string& path, const PointCloud& cloud,
+                     const WriteOptions& options) {
+  const Format format = FormatOf(path, true);
+  detail::CheckWritable(cloud, {}, options, "cloud to write to " + path);
+  WriteFileAtomically(path, format == Format::kPly ? detail::EncodePlyUnchecked(cloud, {}, options)
+                                                   : detail::EncodePcdUnchecked(cloud, options));
+}
+
+void WritePlyMesh(const std::string& path, const TriangleMesh& mesh, const WriteOptions& options) {
+  FormatOf(path, false);
+  detail::CheckWritable(mesh.vertices, mesh.faces, options, "mesh to write to " + path);
+  WriteFileAtomically(path, detail::EncodePlyUnchecked(mesh.vertices, mesh.faces, options));
+}
+
+}  // namespace lasercell::io

@@ -1,0 +1,124 @@
+#include "core/kinematics.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace lasercell {
+
+namespace {
+
+/// One DH link transform link_{i-1}_from_link_i for joint angle theta (rad).
+Eigen::Isometry3d DhLinkTransform(DhConvention convention, const DhJoint& row, double theta) {
+  const double ct = std::cos(theta);
+  const double st = std::sin(theta);
+  const double ca = std::cos(row.alpha_rad);
+  const double sa = std::sin(row.alpha_rad);
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  if (convention == DhConvention::kStandard) {
+    // RotZ(theta) * TransZ(d) * TransX(a) * RotX(alpha), multiplied out (Spong et al. 2006,
+    // eq. 3.10).
+    // clang-format off
+    t.linear() << ct, -st * ca,  st * sa,
+                  st,  ct * ca, -ct * sa,
+                  0,   sa,       ca;
+    // clang-format on
+    t.translation() << row.a_mm * ct, row.a_mm * st, row.d_mm;
+  } else {
+    // RotX(alpha_{i-1}) * TransX(a_{i-1}) * RotZ(theta) * TransZ(d) (Craig 1986, eq. 3.6).
+    // clang-format off
+    t.linear() << ct,      -st,      0,
+                  st * ca,  ct * ca, -sa,
+                  st * sa,  ct * sa,  ca;
+    // clang-format on
+    t.translation() << row.a_mm, -sa * row.d_mm, ca * row.d_mm;
+  }
+  return t;
+}
+
+bool IsFinitePose(const Eigen::Isometry3d& pose) { return pose.matrix().allFinite(); }
+
+std::string ConventionName(DhConvention convention) {
+  return convention == DhConvention::kStandard ? "standard" : "modified";
+}
+
+}  // namespace
+
+DhChain::DhChain(DhConvention convention, std::vector<DhJoint> joints,
+                 const Eigen::Isometry3d& base_from_chain,
+                 const Eigen::Isometry3d& chain_from_flange)
+    : convention_(convention),
+      joints_(std::move(joints)),
+      base_from_chain_(base_from_chain),
+      chain_from_flange_(chain_from_flange) {
+  for (std::size_t i = 0; i < joints_.size(); ++i) {
+    const DhJoint& j = joints_[i];
+    if (!std::isfinite(j.a_mm) || !std::isfinite(j.alpha_rad) || !std::isfinite(j.d_mm) ||
+        !std::isfinite(j.theta_offset_rad) || !std::isfinite(j.joint_offset_rad)) {
+      throw InputError("DH chain (" + ConventionName(convention_) + "): joint " +
+                       std::to_string(i + 1) +
+                       " has a non-finite value (a_mm, alpha_rad, d_mm or an offset); "
+                       "every DH parameter must be a finite number in mm or rad");
+    }
+  }
+  if (!IsFinitePose(base_from_chain_) || !IsFinitePose(chain_from_flange_)) {
+    throw InputError(
+        "DH chain: base_from_chain or chain_from_flange has non-finite entries; pass finite "
+        "transforms (identity when there is no mounting offset)");
+  }
+}
+
+std::vector<Eigen::Isometry3d> DhChain::LinkPoses(std::span<const double> joints_rad) const {
+  const std::size_t n = joints_.size();
+  if (joints_rad.size() != n) {
+    throw InputError("DH chain: got " + std::to_string(joints_rad.size()) +
+                     " joint values, expected " + std::to_string(n) +
+                     " (one angle in rad per joint of the chain)");
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(joints_rad[i])) {
+      throw InputError("DH chain: joint value " + std::to_string(i + 1) + " of " +
+                       std::to_string(n) + " is not finite (" + std::to_string(joints_rad[i]) +
+                       "); pass " + std::to_string(n) + " finite joint angles in rad");
+    }
+  }
+  std::vector<Eigen::Isometry3d> poses;
+  poses.reserve(n);
+  Eigen::Isometry3d base_from_link = base_from_chain_;
+  for (std::size_t i = 0; i < n; ++i) {
+    const DhJoint& row = joints_[i];
+    const double theta = joints_rad[i] + row.theta_offset_rad + row.joint_offset_rad;
+    base_from_link = base_from_link * DhLinkTransform(convention_, row, theta);
+    poses.push_back(base_from_link);
+  }
+  return poses;
+}
+
+Eigen::Isometry3d DhChain::BaseFromFlange(std::span<const double> joints_rad) const {
+  const std::vector<Eigen::Isometry3d> links = LinkPoses(joints_rad);
+  const Eigen::Isometry3d base_from_last = links.empty() ? base_from_chain_ : links.back();
+  return base_from_last * chain_from_flange_;
+}
+
+std::unique_ptr<KinematicModel> DhChain::Clone() const { return std::make_unique<DhChain>(*this); }
+
+DhChain NominalUr5() {
+  constexpr double kHalfPi = std::numbers::pi / 2;
+  // Universal Robots, "DH parameters for calculations of kinematics and dynamics" (UR5, CB3).
+  std::vector<DhJoint> joints(6);
+  joints[0].d_mm = 89.159;
+  joints[0].alpha_rad = kHalfPi;
+  joints[1].a_mm = -425.0;
+  joints[2].a_mm = -392.25;
+  joints[3].d_mm = 109.15;
+  joints[3].alpha_rad = kHalfPi;
+  joints[4].d_mm = 94.65;
+  joints[4].alpha_rad = -kHalfPi;
+  joints[5].d_mm = 82.3;
+  return DhChain(DhConvention::kStandard, std::move(joints));
+}
+
+}  // namespace lasercell

@@ -1,0 +1,88 @@
+#pragma once
+// Serial-robot kinematics vocabulary shared by the frame graph (core), the calibration solvers
+// (calib) and the simulator (datasets). Units: mm and rad. Joint values in rad.
+// `BaseFromFlange(joints)` returns base_from_flange: p_in_base = T * p_in_flange.
+//
+// Denavit-Hartenberg conventions:
+//  - kStandard (Denavit & Hartenberg 1955, as in UR's published tables):
+//      T_i = RotZ(theta_i) * TransZ(d_i) * TransX(a_i) * RotX(alpha_i)
+//  - kModified (Craig 1986):
+//      T_i = RotX(alpha_{i-1}) * TransX(a_{i-1}) * RotZ(theta_i) * TransZ(d_i)
+//    (row i stores alpha_{i-1} and a_{i-1} in alpha_rad and a_mm).
+//  theta_i = joint_i + theta_offset_rad_i (nominal zero) + joint_offset_rad_i (calibrated error).
+// base_from_chain and chain_from_flange are fixed transforms before and after the chain
+// (identity by default); they let a calibrated model absorb mounting errors.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace lasercell {
+
+/// Interface of a robot's forward kinematics, as the frame graph uses it.
+class KinematicModel {
+ public:
+  virtual ~KinematicModel() = default;
+  /// Number of joint values BaseFromFlange expects.
+  virtual int NumJoints() const = 0;
+  /// base_from_flange for the given joint values (rad). Throws InputError on a wrong count or
+  /// non-finite values.
+  virtual Eigen::Isometry3d BaseFromFlange(std::span<const double> joints_rad) const = 0;
+  /// A deep copy.
+  virtual std::unique_ptr<KinematicModel> Clone() const = 0;
+  /// Short type name used in files, e.g. "dh".
+  virtual std::string TypeName() const = 0;
+};
+
+/// Which DH convention a chain uses.
+enum class DhConvention { kStandard, kModified };
+
+/// One row of a DH table.
+struct DhJoint {
+  double a_mm = 0;                ///< Link length (kModified: a_{i-1}), mm.
+  double alpha_rad = 0;           ///< Link twist (kModified: alpha_{i-1}), rad.
+  double d_mm = 0;                ///< Link offset, mm.
+  double theta_offset_rad = 0;    ///< Nominal joint zero offset, rad.
+  double joint_offset_rad = 0;    ///< Calibrated joint offset error, rad (0 when nominal).
+};
+
+/// A serial chain described by a DH table, with base and flange transforms.
+class DhChain final : public KinematicModel {
+ public:
+  DhChain() = default;
+  DhChain(DhConvention convention, std::vector<DhJoint> joints,
+          const Eigen::Isometry3d& base_from_chain = Eigen::Isometry3d::Identity(),
+          const Eigen::Isometry3d& chain_from_flange = Eigen::Isometry3d::Identity());
+
+  int NumJoints() const override { return static_cast<int>(joints_.size()); }
+  Eigen::Isometry3d BaseFromFlange(std::span<const double> joints_rad) const override;
+  std::unique_ptr<KinematicModel> Clone() const override;
+  std::string TypeName() const override { return "dh"; }
+
+  /// base_from_link_i for i = 1..n (element i-1), useful for Jacobians and drawing.
+  std::vector<Eigen::Isometry3d> LinkPoses(std::span<const double> joints_rad) const;
+
+  DhConvention convention() const { return convention_; }
+  const std::vector<DhJoint>& joints() const { return joints_; }
+  std::vector<DhJoint>& mutable_joints() { return joints_; }
+  const Eigen::Isometry3d& base_from_chain() const { return base_from_chain_; }
+  const Eigen::Isometry3d& chain_from_flange() const { return chain_from_flange_; }
+  void set_base_from_chain(const Eigen::Isometry3d& t) { base_from_chain_ = t; }
+  void set_chain_from_flange(const Eigen::Isometry3d& t) { chain_from_flange_ = t; }
+
+ private:
+  DhConvention convention_ = DhConvention::kStandard;
+  std::vector<DhJoint> joints_;
+  Eigen::Isometry3d base_from_chain_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d chain_from_flange_ = Eigen::Isometry3d::Identity();
+};
+
+/// Nominal UR5 (Universal Robots' published standard-DH table, mm):
+/// d1 = 89.159, a2 = -425, a3 = -392.25, d4 = 109.15, d5 = 94.65, d6 = 82.3,
+/// alpha = (pi/2, 0, 0, pi/2, -pi/2, 0).
+DhChain NominalUr5();
+
+}  // namespace lasercell

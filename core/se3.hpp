@@ -1,0 +1,57 @@
+#pragma once
+// SE(3) helpers. Conventions: transforms `target_from_source` as Eigen::Isometry3d; rotation
+// vectors are axis * angle (rad); quaternions in files are unit (w, x, y, z); translations mm.
+// Rotation distance is the angle of R_a^T R_b, in [0, pi], rad.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <span>
+
+namespace lasercell {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+/// Rotation vector (axis * angle, rad) -> unit quaternion. Exact for small angles too.
+Eigen::Quaterniond QuaternionFromRotationVector(const Eigen::Vector3d& rotation_vector);
+/// Unit quaternion -> rotation vector with angle in [0, pi].
+Eigen::Vector3d RotationVectorFromQuaternion(const Eigen::Quaterniond& q);
+/// Rotation matrix -> rotation vector with angle in [0, pi].
+Eigen::Vector3d RotationVectorFromMatrix(const Eigen::Matrix3d& rotation);
+
+/// Pose from rotation vector (rad) and translation (mm).
+Eigen::Isometry3d PoseFromRotationVector(const Eigen::Vector3d& rotation_vector,
+                                         const Eigen::Vector3d& translation_mm);
+/// Pose from a unit quaternion and translation (mm).
+Eigen::Isometry3d PoseFromQuaternion(const Eigen::Quaterniond& q,
+                                     const Eigen::Vector3d& translation_mm);
+/// [rotation vector (rad); translation (mm)] of a pose (the optimizer parametrisation).
+Vector6d RotationVectorTranslation(const Eigen::Isometry3d& pose);
+/// Inverse of RotationVectorTranslation.
+Eigen::Isometry3d PoseFromRotationVectorTranslation(const Vector6d& v);
+
+/// Angle of the relative rotation between a and b, rad, in [0, pi].
+double RotationDistance(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b);
+/// Angle of the relative rotation between the rotation parts of a and b, rad.
+double RotationDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b);
+/// Distance between translations, mm.
+double TranslationDistance(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b);
+
+/// Weighted average of unit quaternions (Markley et al. 2007: principal eigenvector of
+/// sum w_i q_i q_i^T), sign-invariant. Weights must be >= 0 with a positive sum.
+Eigen::Quaterniond AverageQuaternions(std::span<const Eigen::Quaterniond> quaternions,
+                                      std::span<const double> weights = {});
+/// Weighted average pose: Markley rotation average, weighted mean translation.
+Eigen::Isometry3d AveragePoses(std::span<const Eigen::Isometry3d> poses,
+                               std::span<const double> weights = {});
+/// Interpolates a -> b at t in [0, 1]: slerp of rotation, linear translation.
+Eigen::Isometry3d InterpolatePoses(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
+                                   double t);
+
+/// Makes the rotation part orthonormal (nearest rotation by SVD). Used after arithmetic.
+Eigen::Isometry3d Orthonormalized(const Eigen::Isometry3d& pose);
+
+/// Skew-symmetric matrix [v]x so that [v]x w = v x w.
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v);
+
+}  // namespace lasercell

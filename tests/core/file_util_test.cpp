@@ -1,0 +1,66 @@
+#include "core/io/file_util.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.hpp"
+
+namespace lasercell::io {
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+fs::path TempDir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(FileUtilTest, AtomicWriteReplacesAndReadsBack) {
+  const fs::path dir = TempDir("lasercell_fileutil");
+  const std::string path = (dir / "a.bin").string();
+  std::string bytes("abc\0def", 7);
+  WriteFileAtomically(path, bytes);
+  EXPECT_EQ(ReadFileBytes(path), bytes);
+  WriteFileAtomically(path, "second");
+  EXPECT_EQ(ReadFileBytes(path), "second");
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++entries;
+  EXPECT_EQ(entries, 1) << "temporary file left behind";
+  fs::remove_all(dir);
+}
+
+TEST(FileUtilTest, WriteIntoMissingFolderFailsClearly) {
+  try {
+    WriteFileAtomically("/nonexistent_lasercell_dir/x.yaml", "x");
+    FAIL();
+  } catch (const FileError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("/nonexistent_lasercell_dir/x.yaml"));
+    EXPECT_THAT(e.what(), HasSubstr("does not exist"));
+  }
+}
+
+TEST(FileUtilTest, ReadMissingOrDirectoryFailsClearly) {
+  EXPECT_THROW(ReadFileBytes("/nonexistent_lasercell_file.ply"), FileError);
+  try {
+    ReadFileBytes(fs::temp_directory_path().string());
+    FAIL();
+  } catch (const FileError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("is a directory"));
+  }
+}
+
+TEST(FileUtilTest, LowerExtension) {
+  EXPECT_EQ(LowerExtension("a/b/Scene.PLY"), ".ply");
+  EXPECT_EQ(LowerExtension("x.pcd"), ".pcd");
+  EXPECT_EQ(LowerExtension("noext"), "");
+}
+
+}  // namespace
+}  // namespace lasercell::io

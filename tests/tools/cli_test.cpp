@@ -1,0 +1,211 @@
+// End-to-end tests of the `lasercell` command line: exit codes (0 ok, 2 bad input, 1 internal),
+// one-line error messages naming the file, and that failed commands write nothing.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/io/point_cloud_io.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() /
+           (std::string("lasercell_cli_") + info->name() + "_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  RunResult Run(const std::string& args) const {
+    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+    const std::string cmd = std::string(LASERCELL_CLI) + " " + args + " >" + out.string() +
+                            " 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    RunResult r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = Slurp(out);
+    r.err = Slurp(err);
+    return r;
+  }
+
+  static std::string Data(const std::string& rel) {
+    return std::string(LASERCELL_SOURCE_DIR) + "/datasets/" + rel;
+  }
+
+  fs::path dir_;
+};
+
+int CountLines(const std::string& s) {
+  int n = 0;
+  for (char c : s) n += c == '\n';
+  return n;
+}
+
+TEST_F(CliTest, VersionAndHelp) {
+  RunResult r = Run("--version");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_THAT(r.out, HasSubstr("lasercell " LASERCELL_VERSION));
+  for (const char* cmd : {"--help", "cloud --help", "cloud info --help", "cloud convert --help",
+                          "frames --help", "frames show --help", "frames get --help"}) {
+    r = Run(cmd);
+    EXPECT_EQ(r.exit_code, 0) << cmd;
+    EXPECT_THAT(r.out, HasSubstr("Usage")) << cmd;
+  }
+}
+
+TEST_F(CliTest, NoSubcommandIsBadInput) {
+  RunResult r = Run("");
+  EXPECT_EQ(r.exit_code, 2);
+  r = Run("cloud frobnicate");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
+TEST_F(CliTest, CloudInfoOnRealPly) {
+  const RunResult r = Run("cloud info " + Data("real/uwa/parasaurolophus_6700.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("points: 6700"));
+  EXPECT_THAT(r.out, HasSubstr("fields: x y z nx ny nz"));
+  EXPECT_THAT(r.out, HasSubstr("organized: no"));
+  EXPECT_THAT(r.out, HasSubstr("bounding box min"));
+  EXPECT_THAT(r.out, HasSubstr("millimetres"));
+}
+
+TEST_F(CliTest, CloudInfoOnOrganizedPcdReportsGridAndMetres) {
+  const RunResult r = Run("cloud info " + Data("real/pcl/milk_cartoon_all_small_clorox.pcd"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("organized: yes, 480 rows x 640 columns"));
+  EXPECT_THAT(r.out, HasSubstr("metres"));
+}
+
+TEST_F(CliTest, ConvertPlyToPcdAndBackKeepsPoints) {
+  const std::string pcd = (dir_ / "model.pcd").string();
+  const std::string ply = (dir_ / "model.ply").string();
+  RunResult r = Run("cloud convert " + Data("real/uwa/parasaurolophus_6700.ply") + " " + pcd);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Run("cloud convert " + pcd + " " + ply);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto original = lasercell::io::ReadPointCloud(Data("real/uwa/parasaurolophus_6700.ply"));
+  const auto back = lasercell::io::ReadPointCloud(ply);
+  ASSERT_EQ(back.size(), original.size());
+  ASSERT_TRUE(back.HasNormals());
+  for (std::size_t i = 0; i < back.size(); i += 97) {
+    // float32 storage of values that were float32-representable decimal text in the source.
+    EXPECT_NEAR((back.positions[i] - original.positions[i]).norm(), 0.0, 1e-4);
+  }
+}
+
+TEST_F(CliTest, ConvertScalesMetresToMillimetres) {
+  const std::string out = (dir_ / "bun0_mm.ply").string();
+  RunResult r = Run("cloud convert --scale 1000 " + Data("real/pcl/bun0.pcd") + " " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto metres = lasercell::io::ReadPointCloud(Data("real/pcl/bun0.pcd"));
+  const auto mm = lasercell::io::ReadPointCloud(out);
+  ASSERT_EQ(mm.size(), metres.size());
+  EXPECT_NEAR(mm.Bounds().Diagonal(), 1000 * metres.Bounds().Diagonal(), 1e-2);
+}
+
+TEST_F(CliTest, MissingFileIsOneLineExitTwo) {
+  const RunResult r = Run("cloud info " + (dir_ / "nope.ply").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("nope.ply"));
+}
+
+TEST_F(CliTest, CorruptInputWritesNothing) {
+  const fs::path bad = dir_ / "bad.ply";
+  std::ofstream(bad) << "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
+                        "property float y\nproperty float z\nend_header\n1 2 3\n";
+  const fs::path out = dir_ / "out.pcd";
+  const RunResult r = Run("cloud convert " + bad.string() + " " + out.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("bad.ply"));
+  EXPECT_FALSE(fs::exists(out));
+  // No temporary files left behind either.
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    EXPECT_THAT(entry.path().filename().string(), ::testing::Not(HasSubstr(".tmp-")));
+  }
+}
+
+TEST_F(CliTest, ConvertRejectsUnknownOutputTypeAndBadScale) {
+  RunResult r = Run("cloud convert " + Data("real/pcl/bun4.pcd") + " " + (dir_ / "x.xyz").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("x.xyz"));
+  r = Run("cloud convert --scale -3 " + Data("real/pcl/bun4.pcd") + " " + (dir_ / "x.ply").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("--scale"));
+}
+
+TEST_F(CliTest, FramesShowAndGetOnExampleCell) {
+  const std::string cell = Data("demo/cell.yaml");
+  RunResult r = Run("frames show " + cell);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("vision_flange"));
+  EXPECT_THAT(r.out, HasSubstr("sensor"));
+  EXPECT_THAT(r.out, HasSubstr("by: "));
+  r = Run("frames get " + cell + " --to vision_flange --from sensor");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("vision_flange_from_sensor: {translation_mm: ["));
+  EXPECT_THAT(r.out, HasSubstr("rotation_wxyz: ["));
+  // Through the UR5's dynamic edge: all-zero joints.
+  r = Run("frames get " + cell + " --to vision_base --from vision_flange --joints 0,0,0,0,0,0");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // UR5 at zero joints: flange at (a2 + a3, -(d4 + d6), d1 - d5) mm.
+  const auto at = r.out.find("translation_mm: [");
+  ASSERT_NE(at, std::string::npos) << r.out;
+  double x = 0, y = 0, z = 0;
+  ASSERT_EQ(std::sscanf(r.out.c_str() + at, "translation_mm: [%lf, %lf, %lf", &x, &y, &z), 3);
+  EXPECT_NEAR(x, -817.25, 1e-9);
+  EXPECT_NEAR(y, -191.45, 1e-9);
+  EXPECT_NEAR(z, -5.491, 1e-9);
+}
+
+TEST_F(CliTest, FramesGetErrors) {
+  const std::string cell = Data("demo/cell.yaml");
+  RunResult r = Run("frames get " + cell + " --to nowhere --from sensor");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("nowhere"));
+  r = Run("frames get " + cell + " --to vision_base --from sensor");  // joints needed
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("vision_robot"));
+  r = Run("frames get " + cell + " --to vision_base --from sensor --joints 0,0,x");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("--joints"));
+}
+
+TEST_F(CliTest, BadCellFileIsOneLineExitTwo) {
+  const fs::path cell = dir_ / "cell.yaml";
+  std::ofstream(cell) << "format: lasercell.cell\nversion: 99\nframes: []\nedges: []\n";
+  const RunResult r = Run("frames show " + cell.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("cell.yaml"));
+  EXPECT_THAT(r.err, HasSubstr("version"));
+}
+
+}  // namespace

@@ -1,0 +1,9 @@
+#pragma once
+// Subcommand registration. Each Add*Commands adds its subcommands with callbacks that run
+// during app.parse() and throw lasercell errors on bad input.
+#include <CLI/CLI.hpp>
+
+namespace lasercell::tools {
+void AddCloudCommands(CLI::App& app);   ///< cloud info, cloud convert
+void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
+}  // namespace lasercell::tools
