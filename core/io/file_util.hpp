@@ -10,6 +10,24 @@ namespace lasercell::io {
 /// Reads a whole file into memory. Throws FileError when it is missing or unreadable.
 std::string ReadFileBytes(const std::string& path);
 
+/// A read-only memory map of a whole file (no copy into a heap buffer: large clouds load
+/// faster). Throws FileError like ReadFileBytes. Move-only; unmaps on destruction.
+class MappedFile {
+ public:
+  explicit MappedFile(const std::string& path);
+  ~MappedFile();
+  MappedFile(const MappedFile&) = delete;
+  MappedFile& operator=(const MappedFile&) = delete;
+  MappedFile(MappedFile&& other) noexcept;
+  MappedFile& operator=(MappedFile&& other) noexcept;
+  /// The file's bytes, valid while this object lives.
+  std::string_view bytes() const { return {data_, size_}; }
+
+ private:
+  const char* data_ = nullptr;
+  std::size_t size_ = 0;
+};
+
 /// Writes `bytes` to `path` atomically: to `path.tmp-XXXXXX` beside it, flushed, then renamed
 /// over `path`. On failure nothing at `path` changes and FileError is thrown.
 void WriteFileAtomically(const std::string& path, std::string_view bytes);

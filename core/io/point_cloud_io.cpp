@@ -23,10 +23,11 @@ Format FormatOf(const std::string& path, bool allow_pcd) {
 
 PointCloud ReadPointCloud(const std::string& path, ReadReport* report) {
   const Format format = FormatOf(path, true);
-  const std::string bytes = ReadFileBytes(path);
+  const MappedFile file(path);
   ReadReport local;
-  PointCloud cloud = format == Format::kPly ? std::move(ParsePly(bytes, path, &local).vertices)
-                                            : ParsePcd(bytes, path, &local);
+  PointCloud cloud = format == Format::kPly
+                         ? std::move(ParsePly(file.bytes(), path, &local).vertices)
+                         : ParsePcd(file.bytes(), path, &local);
   local.unit_hint = detail::UnitHint(cloud);
   if (report != nullptr) *report = std::move(local);
   return cloud;
@@ -34,9 +35,9 @@ PointCloud ReadPointCloud(const std::string& path, ReadReport* report) {
 
 TriangleMesh ReadPlyMesh(const std::string& path, ReadReport* report) {
   FormatOf(path, false);
-  const std::string bytes = ReadFileBytes(path);
+  const MappedFile file(path);
   ReadReport local;
-  TriangleMesh mesh = ParsePly(bytes, path, &local);
+  TriangleMesh mesh = ParsePly(file.bytes(), path, &local);
   local.unit_hint = detail::UnitHint(mesh.vertices);
   if (report != nullptr) *report = std::move(local);
   return mesh;

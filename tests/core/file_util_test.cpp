@@ -56,6 +56,28 @@ TEST(FileUtilTest, ReadMissingOrDirectoryFailsClearly) {
   }
 }
 
+TEST(FileUtilTest, MappedFileSeesTheBytesAndFailsClearly) {
+  const fs::path dir = TempDir("lasercell_mapped");
+  const std::string path = (dir / "m.bin").string();
+  WriteFileAtomically(path, std::string("xyz\0w", 5));
+  {
+    MappedFile mapped(path);
+    EXPECT_EQ(mapped.bytes(), std::string_view("xyz\0w", 5));
+    MappedFile moved(std::move(mapped));
+    EXPECT_EQ(moved.bytes().size(), 5u);
+    EXPECT_TRUE(mapped.bytes().empty());
+  }
+  WriteFileAtomically(path, "");
+  EXPECT_TRUE(MappedFile(path).bytes().empty());
+  try {
+    MappedFile missing((dir / "missing.ply").string());
+    FAIL();
+  } catch (const FileError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("missing.ply: cannot open"));
+  }
+  fs::remove_all(dir);
+}
+
 TEST(FileUtilTest, LowerExtension) {
   EXPECT_EQ(LowerExtension("a/b/Scene.PLY"), ".ply");
   EXPECT_EQ(LowerExtension("x.pcd"), ".pcd");
