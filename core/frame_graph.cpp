@@ -5,7 +5,6 @@
 #include "core/frame_graph.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <deque>
 #include <utility>
 
@@ -48,35 +47,6 @@ std::string EdgeName(const std::string& parent, const std::string& child) {
   return "static edge " + parent + " <- " + child;
 }
 
-/// Throws unless `pose` is finite with an orthonormal, right-handed rotation.
-void CheckRigid(const Eigen::Isometry3d& pose, const std::string& what) {
-  if (!pose.matrix().topRows<3>().allFinite()) {
-    throw InputError(what + " has non-finite entries; pass a finite rigid transform");
-  }
-  const Eigen::Matrix3d r = pose.linear();
-  const double orthonormality = (r.transpose() * r - Eigen::Matrix3d::Identity()).norm();
-  if (!(orthonormality < 1e-9) || !(r.determinant() > 0)) {
-    throw InputError(what + " has a rotation that is not orthonormal (|R^T R - I| = " +
-                     FormatDouble(orthonormality) + ", det = " + FormatDouble(r.determinant()) +
-                     "); pass a proper rotation (see Orthonormalized in core/se3.hpp)");
-  }
-}
-
-/// Throws unless the stored pose is finite with |rotation| within 1e-9 of 1.
-void CheckStoredPose(const StaticEdge& edge, const std::string& what) {
-  if (!edge.rotation.coeffs().allFinite() || !edge.translation_mm.allFinite()) {
-    throw InputError(what +
-                     " parent_from_child has non-finite entries; pass a finite rigid "
-                     "transform");
-  }
-  const double norm = edge.rotation.norm();
-  if (!(std::abs(norm - 1.0) <= 1e-9)) {
-    throw InputError(what + " parent_from_child: rotation has norm " + FormatDouble(norm) +
-                     "; pass a unit quaternion (norm within 1e-9 of 1), or set the pose from a "
-                     "matrix with SetParentFromChild");
-  }
-}
-
 bool SamePair(const std::string& p, const std::string& c, const std::string& a,
               const std::string& b) {
   return (p == a && c == b) || (p == b && c == a);
@@ -98,35 +68,15 @@ void CheckEdgeCovariance(const Matrix6d& covariance, const std::string& what) {
 
 }  // namespace
 
-Eigen::Quaterniond CanonicalQuaternion(const Eigen::Matrix3d& rotation) {
-  Eigen::Quaterniond q = Eigen::Quaterniond(rotation).normalized();
-  // The first nonzero of (w, x, y, z) positive; Eigen stores the coefficients as (x, y, z, w).
-  for (const int i : {3, 0, 1, 2}) {
-    if (q.coeffs()[i] == 0) continue;
-    if (q.coeffs()[i] < 0) q.coeffs() = -q.coeffs();
-    break;
-  }
-  for (int i = 0; i < 4; ++i) {
-    if (q.coeffs()[i] == 0) q.coeffs()[i] = 0.0;  // +0, never -0
-  }
-  return q;
-}
-
-Eigen::Isometry3d StaticEdge::ParentFromChild() const {
-  return PoseFromQuaternion(rotation, translation_mm);
-}
-
-void StaticEdge::SetParentFromChild(const Eigen::Isometry3d& parent_from_child) {
-  CheckRigid(parent_from_child, EdgeName(parent, child) + " parent_from_child");
-  rotation = CanonicalQuaternion(parent_from_child.linear());
-  translation_mm = parent_from_child.translation();
+void StaticEdge::SetParentFromChild(const Eigen::Isometry3d& pose) {
+  CheckRigidTransform(pose, EdgeName(parent, child) + " parent_from_child");
+  parent_from_child = QuaternionPose::FromIsometry(pose);
 }
 
 FrameGraph::FrameGraph(const FrameGraph& other)
     : frames_(other.frames_),
       static_edges_(other.static_edges_),
-      dynamic_edges_(other.dynamic_edges_),
-      read_mount_rotations_(other.read_mount_rotations_) {
+      dynamic_edges_(other.dynamic_edges_) {
   for (const auto& [name, model] : other.robots_) robots_.emplace(name, model->Clone());
 }
 
@@ -157,7 +107,7 @@ void FrameGraph::SetStaticEdge(const StaticEdge& edge) {
   if (edge.parent == edge.child) {
     throw InputError(what + " joins a frame to itself; parent and child must differ");
   }
-  CheckStoredPose(edge, what);
+  CheckQuaternionPose(edge.parent_from_child, what + " parent_from_child");
   if (edge.covariance) CheckEdgeCovariance(*edge.covariance, what);
   for (const DynamicEdge& d : dynamic_edges_) {
     if (SamePair(d.parent, d.child, edge.parent, edge.child)) {

@@ -9,10 +9,12 @@
 // Covariance convention: 6x6 over the perturbation xi = [rotation vector (rad); translation
 // (mm)] applied on the left: parent_from_child_true = Exp(xi) * parent_from_child.
 //
-// A static edge stores its pose as the cell file holds it: a unit quaternion `rotation` and a
-// `translation_mm`. The matrix is derived (StaticEdge::ParentFromChild); a matrix given by a
-// calibration is converted once (StaticEdge::SetParentFromChild). Reading a file keeps the
-// quaternion's coefficients exactly as written, so nothing is lost between file and memory.
+// Poses are stored as the cell file holds them (QuaternionPose, core/se3.hpp: a unit quaternion
+// and a translation in mm): a static edge's `parent_from_child`, and a DhChain robot's
+// base_from_chain and chain_from_flange. Matrices are derived (StaticEdge::ParentFromChild,
+// DhChain::base_from_chain); a matrix given by a calibration is converted once
+// (StaticEdge::SetParentFromChild, DhChain::set_base_from_chain). Reading a file keeps the
+// quaternions' coefficients exactly as written, so nothing is lost between file and memory.
 //
 // File (cell.yaml, see FrameGraphToYaml): format "lasercell.cell", version 1, in this order:
 //   format, version, frames (sorted), robots (sorted by name), then edges: first the static
@@ -23,10 +25,9 @@
 //   is written atomically. Every tool updates only its own edges, hence only their lines.
 // Round trip: for any file FrameGraphToYaml wrote, FrameGraphFromYaml then FrameGraphToYaml
 //   gives the identical text, and reading that again gives the identical doubles (static
-//   edges hold the file's quaternion and translation themselves; for robots' mounting
-//   transforms see FrameGraph::read_mount_rotations_). So for a graph built in memory,
-//   write -> read -> write gives identical text, and a static edge's quaternion and
-//   translation read back bit-exactly.
+//   edges and robots' mounts hold the file's quaternions and translations themselves). So for
+//   a graph built in memory, write -> read -> write gives identical text, and every stored
+//   quaternion and translation reads back bit-exactly.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -34,7 +35,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "core/kinematics.hpp"
@@ -51,24 +51,22 @@ struct EdgeProvenance {
 };
 
 /// A fixed transform between two frames, parent_from_child (p_in_parent = T * p_in_child),
-/// stored as the cell file holds it: a unit quaternion and a translation.
+/// stored as the cell file holds it.
 struct StaticEdge {
   std::string parent;  ///< Frame the pose maps into.
   std::string child;   ///< Frame the pose maps from.
-  /// Rotation of parent_from_child, a unit quaternion (|q| within 1e-9 of 1). Kept exactly as
-  /// given or read, never renormalized; SetParentFromChild stores the canonical sign
-  /// (CanonicalQuaternion).
-  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
-  /// Translation of parent_from_child: the child's origin in parent coordinates, mm.
-  Eigen::Vector3d translation_mm = Eigen::Vector3d::Zero();
+  /// The pose: a unit quaternion (|q| within 1e-9 of 1) kept exactly as given or read, never
+  /// renormalized, and the child's origin in parent coordinates (mm). SetParentFromChild stores
+  /// the canonical sign (CanonicalQuaternion).
+  QuaternionPose parent_from_child;
   EdgeProvenance provenance;
   std::optional<Matrix6d> covariance;  ///< Over [rotvec rad; translation mm], left perturbation.
 
-  /// parent_from_child as a matrix, built from the normalized `rotation` (as PoseFromQuaternion
-  /// does); the stored coefficients stay untouched.
-  Eigen::Isometry3d ParentFromChild() const;
-  /// Sets `rotation` and `translation_mm` from a matrix: one conversion to the canonical unit
-  /// quaternion (CanonicalQuaternion). Throws InputError, naming the edge, unless the pose is
+  /// parent_from_child as a matrix (parent_from_child.ToIsometry()); the stored coefficients
+  /// stay untouched.
+  Eigen::Isometry3d ParentFromChild() const { return parent_from_child.ToIsometry(); }
+  /// Sets parent_from_child from a matrix: one conversion to the canonical unit quaternion
+  /// (QuaternionPose::FromIsometry). Throws InputError, naming the edge, unless the pose is
   /// finite with an orthonormal, right-handed rotation (|R^T R - I| < 1e-9).
   void SetParentFromChild(const Eigen::Isometry3d& parent_from_child);
 };
@@ -142,17 +140,6 @@ class FrameGraph {
   std::vector<StaticEdge> static_edges_;
   std::vector<DynamicEdge> dynamic_edges_;
   std::map<std::string, std::unique_ptr<KinematicModel>> robots_;
-
-  // Robots' mounting rotations (DhChain base_from_chain, chain_from_flange) as the file they
-  // were read from holds them (first), each with the matrix the reader built from it (second).
-  // DhChain stores matrices, and matrix -> quaternion -> matrix is not exact in floating point;
-  // so while a model still holds exactly (bit for bit) such a matrix, FrameGraphToYaml writes
-  // the quaternion that was read, and read -> write reproduces the text. Matched by the matrix
-  // alone, so replacing a robot needs no bookkeeping here. (Once DhChain stores its mounts as
-  // quaternion + translation, like StaticEdge, this goes away.)
-  std::vector<std::pair<Eigen::Quaterniond, Eigen::Matrix3d>> read_mount_rotations_;
-  friend FrameGraph FrameGraphFromYaml(const std::string& text, const std::string& name);
-  friend std::string FrameGraphToYaml(const FrameGraph& graph);
 };
 
 /// Cell-file format name (the `format:` field) and current version.
@@ -160,28 +147,23 @@ inline constexpr const char* kCellFormatName = "lasercell.cell";
 inline constexpr int kCellFormatVersion = 1;
 
 /// Serializes a frame graph as cell.yaml text: deterministic, in the order given at the top of
-/// this file; a static edge's quaternion and translation are written exactly as stored. Throws
+/// this file; static edges' and robots' mounting poses are written exactly as stored. Throws
 /// InputError for non-finite values or a robot model without a file form.
 std::string FrameGraphToYaml(const FrameGraph& graph);
-/// Parses cell.yaml text; `name` appears in error messages. Static edges keep the quaternion
-/// coefficients as written (checked, not renormalized). Throws FileError naming the file and
-/// the problem: unknown format/version, an edge naming an undeclared frame, a cycle, a
-/// non-unit quaternion (|q| off 1 by more than 1e-9), malformed numbers or fields.
+/// Parses cell.yaml text; `name` appears in error messages. Static edges and robots' mounts
+/// keep the quaternion coefficients as written (checked, not renormalized). Throws FileError
+/// naming the file and the problem: unknown format/version, an edge naming an undeclared frame,
+/// a cycle, a non-unit quaternion (|q| off 1 by more than 1e-9), malformed numbers or fields.
 FrameGraph FrameGraphFromYaml(const std::string& text, const std::string& name);
 /// Reads cell.yaml.
 FrameGraph LoadFrameGraph(const std::string& path);
 /// Writes cell.yaml atomically.
 void SaveFrameGraph(const std::string& path, const FrameGraph& graph);
 
-/// The unit quaternion of a rotation matrix, with the canonical sign: the first nonzero of
-/// (w, x, y, z) is positive (w >= 0; x > 0 when w == 0; ...), and no coefficient is -0.
-Eigen::Quaterniond CanonicalQuaternion(const Eigen::Matrix3d& rotation);
-
 /// Pose in the file notation, one line: {translation_mm: [x, y, z], rotation_wxyz: [w, x, y, z]},
-/// with the coefficients exactly as given.
-std::string PoseToFileNotation(const Eigen::Quaterniond& rotation,
-                               const Eigen::Vector3d& translation_mm);
-/// The same for a matrix, through CanonicalQuaternion(pose.linear()).
+/// with the coefficients exactly as stored.
+std::string PoseToFileNotation(const QuaternionPose& pose);
+/// The same for a matrix, through QuaternionPose::FromIsometry (CanonicalQuaternion).
 std::string PoseToFileNotation(const Eigen::Isometry3d& pose);
 /// Formats a double with the shortest text that reads back to the same value.
 std::string FormatDouble(double value);

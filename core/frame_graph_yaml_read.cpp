@@ -2,8 +2,8 @@
 //
 // Reading goes through yaml-cpp and checks everything: unknown fields (typos), counts, unit
 // quaternions, frames, cycles. Messages count edges and joints from 1 and give the line.
-// Static edges keep the quaternion's coefficients exactly as written (checked for |q| within
-// 1e-9 of 1, not renormalized), so writing them again reproduces the text.
+// Every pose (static edges, robots' mounts) is kept as a QuaternionPose exactly as written
+// (checked for |q| within 1e-9 of 1, not renormalized), so writing it again reproduces the text.
 
 #include <yaml-cpp/yaml.h>
 
@@ -25,12 +25,6 @@
 namespace lasercell {
 
 namespace {
-
-/// A pose as the file holds it.
-struct FilePose {
-  Eigen::Quaterniond rotation;
-  Eigen::Vector3d translation_mm;
-};
 
 // Allowed fields per mapping; anything else is reported as a typo.
 using Fields = std::span<const std::string_view>;
@@ -117,12 +111,6 @@ class CellReader {
     return graph;
   }
 
-  /// The robots' mounting rotations as read, with the matrices built from them (see
-  /// FrameGraph::read_mount_rotations_).
-  std::vector<std::pair<Eigen::Quaterniond, Eigen::Matrix3d>> TakeMountRotations() {
-    return std::move(mount_rotations_);
-  }
-
  private:
   [[noreturn]] void Fail(const std::string& problem, const YAML::Node& node) const {
     std::string line;
@@ -196,27 +184,19 @@ class CellReader {
   }
 
   /// The pose as written: the quaternion's coefficients are checked, not renormalized.
-  FilePose Pose(const YAML::Node& node, const std::string& where) {
+  QuaternionPose Pose(const YAML::Node& node, const std::string& where) {
     ExpectMap(node, where);
     CheckKeys(node, kPoseFields, where);
     const auto t = Numbers(Require(node, "translation_mm", where), 3, where + ".translation_mm");
     const YAML::Node rotation = Require(node, "rotation_wxyz", where);
     const auto q = Numbers(rotation, 4, where + ".rotation_wxyz");
     const double norm = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(std::abs(norm - 1.0) <= 1e-9)) {
+    if (!(std::abs(norm - 1.0) <= kUnitQuaternionTolerance)) {
       Fail(where + ": rotation_wxyz has norm " + FormatDouble(norm) +
                "; expected a unit quaternion (norm within 1e-9 of 1), w first",
            rotation);
     }
     return {Eigen::Quaterniond(q[0], q[1], q[2], q[3]), Eigen::Vector3d(t[0], t[1], t[2])};
-  }
-
-  /// A robot's mounting transform (a DhChain matrix); remembers the rotation as read.
-  Eigen::Isometry3d MountPose(const YAML::Node& node, const std::string& where) {
-    const FilePose pose = Pose(node, where);
-    const Eigen::Isometry3d matrix = PoseFromQuaternion(pose.rotation, pose.translation_mm);
-    mount_rotations_.emplace_back(pose.rotation, matrix.linear());
-    return matrix;
   }
 
   void ReadFrames(const YAML::Node& frames, FrameGraph& graph) {
@@ -258,13 +238,13 @@ class CellReader {
         Fail(where + ": unknown convention '" + convention + "'; expected standard or modified",
              convention_node);
       }
-      Eigen::Isometry3d base_from_chain = Eigen::Isometry3d::Identity();
-      Eigen::Isometry3d chain_from_flange = Eigen::Isometry3d::Identity();
+      QuaternionPose base_from_chain, chain_from_flange;  // identity when absent
       if (const auto n = Find(robot, "base_from_chain")) {
-        base_from_chain = MountPose(*n, where + " base_from_chain");
+        base_from_chain = Pose(*n, where + " base_from_chain");
       }
-      if (const auto n = Find(robot, "chain_from_flange"))
-        chain_from_flange = MountPose(*n, where + " chain_from_flange");
+      if (const auto n = Find(robot, "chain_from_flange")) {
+        chain_from_flange = Pose(*n, where + " chain_from_flange");
+      }
       const YAML::Node joints = Require(robot, "joints", where);
       if (!joints.IsSequence()) Fail(where + " joints must be a list, got " + Kind(joints), joints);
       std::vector<DhJoint> rows;
@@ -298,10 +278,8 @@ class CellReader {
     StaticEdge s;
     s.parent = parent;
     s.child = child;
-    const FilePose pose =
+    s.parent_from_child =
         Pose(Require(edge, "parent_from_child", where), where + " parent_from_child");
-    s.rotation = pose.rotation;
-    s.translation_mm = pose.translation_mm;
     if (const auto c = Find(edge, "covariance")) {
       const auto values = Numbers(*c, 36, where + " covariance");
       s.covariance = Eigen::Map<const Eigen::Matrix<double, 6, 6, Eigen::RowMajor>>(values.data());
@@ -392,17 +370,13 @@ class CellReader {
   }
 
   std::string name_;
-  std::vector<std::pair<Eigen::Quaterniond, Eigen::Matrix3d>> mount_rotations_;
 };
 
 }  // namespace
 
 FrameGraph FrameGraphFromYaml(const std::string& text, const std::string& name) {
   try {
-    CellReader reader(name);
-    FrameGraph graph = reader.Read(YAML::Load(text));
-    graph.read_mount_rotations_ = reader.TakeMountRotations();
-    return graph;
+    return CellReader(name).Read(YAML::Load(text));
   } catch (const YAML::ParserException& e) {
     throw FileError(name, "YAML syntax error at line " + std::to_string(e.mark.line + 1) +
                               ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg +

@@ -4,18 +4,14 @@
 // in insertion order followed by dynamic edges in insertion order; numbers by FormatDouble
 // (shortest text that reads back to the same double); strings double-quoted and escaped.
 //
-// A static edge holds the file's quaternion and translation, which are written as they are:
-// reading them back gives the same doubles, and writing again the same text. A robot's
-// mounting transforms are matrices (DhChain); they are written with the quaternion read from
-// the file while the model still holds exactly the matrix built from it (FrameGraph's
-// read_mount_rotations_), else with their canonical quaternion.
+// Static edges and robots' mounts (DhChain) hold the file's quaternions and translations
+// (QuaternionPose), which are written as they are: reading them back gives the same doubles,
+// and writing again the same text.
 
 #include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>
-#include <cstring>
-#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
@@ -25,9 +21,6 @@
 namespace lasercell {
 
 namespace {
-
-/// Rotations read from a file with the matrices built from them (FrameGraph's notes).
-using ReadRotations = std::vector<std::pair<Eigen::Quaterniond, Eigen::Matrix3d>>;
 
 std::string Quoted(const std::string& text) {
   static const char* kHex = "0123456789ABCDEF";
@@ -70,29 +63,15 @@ std::string Number(double value, const std::string& what) {
   return FormatDouble(value);
 }
 
-/// Refuses a pose with non-finite entries, naming it.
-void CheckFinitePose(bool finite, const std::string& what) {
-  if (!finite) {
+/// PoseToFileNotation for the writer: refuses a pose with non-finite entries, naming it.
+std::string Pose(const QuaternionPose& pose, const std::string& what) {
+  if (!pose.rotation.coeffs().allFinite() || !pose.translation_mm.allFinite()) {
     throw InputError("cannot write " + what + ": the pose is not finite; fix it before saving");
-  }
-}
-
-/// A robot's mounting transform in the file notation: the rotation read from the file when
-/// `pose` still holds exactly (bit for bit) the matrix built from it, else the canonical one.
-std::string MountPose(const Eigen::Isometry3d& pose, const ReadRotations& read,
-                      const std::string& what) {
-  CheckFinitePose(pose.matrix().topRows<3>().allFinite(), what);
-  const Eigen::Matrix3d rotation = pose.linear();
-  for (const auto& [file_rotation, matrix] : read) {
-    if (std::memcmp(matrix.data(), rotation.data(), sizeof(double) * 9) == 0) {
-      return PoseToFileNotation(file_rotation, pose.translation());
-    }
   }
   return PoseToFileNotation(pose);
 }
 
-void WriteRobot(std::string& out, const std::string& name, const KinematicModel& model,
-                const ReadRotations& read) {
+void WriteRobot(std::string& out, const std::string& name, const KinematicModel& model) {
   const auto* chain = dynamic_cast<const DhChain*>(&model);
   if (chain == nullptr) {
     throw InputError("cannot write robot '" + name + "': its kinematic model type '" +
@@ -102,8 +81,8 @@ void WriteRobot(std::string& out, const std::string& name, const KinematicModel&
   out += "  " + NameToken(name) + ":\n    model: dh\n";
   out += std::string("    convention: ") +
          (chain->convention() == DhConvention::kStandard ? "standard" : "modified") + "\n";
-  out += "    base_from_chain: " + MountPose(chain->base_from_chain(), read, what) + "\n";
-  out += "    chain_from_flange: " + MountPose(chain->chain_from_flange(), read, what) + "\n";
+  out += "    base_from_chain: " + Pose(chain->base_from_chain_stored(), what) + "\n";
+  out += "    chain_from_flange: " + Pose(chain->chain_from_flange_stored(), what) + "\n";
   if (chain->joints().empty()) {
     out += "    joints: []\n";
     return;
@@ -121,10 +100,8 @@ void WriteRobot(std::string& out, const std::string& name, const KinematicModel&
 
 void WriteStaticEdge(std::string& out, const StaticEdge& edge) {
   const std::string what = "static edge " + edge.parent + " <- " + edge.child;
-  CheckFinitePose(edge.rotation.coeffs().allFinite() && edge.translation_mm.allFinite(), what);
   out += "  - parent: " + NameToken(edge.parent) + "\n    child: " + NameToken(edge.child) +
-         "\n    type: static\n    parent_from_child: " +
-         PoseToFileNotation(edge.rotation, edge.translation_mm) + "\n";
+         "\n    type: static\n    parent_from_child: " + Pose(edge.parent_from_child, what) + "\n";
   if (edge.covariance) {
     out += "    covariance: [";
     for (int r = 0; r < 6; ++r) {
@@ -149,17 +126,16 @@ std::string FormatDouble(double value) {
   return std::string(buffer.data(), result.ptr);
 }
 
-std::string PoseToFileNotation(const Eigen::Quaterniond& rotation,
-                               const Eigen::Vector3d& translation_mm) {
-  const Eigen::Vector3d& t = translation_mm;
-  const Eigen::Quaterniond& q = rotation;
+std::string PoseToFileNotation(const QuaternionPose& pose) {
+  const Eigen::Vector3d& t = pose.translation_mm;
+  const Eigen::Quaterniond& q = pose.rotation;
   return "{translation_mm: [" + FormatDouble(t.x()) + ", " + FormatDouble(t.y()) + ", " +
          FormatDouble(t.z()) + "], rotation_wxyz: [" + FormatDouble(q.w()) + ", " +
          FormatDouble(q.x()) + ", " + FormatDouble(q.y()) + ", " + FormatDouble(q.z()) + "]}";
 }
 
 std::string PoseToFileNotation(const Eigen::Isometry3d& pose) {
-  return PoseToFileNotation(CanonicalQuaternion(pose.linear()), pose.translation());
+  return PoseToFileNotation(QuaternionPose::FromIsometry(pose));
 }
 
 std::string FrameGraphToYaml(const FrameGraph& graph) {
@@ -173,7 +149,7 @@ std::string FrameGraphToYaml(const FrameGraph& graph) {
   const std::vector<std::string> robots = graph.Robots();
   out += robots.empty() ? "robots: {}\n" : "robots:\n";
   for (const std::string& robot : robots) {
-    WriteRobot(out, robot, graph.Robot(robot), graph.read_mount_rotations_);
+    WriteRobot(out, robot, graph.Robot(robot));
   }
   const bool no_edges = graph.static_edges().empty() && graph.dynamic_edges().empty();
   out += no_edges ? "edges: []\n" : "edges:\n";

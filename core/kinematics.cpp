@@ -39,10 +39,14 @@ Eigen::Isometry3d DhLinkTransform(DhConvention convention, const DhJoint& row, d
   return t;
 }
 
-bool IsFinitePose(const Eigen::Isometry3d& pose) { return pose.matrix().allFinite(); }
-
 std::string ConventionName(DhConvention convention) {
   return convention == DhConvention::kStandard ? "standard" : "modified";
+}
+
+/// A mount given as a matrix, checked and converted once.
+QuaternionPose MountFromMatrix(const Eigen::Isometry3d& mount, const char* name) {
+  CheckRigidTransform(mount, std::string("DH chain ") + name);
+  return QuaternionPose::FromIsometry(mount);
 }
 
 }  // namespace
@@ -50,10 +54,12 @@ std::string ConventionName(DhConvention convention) {
 DhChain::DhChain(DhConvention convention, std::vector<DhJoint> joints,
                  const Eigen::Isometry3d& base_from_chain,
                  const Eigen::Isometry3d& chain_from_flange)
-    : convention_(convention),
-      joints_(std::move(joints)),
-      base_from_chain_(base_from_chain),
-      chain_from_flange_(chain_from_flange) {
+    : DhChain(convention, std::move(joints), MountFromMatrix(base_from_chain, "base_from_chain"),
+              MountFromMatrix(chain_from_flange, "chain_from_flange")) {}
+
+DhChain::DhChain(DhConvention convention, std::vector<DhJoint> joints,
+                 const QuaternionPose& base_from_chain, const QuaternionPose& chain_from_flange)
+    : convention_(convention), joints_(std::move(joints)) {
   for (std::size_t i = 0; i < joints_.size(); ++i) {
     const DhJoint& j = joints_[i];
     if (!std::isfinite(j.a_mm) || !std::isfinite(j.alpha_rad) || !std::isfinite(j.d_mm) ||
@@ -64,11 +70,28 @@ DhChain::DhChain(DhConvention convention, std::vector<DhJoint> joints,
                        "every DH parameter must be a finite number in mm or rad");
     }
   }
-  if (!IsFinitePose(base_from_chain_) || !IsFinitePose(chain_from_flange_)) {
-    throw InputError(
-        "DH chain: base_from_chain or chain_from_flange has non-finite entries; pass finite "
-        "transforms (identity when there is no mounting offset)");
-  }
+  set_base_from_chain(base_from_chain);
+  set_chain_from_flange(chain_from_flange);
+}
+
+void DhChain::set_base_from_chain(const Eigen::Isometry3d& base_from_chain) {
+  set_base_from_chain(MountFromMatrix(base_from_chain, "base_from_chain"));
+}
+
+void DhChain::set_chain_from_flange(const Eigen::Isometry3d& chain_from_flange) {
+  set_chain_from_flange(MountFromMatrix(chain_from_flange, "chain_from_flange"));
+}
+
+void DhChain::set_base_from_chain(const QuaternionPose& base_from_chain) {
+  CheckQuaternionPose(base_from_chain, "DH chain base_from_chain");
+  base_from_chain_ = base_from_chain;
+  base_from_chain_matrix_ = base_from_chain_.ToIsometry();
+}
+
+void DhChain::set_chain_from_flange(const QuaternionPose& chain_from_flange) {
+  CheckQuaternionPose(chain_from_flange, "DH chain chain_from_flange");
+  chain_from_flange_ = chain_from_flange;
+  chain_from_flange_matrix_ = chain_from_flange_.ToIsometry();
 }
 
 std::vector<Eigen::Isometry3d> DhChain::LinkPoses(std::span<const double> joints_rad) const {
@@ -87,7 +110,7 @@ std::vector<Eigen::Isometry3d> DhChain::LinkPoses(std::span<const double> joints
   }
   std::vector<Eigen::Isometry3d> poses;
   poses.reserve(n);
-  Eigen::Isometry3d base_from_link = base_from_chain_;
+  Eigen::Isometry3d base_from_link = base_from_chain_matrix_;
   for (std::size_t i = 0; i < n; ++i) {
     const DhJoint& row = joints_[i];
     const double theta = joints_rad[i] + row.theta_offset_rad + row.joint_offset_rad;
@@ -99,8 +122,8 @@ std::vector<Eigen::Isometry3d> DhChain::LinkPoses(std::span<const double> joints
 
 Eigen::Isometry3d DhChain::BaseFromFlange(std::span<const double> joints_rad) const {
   const std::vector<Eigen::Isometry3d> links = LinkPoses(joints_rad);
-  const Eigen::Isometry3d base_from_last = links.empty() ? base_from_chain_ : links.back();
-  return base_from_last * chain_from_flange_;
+  const Eigen::Isometry3d& base_from_last = links.empty() ? base_from_chain_matrix_ : links.back();
+  return base_from_last * chain_from_flange_matrix_;
 }
 
 std::unique_ptr<KinematicModel> DhChain::Clone() const { return std::make_unique<DhChain>(*this); }

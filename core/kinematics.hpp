@@ -11,7 +11,9 @@
 //    (row i stores alpha_{i-1} and a_{i-1} in alpha_rad and a_mm).
 //  theta_i = joint_i + theta_offset_rad_i (nominal zero) + joint_offset_rad_i (calibrated error).
 // base_from_chain and chain_from_flange are fixed transforms before and after the chain
-// (identity by default); they let a calibrated model absorb mounting errors.
+// (identity by default); they let a calibrated model absorb mounting errors. DhChain stores them
+// as files hold them (QuaternionPose: unit quaternion + translation, mm), so a chain read from
+// cell.yaml writes back the very same numbers; their matrices are computed once, when set.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -19,6 +21,8 @@
 #include <span>
 #include <string>
 #include <vector>
+
+#include "core/se3.hpp"
 
 namespace lasercell {
 
@@ -49,13 +53,22 @@ struct DhJoint {
   double joint_offset_rad = 0;    ///< Calibrated joint offset error, rad (0 when nominal).
 };
 
-/// A serial chain described by a DH table, with base and flange transforms.
+/// A serial chain described by a DH table, with base and flange transforms (mounts).
+/// Mounts are stored as QuaternionPose (the `*_stored()` getters); `base_from_chain()` and
+/// `chain_from_flange()` return the matrices built from them (QuaternionPose::ToIsometry),
+/// cached when the mount is set, so BaseFromFlange converts nothing.
 class DhChain final : public KinematicModel {
  public:
   DhChain() = default;
+  /// Mounts given as matrices are converted once (QuaternionPose::FromIsometry). Throws
+  /// InputError for a non-finite DH value or a mount that is not a finite rigid transform.
   DhChain(DhConvention convention, std::vector<DhJoint> joints,
           const Eigen::Isometry3d& base_from_chain = Eigen::Isometry3d::Identity(),
           const Eigen::Isometry3d& chain_from_flange = Eigen::Isometry3d::Identity());
+  /// Mounts stored exactly as given (e.g. as read from a file). Throws InputError for a
+  /// non-finite DH value or a mount failing CheckQuaternionPose.
+  DhChain(DhConvention convention, std::vector<DhJoint> joints,
+          const QuaternionPose& base_from_chain, const QuaternionPose& chain_from_flange);
 
   int NumJoints() const override { return static_cast<int>(joints_.size()); }
   Eigen::Isometry3d BaseFromFlange(std::span<const double> joints_rad) const override;
@@ -68,16 +81,31 @@ class DhChain final : public KinematicModel {
   DhConvention convention() const { return convention_; }
   const std::vector<DhJoint>& joints() const { return joints_; }
   std::vector<DhJoint>& mutable_joints() { return joints_; }
-  const Eigen::Isometry3d& base_from_chain() const { return base_from_chain_; }
-  const Eigen::Isometry3d& chain_from_flange() const { return chain_from_flange_; }
-  void set_base_from_chain(const Eigen::Isometry3d& t) { base_from_chain_ = t; }
-  void set_chain_from_flange(const Eigen::Isometry3d& t) { chain_from_flange_ = t; }
+
+  /// The mounts as matrices: exactly `*_stored().ToIsometry()`, computed when set.
+  const Eigen::Isometry3d& base_from_chain() const { return base_from_chain_matrix_; }
+  const Eigen::Isometry3d& chain_from_flange() const { return chain_from_flange_matrix_; }
+  /// The mounts as stored: quaternion and translation (mm), as given or read.
+  const QuaternionPose& base_from_chain_stored() const { return base_from_chain_; }
+  const QuaternionPose& chain_from_flange_stored() const { return chain_from_flange_; }
+  /// Sets a mount from a matrix, converted once (QuaternionPose::FromIsometry). Throws
+  /// InputError (and keeps the previous mount) unless it is a finite rigid transform.
+  void set_base_from_chain(const Eigen::Isometry3d& base_from_chain);
+  void set_chain_from_flange(const Eigen::Isometry3d& chain_from_flange);
+  /// Sets a mount exactly as given. Throws InputError (and keeps the previous mount) unless it
+  /// passes CheckQuaternionPose.
+  void set_base_from_chain(const QuaternionPose& base_from_chain);
+  void set_chain_from_flange(const QuaternionPose& chain_from_flange);
 
  private:
   DhConvention convention_ = DhConvention::kStandard;
   std::vector<DhJoint> joints_;
-  Eigen::Isometry3d base_from_chain_ = Eigen::Isometry3d::Identity();
-  Eigen::Isometry3d chain_from_flange_ = Eigen::Isometry3d::Identity();
+  QuaternionPose base_from_chain_;
+  QuaternionPose chain_from_flange_;
+  // base_from_chain_.ToIsometry() and chain_from_flange_.ToIsometry(), kept in step by the
+  // constructors and setters (BaseFromFlange runs in calibration's inner loops).
+  Eigen::Isometry3d base_from_chain_matrix_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d chain_from_flange_matrix_ = Eigen::Isometry3d::Identity();
 };
 
 /// Nominal UR5 (Universal Robots' published standard-DH table, mm):

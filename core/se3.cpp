@@ -2,6 +2,8 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <string>
 
@@ -144,6 +146,62 @@ Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d m;
   m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
   return m;
+}
+
+Eigen::Quaterniond CanonicalQuaternion(const Eigen::Matrix3d& rotation) {
+  Eigen::Quaterniond q = Eigen::Quaterniond(rotation).normalized();
+  // The first nonzero of (w, x, y, z) positive; Eigen stores the coefficients as (x, y, z, w).
+  for (const int i : {3, 0, 1, 2}) {
+    if (q.coeffs()[i] == 0) continue;
+    if (q.coeffs()[i] < 0) q.coeffs() = -q.coeffs();
+    break;
+  }
+  for (int i = 0; i < 4; ++i) {
+    if (q.coeffs()[i] == 0) q.coeffs()[i] = 0.0;  // +0, never -0
+  }
+  return q;
+}
+
+Eigen::Isometry3d QuaternionPose::ToIsometry() const {
+  return PoseFromQuaternion(rotation, translation_mm);
+}
+
+QuaternionPose QuaternionPose::FromIsometry(const Eigen::Isometry3d& pose) {
+  return {CanonicalQuaternion(pose.linear()), pose.translation()};
+}
+
+namespace {
+/// Shortest text that reads back to the same double (as the cell-file writer prints numbers).
+std::string Shortest(double value) {
+  std::array<char, 64> buffer{};
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  return std::string(buffer.data(), result.ptr);
+}
+}  // namespace
+
+void CheckRigidTransform(const Eigen::Isometry3d& pose, const std::string& what) {
+  if (!pose.matrix().topRows<3>().allFinite()) {
+    throw InputError(what + " has non-finite entries; pass a finite rigid transform");
+  }
+  const Eigen::Matrix3d r = pose.linear();
+  const double orthonormality = (r.transpose() * r - Eigen::Matrix3d::Identity()).norm();
+  if (!(orthonormality < 1e-9) || !(r.determinant() > 0)) {
+    throw InputError(what + " has a rotation that is not orthonormal (|R^T R - I| = " +
+                     Shortest(orthonormality) + ", det = " + Shortest(r.determinant()) +
+                     "); pass a proper rotation (see Orthonormalized in core/se3.hpp)");
+  }
+}
+
+void CheckQuaternionPose(const QuaternionPose& pose, const std::string& what) {
+  if (!pose.rotation.coeffs().allFinite() || !pose.translation_mm.allFinite()) {
+    throw InputError(what + " has non-finite entries; pass a finite rigid transform");
+  }
+  const double norm = pose.rotation.norm();
+  if (!(std::abs(norm - 1.0) <= kUnitQuaternionTolerance)) {
+    throw InputError(what + ": rotation has norm " + Shortest(norm) +
+                     "; pass a unit quaternion (norm within 1e-9 of 1), or set the pose from a "
+                     "rotation matrix instead");
+  }
 }
 
 }  // namespace lasercell

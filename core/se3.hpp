@@ -2,10 +2,14 @@
 // SE(3) helpers. Conventions: transforms `target_from_source` as Eigen::Isometry3d; rotation
 // vectors are axis * angle (rad); quaternions in files are unit (w, x, y, z); translations mm.
 // Rotation distance is the angle of R_a^T R_b, in [0, pi], rad.
+// QuaternionPose is a pose as files hold it (unit quaternion + translation, mm): the form in
+// which the frame graph stores static edges and DhChain its mounting transforms, so that
+// file -> memory -> file is exact.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <span>
+#include <string>
 
 namespace lasercell {
 
@@ -53,5 +57,36 @@ Eigen::Isometry3d Orthonormalized(const Eigen::Isometry3d& pose);
 
 /// Skew-symmetric matrix [v]x so that [v]x w = v x w.
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v);
+
+/// How far from 1 the norm of a stored quaternion may be (files, StaticEdge, DhChain mounts).
+inline constexpr double kUnitQuaternionTolerance = 1e-9;
+
+/// The unit quaternion of a rotation matrix, with the canonical sign: the first nonzero of
+/// (w, x, y, z) is positive (w >= 0; x > 0 when w == 0; ...), and no coefficient is -0.
+Eigen::Quaterniond CanonicalQuaternion(const Eigen::Matrix3d& rotation);
+
+/// A pose `target_from_source` as files hold it: p_in_target = R(rotation) * p_in_source +
+/// translation_mm. The coefficients are kept exactly as given or read (never renormalized, any
+/// sign), so writing them back reproduces the file; only ToIsometry normalizes, for the matrix.
+/// Whoever stores one (StaticEdge, DhChain) checks it with CheckQuaternionPose.
+struct QuaternionPose {
+  /// Unit quaternion (|q| within kUnitQuaternionTolerance of 1); files write it (w, x, y, z).
+  Eigen::Quaterniond rotation = Eigen::Quaterniond::Identity();
+  /// The source frame's origin in target coordinates, mm.
+  Eigen::Vector3d translation_mm = Eigen::Vector3d::Zero();
+
+  /// The matrix, built from the normalized `rotation` exactly as PoseFromQuaternion builds it.
+  Eigen::Isometry3d ToIsometry() const;
+  /// One conversion of a rigid transform: CanonicalQuaternion(pose.linear()) and the
+  /// translation as is. The rotation part must be orthonormal (see CheckRigidTransform).
+  static QuaternionPose FromIsometry(const Eigen::Isometry3d& pose);
+};
+
+/// Throws InputError, starting with `what`, unless `pose` is finite with an orthonormal,
+/// right-handed rotation (|R^T R - I| < 1e-9, det > 0), i.e. unless FromIsometry is faithful.
+void CheckRigidTransform(const Eigen::Isometry3d& pose, const std::string& what);
+/// Throws InputError, starting with `what`, unless `pose` is finite and |rotation| is within
+/// kUnitQuaternionTolerance of 1.
+void CheckQuaternionPose(const QuaternionPose& pose, const std::string& what);
 
 }  // namespace lasercell

@@ -29,11 +29,13 @@ std::string Short(double v) {
 }
 
 std::string DescribeStatic(const StaticEdge& e, bool forward) {
-  std::string text = "static " + e.parent + "_from_" + e.child + " = " +
-                     PoseToFileNotation(e.rotation, e.translation_mm);
+  std::string text =
+      "static " + e.parent + "_from_" + e.child + " = " + PoseToFileNotation(e.parent_from_child);
   if (!forward) text += " (edge stored in the other direction)";
   const auto& p = e.provenance;
-  if (!p.tool.empty() || !p.date.empty()) text += "\n      by: " + p.tool + ", " + p.date;
+  if (!p.tool.empty() || !p.date.empty()) {
+    text += "\n      by: " + p.tool + (p.tool.empty() || p.date.empty() ? "" : ", ") + p.date;
+  }
   if (!p.residual_summary.empty()) text += "\n      residuals: " + p.residual_summary;
   if (!p.input_digest.empty()) text += "\n      inputs: " + p.input_digest;
   if (e.covariance) {

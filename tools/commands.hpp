@@ -6,4 +6,6 @@
 namespace lasercell::tools {
 void AddCloudCommands(CLI::App& app);   ///< cloud info, cloud convert
 void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
+void AddLocalizeCommand(CLI::App& app);  ///< localize
+void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
 }  // namespace lasercell::tools

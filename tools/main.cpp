@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("lasercell ") + LASERCELL_VERSION);
   lasercell::tools::AddCloudCommands(app);
   lasercell::tools::AddFramesCommands(app);
+  lasercell::tools::AddLocalizeCommand(app);
+  lasercell::tools::AddSimulateCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

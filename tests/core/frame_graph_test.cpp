@@ -49,9 +49,10 @@ StaticEdge Edge(const std::string& parent, const std::string& child,
 
 /// True when both edges store the very same bits for rotation and translation.
 bool SamePoseBits(const StaticEdge& a, const StaticEdge& b) {
-  return std::memcmp(a.rotation.coeffs().data(), b.rotation.coeffs().data(), 4 * sizeof(double)) ==
+  const QuaternionPose &x = a.parent_from_child, &y = b.parent_from_child;
+  return std::memcmp(x.rotation.coeffs().data(), y.rotation.coeffs().data(), 4 * sizeof(double)) ==
              0 &&
-         std::memcmp(a.translation_mm.data(), b.translation_mm.data(), 3 * sizeof(double)) == 0;
+         std::memcmp(x.translation_mm.data(), y.translation_mm.data(), 3 * sizeof(double)) == 0;
 }
 
 /// A random tree: frame_i (i > 0) hangs off a random earlier frame, in a random direction;
@@ -248,8 +249,8 @@ TEST(FrameGraphTest, MatricesMustBeRigid) {
       EXPECT_THAT(e.what(), HasSubstr("static edge a <- b parent_from_child"));
     }
     // The edge keeps its previous (identity) pose.
-    EXPECT_EQ(edge.rotation.coeffs(), Eigen::Quaterniond::Identity().coeffs());
-    EXPECT_EQ(edge.translation_mm, Eigen::Vector3d::Zero());
+    EXPECT_EQ(edge.parent_from_child.rotation.coeffs(), Eigen::Quaterniond::Identity().coeffs());
+    EXPECT_EQ(edge.parent_from_child.translation_mm, Eigen::Vector3d::Zero());
   }
   Eigen::Isometry3d almost = Eigen::Isometry3d::Identity();
   almost.linear()(0, 1) = 1e-12;
@@ -268,8 +269,7 @@ TEST(FrameGraphTest, QuaternionsGivenDirectlyMustBeUnitAndFiniteAndAreKeptAsGive
     StaticEdge edge;
     edge.parent = "a";
     edge.child = "b";
-    edge.rotation = q;
-    edge.translation_mm = t;
+    edge.parent_from_child = {q, t};
     return edge;
   };
   const Eigen::Vector3d t(1, 2, 3);
@@ -294,8 +294,9 @@ TEST(FrameGraphTest, QuaternionsGivenDirectlyMustBeUnitAndFiniteAndAreKeptAsGive
   const Eigen::Quaterniond q(-(0.6 + 5e-10), 0.0, -0.0, 0.8);
   graph.SetStaticEdge(edge_with(q, t));
   const StaticEdge& stored = graph.static_edges()[0];
-  EXPECT_EQ(std::memcmp(stored.rotation.coeffs().data(), q.coeffs().data(), 4 * sizeof(double)), 0);
-  EXPECT_TRUE(std::signbit(stored.rotation.y()));
+  const Eigen::Quaterniond& kept = stored.parent_from_child.rotation;
+  EXPECT_EQ(std::memcmp(kept.coeffs().data(), q.coeffs().data(), 4 * sizeof(double)), 0);
+  EXPECT_TRUE(std::signbit(kept.y()));
   const Eigen::Isometry3d matrix = stored.ParentFromChild();
   EXPECT_EQ(matrix.matrix(), PoseFromQuaternion(q, t).matrix());
   EXPECT_LT((matrix.linear().transpose() * matrix.linear() - Eigen::Matrix3d::Identity()).norm(),
@@ -325,8 +326,8 @@ TEST(FrameGraphTest, SetParentFromChildStoresTheCanonicalQuaternionOnce) {
   for (const auto& c : exact) {
     StaticEdge edge;
     edge.SetParentFromChild(Eigen::Isometry3d(c.rotation));
-    const Eigen::Vector4d wxyz(edge.rotation.w(), edge.rotation.x(), edge.rotation.y(),
-                               edge.rotation.z());
+    const Eigen::Quaterniond& r = edge.parent_from_child.rotation;
+    const Eigen::Vector4d wxyz(r.w(), r.x(), r.y(), r.z());
     EXPECT_LT((wxyz - c.wxyz).cwiseAbs().maxCoeff(), 1e-15) << wxyz.transpose();
     for (int i = 0; i < 4; ++i) EXPECT_FALSE(wxyz[i] == 0 && std::signbit(wxyz[i])) << "-0";
   }
@@ -340,11 +341,11 @@ TEST(FrameGraphTest, SetParentFromChildStoresTheCanonicalQuaternionOnce) {
                            100.0 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
     StaticEdge edge;
     edge.SetParentFromChild(pose);
-    EXPECT_GT(edge.rotation.w(), 0.0);
-    EXPECT_NEAR(edge.rotation.norm(), 1.0, 1e-15);
-    EXPECT_EQ(edge.translation_mm, pose.translation());
+    EXPECT_GT(edge.parent_from_child.rotation.w(), 0.0);
+    EXPECT_NEAR(edge.parent_from_child.rotation.norm(), 1.0, 1e-15);
+    EXPECT_EQ(edge.parent_from_child.translation_mm, pose.translation());
     EXPECT_LT((edge.ParentFromChild().linear() - pose.linear()).cwiseAbs().maxCoeff(), 1e-14);
-    EXPECT_LT(std::abs(std::abs(edge.rotation.dot(q)) - 1.0), 1e-15);
+    EXPECT_LT(std::abs(std::abs(edge.parent_from_child.rotation.dot(q)) - 1.0), 1e-15);
   }
 }
 

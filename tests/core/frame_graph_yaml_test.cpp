@@ -1,6 +1,6 @@
-// cell.yaml: exact text, bit-exact round trips on random cells (static edges keep the file's
-// quaternions; robots' mounting rotations are written as read), every rejected input with a
-// message naming the file and the problem, and atomic saves.
+// cell.yaml: exact text, bit-exact round trips on random cells (static edges and robots' mounts
+// keep the file's quaternions), every rejected input with a message naming the file and the
+// problem, and atomic saves.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -44,7 +44,7 @@ bool SameBits(const A& a, const B& b) {
   return std::memcmp(&a, &b, sizeof(a)) == 0;
 }
 
-::testing::AssertionResult SamePose(const StaticEdge& a, const StaticEdge& b) {
+::testing::AssertionResult SamePose(const QuaternionPose& a, const QuaternionPose& b) {
   if (SameBits(a.rotation.coeffs(), b.rotation.coeffs()) &&
       SameBits(a.translation_mm, b.translation_mm)) {
     return ::testing::AssertionSuccess();
@@ -171,7 +171,7 @@ void ExpectIdentical(const FrameGraph& a, const FrameGraph& b) {
     const StaticEdge &x = a.static_edges()[i], &y = b.static_edges()[i];
     EXPECT_EQ(x.parent, y.parent);
     EXPECT_EQ(x.child, y.child);
-    EXPECT_TRUE(SamePose(x, y)) << "edge " << i;
+    EXPECT_TRUE(SamePose(x.parent_from_child, y.parent_from_child)) << "edge " << i;
     EXPECT_EQ(x.ParentFromChild().matrix(), y.ParentFromChild().matrix()) << "edge " << i;
     ASSERT_EQ(x.covariance.has_value(), y.covariance.has_value());
     if (x.covariance) {
@@ -193,6 +193,8 @@ void ExpectIdentical(const FrameGraph& a, const FrameGraph& b) {
     const auto& x = dynamic_cast<const DhChain&>(a.Robot(robot));
     const auto& y = dynamic_cast<const DhChain&>(b.Robot(robot));
     EXPECT_EQ(x.convention(), y.convention());
+    EXPECT_TRUE(SamePose(x.base_from_chain_stored(), y.base_from_chain_stored()));
+    EXPECT_TRUE(SamePose(x.chain_from_flange_stored(), y.chain_from_flange_stored()));
     EXPECT_TRUE(SameBits(x.base_from_chain().matrix(), y.base_from_chain().matrix()));
     EXPECT_TRUE(SameBits(x.chain_from_flange().matrix(), y.chain_from_flange().matrix()));
     ASSERT_EQ(x.joints().size(), y.joints().size());
@@ -254,13 +256,15 @@ TEST(FrameGraphYamlTest, RandomCellsRoundTripBitExactly) {
     }
     const Eigen::Isometry3d t1 = first.Transform("vision_flange", "handling_base", joints);
     EXPECT_EQ(t1.matrix(), second.Transform("vision_flange", "handling_base", joints).matrix());
-    // Against the original: static edges and numbers exact; robots' mounting rotations (matrices
-    // in DhChain) to rounding.
+    // Against the original: everything exact, robots' mounts included (DhChain stores them as
+    // the file does).
+    ExpectIdentical(original, first);
     const Eigen::Isometry3d t0 = original.Transform("vision_flange", "handling_base", joints);
-    EXPECT_LT((t0.matrix() - t1.matrix()).cwiseAbs().maxCoeff(), 1e-9);
+    EXPECT_EQ(t0.matrix(), t1.matrix());
     for (std::size_t i = 0; i < original.static_edges().size(); ++i) {
       const StaticEdge &o = original.static_edges()[i], &r = first.static_edges()[i];
-      EXPECT_TRUE(SamePose(o, r)) << "trial " << trial << " edge " << i;
+      EXPECT_TRUE(SamePose(o.parent_from_child, r.parent_from_child))
+          << "trial " << trial << " edge " << i;
       EXPECT_EQ(o.provenance.tool, r.provenance.tool);
       EXPECT_EQ(o.provenance.residual_summary, r.provenance.residual_summary);
       if (o.covariance) {
@@ -306,7 +310,9 @@ TEST(FrameGraphYamlTest, EveryPoseRoundTripsBitExactly) {
     graph.SetStaticEdge(Edge("a", "b", pose));
     const std::string text1 = FrameGraphToYaml(graph);
     const FrameGraph first = FrameGraphFromYaml(text1, "first.yaml");
-    ASSERT_TRUE(SamePose(first.static_edges()[0], graph.static_edges()[0])) << "trial " << trial;
+    ASSERT_TRUE(SamePose(first.static_edges()[0].parent_from_child,
+                         graph.static_edges()[0].parent_from_child))
+        << "trial " << trial;
     const std::string text2 = FrameGraphToYaml(first);
     ASSERT_EQ(text1, text2) << "trial " << trial;
     const Eigen::Isometry3d read = first.static_edges()[0].ParentFromChild();
@@ -320,8 +326,8 @@ TEST(FrameGraphYamlTest, EveryPoseRoundTripsBitExactly) {
 }
 
 TEST(FrameGraphYamlTest, RobotMountsRoundTripBitExactly) {
-  // DhChain holds its mounting transforms as matrices: once read, they write the quaternions
-  // that were read, so write -> read -> write gives the same text and the same doubles.
+  // DhChain stores its mounting transforms as the file holds them (QuaternionPose): a matrix is
+  // converted once, then write -> read -> write gives the same text and the same doubles.
   std::mt19937 rng(9);
   for (int trial = 0; trial < 600; ++trial) {
     const Eigen::Isometry3d base_from_chain = AnyPose(rng, trial);
@@ -336,6 +342,9 @@ TEST(FrameGraphYamlTest, RobotMountsRoundTripBitExactly) {
     const FrameGraph second = FrameGraphFromYaml(text2, "second.yaml");
     ExpectIdentical(first, second);
     const auto& read = dynamic_cast<const DhChain&>(first.Robot("arm"));
+    const auto& built = dynamic_cast<const DhChain&>(graph.Robot("arm"));
+    EXPECT_TRUE(SamePose(read.base_from_chain_stored(), built.base_from_chain_stored()));
+    EXPECT_TRUE(SamePose(read.chain_from_flange_stored(), built.chain_from_flange_stored()));
     EXPECT_EQ(read.base_from_chain().translation(), base_from_chain.translation());
     EXPECT_LT((read.base_from_chain().linear() - base_from_chain.linear()).cwiseAbs().maxCoeff(),
               1e-14);
@@ -348,7 +357,8 @@ TEST(FrameGraphYamlTest, RobotMountsRoundTripBitExactly) {
       EXPECT_NEAR(wxyz.norm(), 1.0, 1e-15);
     }
   }
-  // Copies and re-registered models keep that; a changed mount is written anew.
+  // Copies and re-registered models keep that; a changed mount is written anew, from a matrix
+  // with the canonical quaternion, from a QuaternionPose exactly as given.
   const FrameGraph read = FrameGraphFromYaml(
       FrameGraphToYaml([&] {
         FrameGraph g;
@@ -366,6 +376,17 @@ TEST(FrameGraphYamlTest, RobotMountsRoundTripBitExactly) {
   copy.SetRobot("arm", moved);
   EXPECT_THAT(FrameGraphToYaml(copy),
               HasSubstr("base_from_chain: " + PoseToFileNotation(new_base)));
+  const QuaternionPose new_flange{Eigen::Quaterniond(-0.6000000002, -0.0, 0.0, 0.8),
+                                  Eigen::Vector3d(0.1, -0.0, 1e-300)};
+  moved.set_chain_from_flange(new_flange);
+  copy.SetRobot("arm", moved);
+  const std::string flange_text =
+      "chain_from_flange: {translation_mm: [0.1, -0, 1e-300], "
+      "rotation_wxyz: [-0.6000000002, -0, 0, 0.8]}";
+  EXPECT_THAT(FrameGraphToYaml(copy), HasSubstr(flange_text));
+  const FrameGraph reread = FrameGraphFromYaml(FrameGraphToYaml(copy), "cell.yaml");
+  EXPECT_TRUE(SamePose(dynamic_cast<const DhChain&>(reread.Robot("arm")).chain_from_flange_stored(),
+                       new_flange));
 }
 
 TEST(FrameGraphYamlTest, ReplacingOneEdgeChangesOnlyItsLines) {
@@ -461,11 +482,14 @@ TEST(FrameGraphYamlTest, FileQuaternionsAreKeptAsWritten) {
   EXPECT_EQ(FrameGraphToYaml(graph), text);
   const StaticEdge& edge = graph.static_edges()[0];
   const Eigen::Quaterniond q(-0.6000000002, -0.0, 0.0, 0.8);
-  EXPECT_TRUE(SameBits(edge.rotation.coeffs(), q.coeffs()));
-  EXPECT_TRUE(SameBits(edge.translation_mm, Eigen::Vector3d(0.1, -0.0, 1e-300)));
-  EXPECT_EQ(edge.ParentFromChild().matrix(), PoseFromQuaternion(q, edge.translation_mm).matrix());
-  EXPECT_EQ(dynamic_cast<const DhChain&>(graph.Robot("vision_robot")).base_from_chain().matrix(),
-            PoseFromQuaternion(q, edge.translation_mm).matrix());
+  const QuaternionPose as_written{q, Eigen::Vector3d(0.1, -0.0, 1e-300)};
+  EXPECT_TRUE(SamePose(edge.parent_from_child, as_written));
+  EXPECT_EQ(edge.ParentFromChild().matrix(),
+            PoseFromQuaternion(q, as_written.translation_mm).matrix());
+  const auto& robot = dynamic_cast<const DhChain&>(graph.Robot("vision_robot"));
+  EXPECT_TRUE(SamePose(robot.base_from_chain_stored(), as_written));
+  EXPECT_EQ(robot.base_from_chain().matrix(),
+            PoseFromQuaternion(q, as_written.translation_mm).matrix());
 }
 
 TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {

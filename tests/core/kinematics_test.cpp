@@ -7,9 +7,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <random>
+#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
@@ -247,6 +249,106 @@ TEST(KinematicsTest, NonFiniteValuesAreRejected) {
   } catch (const InputError& e) {
     EXPECT_THAT(e.what(), HasSubstr("joint 2 has a non-finite value"));
   }
+}
+
+/// True when a and b hold the very same bits (so also the same sign of zero).
+bool SameBits(const QuaternionPose& a, const QuaternionPose& b) {
+  return std::memcmp(a.rotation.coeffs().data(), b.rotation.coeffs().data(), 4 * sizeof(double)) ==
+             0 &&
+         std::memcmp(a.translation_mm.data(), b.translation_mm.data(), 3 * sizeof(double)) == 0;
+}
+
+bool SameBits(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return std::memcmp(a.matrix().data(), b.matrix().data(), 16 * sizeof(double)) == 0;
+}
+
+TEST(KinematicsTest, MountsAreStoredAsGivenWithTheirMatricesCached) {
+  std::mt19937 rng(13);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const std::vector<double> q = {0.3, -1.1, 0.7, 2.0, -0.4, 1.3};
+  for (int trial = 0; trial < 200; ++trial) {
+    // Any sign, -0, and a norm off 1 by less than 1e-9, as a file may hold them.
+    const double off = 1.0 + 9e-10 * (2 * (trial % 2) - 1);
+    const QuaternionPose base{
+        Eigen::Quaterniond(Eigen::Vector4d(n(rng), n(rng), -0.0, n(rng)).normalized() * off),
+        100.0 * Eigen::Vector3d(n(rng), -0.0, n(rng))};
+    const QuaternionPose flange{
+        Eigen::Quaterniond(-Eigen::Vector4d(n(rng), n(rng), n(rng), n(rng)).normalized()),
+        Eigen::Vector3d(n(rng), n(rng), n(rng))};
+    const DhChain chain(DhConvention::kStandard, NominalUr5().joints(), base, flange);
+    EXPECT_TRUE(SameBits(chain.base_from_chain_stored(), base)) << "trial " << trial;
+    EXPECT_TRUE(SameBits(chain.chain_from_flange_stored(), flange)) << "trial " << trial;
+    EXPECT_TRUE(SameBits(chain.base_from_chain(), base.ToIsometry())) << "trial " << trial;
+    EXPECT_TRUE(SameBits(chain.chain_from_flange(), flange.ToIsometry())) << "trial " << trial;
+    EXPECT_TRUE(SameBits(chain.BaseFromFlange(q), chain.LinkPoses(q).back() * flange.ToIsometry()));
+    // Copies keep both forms.
+    const DhChain copy = chain;
+    const std::unique_ptr<KinematicModel> clone = chain.Clone();
+    EXPECT_TRUE(SameBits(copy.base_from_chain_stored(), base));
+    EXPECT_TRUE(SameBits(copy.chain_from_flange(), flange.ToIsometry()));
+    EXPECT_TRUE(SameBits(clone->BaseFromFlange(q), chain.BaseFromFlange(q)));
+    // Setters keep the cache in step: a QuaternionPose as given, a matrix converted once.
+    DhChain set = NominalUr5();
+    set.set_base_from_chain(base);
+    set.set_chain_from_flange(flange);
+    EXPECT_TRUE(SameBits(set.base_from_chain_stored(), base));
+    EXPECT_TRUE(SameBits(set.base_from_chain(), base.ToIsometry()));
+    EXPECT_TRUE(SameBits(set.chain_from_flange(), flange.ToIsometry()));
+    EXPECT_TRUE(SameBits(set.BaseFromFlange(q), chain.BaseFromFlange(q)));
+    const Eigen::Isometry3d matrix = RandomPose(rng);
+    set.set_base_from_chain(matrix);
+    EXPECT_TRUE(SameBits(set.base_from_chain_stored(), QuaternionPose::FromIsometry(matrix)));
+    EXPECT_TRUE(SameBits(set.base_from_chain(), QuaternionPose::FromIsometry(matrix).ToIsometry()));
+    EXPECT_TRUE(PosesNear(set.base_from_chain(), matrix, 1e-12));
+    const DhChain from_matrices(DhConvention::kModified, {}, matrix, matrix.inverse());
+    EXPECT_TRUE(SameBits(from_matrices.chain_from_flange_stored(),
+                         QuaternionPose::FromIsometry(matrix.inverse())));
+    EXPECT_TRUE(SameBits(from_matrices.chain_from_flange(),
+                         QuaternionPose::FromIsometry(matrix.inverse()).ToIsometry()));
+  }
+}
+
+TEST(KinematicsTest, BadMountsAreRejectedAndTheOldOnesKept) {
+  DhChain chain = NominalUr5();
+  const QuaternionPose kept{Eigen::Quaterniond(0.6, 0, 0.8, 0), Eigen::Vector3d(1, 2, 3)};
+  chain.set_base_from_chain(kept);
+  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
+  scaled.linear() *= 1.001;
+  Eigen::Isometry3d nan = Eigen::Isometry3d::Identity();
+  nan.translation().y() = std::nan("");
+  const struct {
+    QuaternionPose pose;
+    const char* problem;
+  } stored[] = {
+      {{Eigen::Quaterniond(1.001, 0, 0, 0), Eigen::Vector3d::Zero()}, "rotation has norm 1.001"},
+      {{Eigen::Quaterniond(0, 0, 0, 0), Eigen::Vector3d::Zero()}, "rotation has norm 0"},
+      {{Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, std::nan(""), 0)}, "non-finite"},
+  };
+  for (const auto& c : stored) {
+    try {
+      chain.set_base_from_chain(c.pose);
+      ADD_FAILURE() << "accepted " << c.problem;
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(c.problem));
+      EXPECT_THAT(e.what(), HasSubstr("DH chain base_from_chain"));
+    }
+    EXPECT_THROW(DhChain(DhConvention::kStandard, {}, QuaternionPose(), c.pose), InputError);
+  }
+  for (const auto& [matrix, problem] :
+       {std::pair{scaled, "not orthonormal"}, std::pair{nan, "non-finite"}}) {
+    try {
+      chain.set_chain_from_flange(matrix);
+      ADD_FAILURE() << "accepted " << problem;
+    } catch (const InputError& e) {
+      EXPECT_THAT(e.what(), HasSubstr(problem));
+      EXPECT_THAT(e.what(), HasSubstr("DH chain chain_from_flange"));
+    }
+    EXPECT_THROW(DhChain(DhConvention::kStandard, {}, matrix), InputError);
+  }
+  EXPECT_TRUE(SameBits(chain.base_from_chain_stored(), kept));
+  EXPECT_TRUE(SameBits(chain.base_from_chain(), kept.ToIsometry()));
+  EXPECT_TRUE(SameBits(chain.chain_from_flange_stored(), QuaternionPose()));
+  EXPECT_TRUE(SameBits(chain.chain_from_flange(), Eigen::Isometry3d::Identity()));
 }
 
 TEST(KinematicsTest, CloneIsDeep) {

@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "core/error.hpp"
@@ -233,6 +235,115 @@ TEST(Se3Test, SkewIsTheCrossProduct) {
   const Eigen::Vector3d v(1.5, -2.0, 0.25), w(-3.0, 0.5, 4.0);
   EXPECT_EQ(Skew(v) * w, v.cross(w));
   EXPECT_EQ(Skew(v).transpose(), -Skew(v));
+}
+
+TEST(Se3Test, CanonicalQuaternionHasThePositiveFirstNonzeroAndNoNegativeZero) {
+  // Rotations by pi (R = 2 a a^T - I) have w == 0: the first nonzero of (w, x, y, z) decides.
+  const double h = std::sqrt(0.5);
+  Eigen::Matrix3d about_y_z;  // axis (0, -1, 1) / sqrt(2)
+  about_y_z << -1, 0, 0, 0, 0, -1, 0, -1, 0;
+  Eigen::Matrix3d about_x_z;  // axis (-0.6, 0, 0.8): Eigen gives x < 0, so the sign is flipped
+  about_x_z << -0.28, 0, -0.96, 0, -1, 0, -0.96, 0, 0.28;
+  const struct {
+    Eigen::Matrix3d rotation;
+    Eigen::Vector4d wxyz;
+  } exact[] = {
+      {Eigen::Matrix3d::Identity(), {1, 0, 0, 0}},
+      {Eigen::Vector3d(1, -1, -1).asDiagonal(), {0, 1, 0, 0}},
+      {Eigen::Vector3d(-1, 1, -1).asDiagonal(), {0, 0, 1, 0}},
+      {Eigen::Vector3d(-1, -1, 1).asDiagonal(), {0, 0, 0, 1}},
+      {about_y_z, {0, 0, h, -h}},
+      {about_x_z, {0, 0.6, 0, -0.8}},
+  };
+  for (const auto& c : exact) {
+    const Eigen::Quaterniond q = CanonicalQuaternion(c.rotation);
+    const Eigen::Vector4d wxyz(q.w(), q.x(), q.y(), q.z());
+    EXPECT_LT((wxyz - c.wxyz).cwiseAbs().maxCoeff(), 1e-15) << wxyz.transpose();
+    for (int i = 0; i < 4; ++i) EXPECT_FALSE(wxyz[i] == 0 && std::signbit(wxyz[i])) << "-0";
+  }
+  std::mt19937 rng(21);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int trial = 0; trial < 1000; ++trial) {
+    const Eigen::Quaterniond q = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized();
+    const Eigen::Quaterniond c = CanonicalQuaternion(q.toRotationMatrix());
+    EXPECT_GT(c.w(), 0.0);
+    EXPECT_NEAR(c.norm(), 1.0, 1e-15);
+    EXPECT_LT(std::abs(std::abs(c.dot(q)) - 1.0), 1e-15);
+    // Both signs of the input quaternion give the same matrix, hence the same result.
+    EXPECT_EQ(c.coeffs(),
+              CanonicalQuaternion(Eigen::Quaterniond(-q.coeffs()).toRotationMatrix()).coeffs());
+  }
+}
+
+TEST(Se3Test, QuaternionPoseKeepsItsCoefficientsAndConvertsOnce) {
+  // Default: identity.
+  const QuaternionPose identity;
+  EXPECT_EQ(identity.ToIsometry().matrix(), Eigen::Matrix4d::Identity());
+  // Stored as given (any sign, -0, norm off 1 within the tolerance); only the matrix normalizes.
+  const QuaternionPose given{Eigen::Quaterniond(-(0.6 + 5e-10), 0.0, -0.0, 0.8),
+                             Eigen::Vector3d(0.1, -0.0, 1e-300)};
+  EXPECT_TRUE(std::signbit(given.rotation.y()));
+  EXPECT_EQ(given.ToIsometry().matrix(),
+            PoseFromQuaternion(given.rotation, given.translation_mm).matrix());
+  EXPECT_NO_THROW(CheckQuaternionPose(given, "pose"));
+  // FromIsometry: canonical quaternion, translation as is; ToIsometry gives the matrix back to
+  // rounding (which is why DhChain and StaticEdge store the quaternion, not the matrix).
+  std::mt19937 rng(22);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int trial = 0; trial < 1000; ++trial) {
+    const Eigen::Isometry3d pose = PoseFromRotationVector(
+        3.0 * n(rng) * RandomAxis(rng), 500.0 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+    const QuaternionPose stored = QuaternionPose::FromIsometry(pose);
+    EXPECT_EQ(stored.rotation.coeffs(), CanonicalQuaternion(pose.linear()).coeffs());
+    EXPECT_EQ(stored.translation_mm, pose.translation());
+    const Eigen::Isometry3d back = stored.ToIsometry();
+    EXPECT_EQ(back.translation(), pose.translation());
+    EXPECT_LT((back.linear() - pose.linear()).cwiseAbs().maxCoeff(), 1e-14);
+    EXPECT_LT(RotationDistance(QuaternionPose::FromIsometry(back).rotation, stored.rotation),
+              1e-14);
+  }
+}
+
+TEST(Se3Test, PoseChecksNameTheProblem) {
+  const auto message = [](const auto& check) {
+    try {
+      check();
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  using ::testing::AllOf;
+  using ::testing::HasSubstr;
+  using ::testing::StartsWith;
+  const Eigen::Vector3d t(1, 2, 3);
+  EXPECT_THAT(message([&] {
+                CheckQuaternionPose({Eigen::Quaterniond(1.001, 0, 0, 0), t}, "m");
+              }),
+              AllOf(StartsWith("m: rotation has norm 1.001"), HasSubstr("unit quaternion")));
+  EXPECT_THAT(message([&] {
+                CheckQuaternionPose({Eigen::Quaterniond(1 + 2e-9, 0, 0, 0), t}, "m");
+              }),
+              HasSubstr("unit quaternion"));
+  EXPECT_NO_THROW(CheckQuaternionPose({Eigen::Quaterniond(1 + 9e-10, 0, 0, 0), t}, "m"));
+  EXPECT_THAT(message([&] {
+                CheckQuaternionPose({Eigen::Quaterniond(std::nan(""), 0, 0, 0), t}, "m");
+              }),
+              StartsWith("m has non-finite entries"));
+  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
+  scaled.linear() *= 1.001;
+  Eigen::Isometry3d mirrored = Eigen::Isometry3d::Identity();
+  mirrored.linear() = Eigen::Vector3d(1, 1, -1).asDiagonal();
+  Eigen::Isometry3d infinite = Eigen::Isometry3d::Identity();
+  infinite.translation().z() = std::numeric_limits<double>::infinity();
+  EXPECT_THAT(message([&] { CheckRigidTransform(scaled, "m"); }),
+              StartsWith("m has a rotation that is not orthonormal"));
+  EXPECT_THAT(message([&] { CheckRigidTransform(mirrored, "m"); }), HasSubstr("not orthonormal"));
+  EXPECT_THAT(message([&] { CheckRigidTransform(infinite, "m"); }),
+              StartsWith("m has non-finite entries"));
+  Eigen::Isometry3d almost = Eigen::Isometry3d::Identity();
+  almost.linear()(0, 1) = 1e-12;
+  EXPECT_NO_THROW(CheckRigidTransform(almost, "m"));
 }
 
 }  // namespace

@@ -10,6 +10,8 @@
 #include <sstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "core/io/point_cloud_io.hpp"
 
 namespace {
@@ -206,6 +208,111 @@ TEST_F(CliTest, BadCellFileIsOneLineExitTwo) {
   EXPECT_EQ(CountLines(r.err), 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("cell.yaml"));
   EXPECT_THAT(r.err, HasSubstr("version"));
+}
+
+
+TEST_F(CliTest, LocalizeFindsTheParasaurolophusInRs1) {
+  const std::string out = (dir_ / "result.json").string();
+  const RunResult r = Run("localize --model " + Data("real/uwa/parasaurolophus_6700.bin.ply") +
+                          " --scene " + Data("real/uwa/rs1_normals.bin.ply") + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(Slurp(out));
+  EXPECT_EQ(j["format"], "lasercell.localization");
+  ASSERT_TRUE(j["found"].get<bool>());
+  ASSERT_GE(j["candidates"].size(), 1u);
+  const auto& best = j["candidates"][0];
+  EXPECT_EQ(best["rank"], 1);
+  ASSERT_EQ(best["scene_from_model"].size(), 16u);
+  EXPECT_EQ(best["scene_from_model"][15], 1.0);
+  EXPECT_GT(best["support"].get<double>(), 0.5);
+  EXPECT_LT(best["icp"]["rmse_mm"].get<double>(), 2.0);
+  EXPECT_TRUE(j["timings_ms"].contains("matching"));
+}
+
+TEST_F(CliTest, LocalizeWithoutThePartIsFoundFalseExitZero) {
+  // The milk carton scene (PCL, converted to mm) holds no parasaurolophus.
+  const std::string scene = (dir_ / "milk_scene_mm.ply").string();
+  ASSERT_EQ(Run("cloud convert --scale 1000 " + Data("real/pcl/milk_cartoon_all_small_clorox.pcd") +
+                " " + scene).exit_code, 0);
+  const std::string out = (dir_ / "result.json").string();
+  const RunResult r = Run("localize --model " + Data("real/uwa/parasaurolophus_6700.bin.ply") +
+                          " --scene " + scene + " --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(Slurp(out));
+  EXPECT_FALSE(j["found"].get<bool>());
+  EXPECT_TRUE(j["candidates"].empty());
+  EXPECT_FALSE(j["message"].get<std::string>().empty());
+}
+
+TEST_F(CliTest, LocalizeBadOptionsAreOneLineExitTwoAndWriteNothing) {
+  const fs::path opts = dir_ / "opts.yaml";
+  std::ofstream(opts) << "matching:\n  refrence_stride: 3\n";
+  const std::string out = (dir_ / "result.json").string();
+  const std::string base = "localize --model " + Data("real/uwa/parasaurolophus_6700.bin.ply") +
+                           " --scene " + Data("real/uwa/rs1_normals.bin.ply") + " --out " + out;
+  RunResult r = Run(base + " --options " + opts.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("matching.refrence_stride"));
+  std::ofstream(opts, std::ios::trunc) << "matching:\n  reference_stride: -1\n";
+  r = Run(base + " --options " + opts.string());
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  std::ofstream(opts, std::ios::trunc) << "model: {angle_step_rad: -0.1}\n";
+  r = Run(base + " --options " + opts.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("angle_step_rad"));
+  r = Run(base + " --max-instances 0");
+  EXPECT_EQ(r.exit_code, 2);
+  r = Run(base + " --viewpoint 1,2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(CliTest, LocalizeSavesAndReusesAPrebuiltModel) {
+  const std::string model = (dir_ / "para.ppfm").string();
+  const std::string out1 = (dir_ / "r1.json").string(), out2 = (dir_ / "r2.json").string();
+  const std::string scene = Data("real/uwa/rs1_normals.bin.ply");
+  RunResult r = Run("localize --quiet --threads 1 --model " +
+                    Data("real/uwa/parasaurolophus_6700.bin.ply") + " --scene " + scene +
+                    " --out " + out1 + " --save-model " + model);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.out.empty());
+  r = Run("localize --quiet --threads 1 --model " + model + " --scene " + scene + " --out " + out2);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto a = nlohmann::json::parse(Slurp(out1)), b = nlohmann::json::parse(Slurp(out2));
+  EXPECT_EQ(a["candidates"][0]["scene_from_model"], b["candidates"][0]["scene_from_model"]);
+}
+
+TEST_F(CliTest, SimulateSeatIsDeterministicAndReadable) {
+  const fs::path a = dir_ / "a", b = dir_ / "b";
+  RunResult r = Run("simulate seat --quiet --placements 1 --seed 7 --out " + a.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Run("simulate seat --quiet --placements 1 --seed 7 --threads 1 --out " + b.string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  int files = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(a)) {
+    if (!entry.is_regular_file()) continue;
+    ++files;
+    const fs::path other = b / fs::relative(entry.path(), a);
+    EXPECT_EQ(Slurp(entry.path()), Slurp(other)) << entry.path();
+  }
+  EXPECT_GE(files, 5);
+  // The truth cell file is readable by the frames tools.
+  r = Run("frames get " + (a / "truth/cell.yaml").string() + " --to handling_base --from seat_000");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("handling_base_from_seat_000"));
+}
+
+TEST_F(CliTest, SimulateBadConfigNamesTheField) {
+  const fs::path cfg = dir_ / "sim.yaml";
+  std::ofstream(cfg) << "seats: {count: -1}\n";
+  RunResult r = Run("simulate cell --out " + (dir_ / "out").string() + " --config " + cfg.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("seats.count"));
+  std::ofstream(cfg, std::ios::trunc) << "sensor: {standof_mm: 700}\n";
+  r = Run("simulate cell --out " + (dir_ / "out").string() + " --config " + cfg.string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("standof_mm"));
 }
 
 }  // namespace

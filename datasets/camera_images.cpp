@@ -1,0 +1,299 @@
+#include "datasets/camera_images.hpp"
+
+extern "C" {
+#include <mrcal/mrcal.h>
+}
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cmath>
+#include <numbers>
+
+#include "core/error.hpp"
+#include "datasets/rng.hpp"
+
+namespace lasercell::datasets {
+
+namespace {
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+// Cell index of a board coordinate along one axis: -2 off the plate, -1 border before the
+// pattern, 0..n-1 squares, n border after, n + 1 off the plate.
+int AxisCell(double v, int n, double square, double border) {
+  if (v < -border) return -2;
+  if (v < 0) return -1;
+  if (v < n * square) return std::min(n - 1, static_cast<int>(std::floor(v / square)));
+  if (v <= n * square + border) return n;
+  return n + 1;
+}
+
+double CellAlbedo(int cx, int cy, const ChessboardTarget& b, double background) {
+  if (cx == -2 || cy == -2 || cx == b.squares_x + 1 || cy == b.squares_y + 1) return background;
+  if (cx == -1 || cy == -1 || cx == b.squares_x || cy == b.squares_y) return b.light_albedo;
+  return ((cx + cy) % 2 == 0) ? b.dark_albedo : b.light_albedo;
+}
+
+// Separable Gaussian blur with replicated borders.
+void GaussianBlur(std::vector<float>& img, int w, int h, double sigma) {
+  if (sigma <= 0) return;
+  const int r = std::max(1, static_cast<int>(std::ceil(3.5 * sigma)));
+  std::vector<float> k(2 * r + 1);
+  double sum = 0;
+  for (int i = -r; i <= r; ++i) sum += k[i + r] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
+  for (float& v : k) v = static_cast<float>(v / sum);
+  std::vector<float> tmp(img.size());
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      float acc = 0;
+      for (int i = -r; i <= r; ++i) acc += k[i + r] * img[y * w + std::clamp(x + i, 0, w - 1)];
+      tmp[y * w + x] = acc;
+    }
+  }
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      float acc = 0;
+      for (int i = -r; i <= r; ++i) acc += k[i + r] * tmp[std::clamp(y + i, 0, h - 1) * w + x];
+      img[y * w + x] = acc;
+    }
+  }
+}
+
+GrayImage Quantize(const std::vector<float>& img, int w, int h, double noise_sigma,
+                   std::uint64_t seed) {
+  GrayImage out;
+  out.width = w;
+  out.height = h;
+  out.pixels.resize(img.size());
+  Rng rng(seed);
+  for (std::size_t i = 0; i < img.size(); ++i) {
+    const double v = img[i] + (noise_sigma > 0 ? noise_sigma * rng.Normal() : 0.0);
+    out.pixels[i] = static_cast<std::uint8_t>(std::clamp(std::lround(v), 0L, 255L));
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3d> ChessboardTarget::InnerCorners() const {
+  std::vector<Eigen::Vector3d> corners;
+  for (int j = 1; j < squares_y; ++j) {
+    for (int i = 1; i < squares_x; ++i) corners.emplace_back(i * square_mm, j * square_mm, 0.0);
+  }
+  return corners;
+}
+
+void ChessboardTarget::Check(const std::string& what) const {
+  if (squares_x < 3 || squares_y < 3 || squares_x > 100 || squares_y > 100) {
+    throw OptionError(what + ".squares must be in [3, 100] per axis (got " +
+                      std::to_string(squares_x) + " x " + std::to_string(squares_y) + ")");
+  }
+  if (!(square_mm > 0) || !(border_mm >= 0)) {
+    throw OptionError(what + ".square_mm must be positive and border_mm >= 0");
+  }
+  if (!(dark_albedo >= 0 && dark_albedo <= 1 && light_albedo >= 0 && light_albedo <= 1)) {
+    throw OptionError(what + ".dark_albedo/light_albedo must be in [0, 1]");
+  }
+}
+
+void ImageRenderOptions::Check(const std::string& what) const {
+  if (!(exposure > 0)) throw OptionError(what + ".exposure must be positive");
+  if (!(ambient >= 0 && ambient < 255)) throw OptionError(what + ".ambient must be in [0, 255)");
+  if (!(background_albedo >= 0 && background_albedo <= 1)) {
+    throw OptionError(what + ".background_albedo must be in [0, 1]");
+  }
+  if (!(blur_sigma_px >= 0 && blur_sigma_px <= 20)) {
+    throw OptionError(what + ".blur_sigma_px must be in [0, 20] (got " +
+                      std::to_string(blur_sigma_px) + ")");
+  }
+  if (!(noise_sigma >= 0 && noise_sigma <= 100)) {
+    throw OptionError(what + ".noise_sigma must be in [0, 100] (got " + std::to_string(noise_sigma) +
+                      ")");
+  }
+  if (edge_samples < 1 || edge_samples > 64) {
+    throw OptionError(what + ".edge_samples must be in [1, 64]");
+  }
+}
+
+ImageRenderer::ImageRenderer(const CameraModel& camera) : camera_(camera) {
+  const int w = camera.intrinsics().width_px;
+  const int h = camera.intrinsics().height_px;
+  std::vector<mrcal_point2_t> q;
+  q.reserve(static_cast<std::size_t>(w + 1) * (h + 1));
+  for (int y = 0; y <= h; ++y) {
+    for (int x = 0; x <= w; ++x) q.push_back({{x - 0.5, y - 0.5}});
+  }
+  std::vector<mrcal_point3_t> v(q.size());
+  mrcal_lensmodel_t lens;
+  lens.type = MRCAL_LENSMODEL_OPENCV8;
+  const std::array<double, 12> intrinsics = camera.intrinsics().MrcalVector();
+  if (!mrcal_unproject(v.data(), q.data(), static_cast<int>(q.size()), &lens, intrinsics.data())) {
+    throw InternalError("mrcal_unproject failed for the pixel-corner grid");
+  }
+  corner_rays_.resize(q.size());
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    corner_rays_[i] = Eigen::Vector2d(v[i].x / v[i].z, v[i].y / v[i].z);
+  }
+}
+
+GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& board,
+                                          const Eigen::Isometry3d& camera_from_board,
+                                          const ImageRenderOptions& options,
+                                          std::uint64_t seed) const {
+  board.Check();
+  options.Check();
+  const int w = camera_.intrinsics().width_px;
+  const int h = camera_.intrinsics().height_px;
+  // (x, y, 1) ~ [r1 r2 t] (bx, by, 1): the board plane's homography and its inverse.
+  Eigen::Matrix3d hom;
+  hom << camera_from_board.linear().col(0), camera_from_board.linear().col(1),
+      camera_from_board.translation();
+  const Eigen::Matrix3d inv = hom.inverse();
+  const auto to_board = [&](const Eigen::Vector2d& n, Eigen::Vector2d* b) {
+    const Eigen::Vector3d p = inv * Eigen::Vector3d(n.x(), n.y(), 1.0);
+    if (!(p.z() > 0)) return false;  // the ray meets the plane behind the camera
+    *b = p.head<2>() / p.z();
+    return true;
+  };
+  const auto albedo_at = [&](const Eigen::Vector2d& n) {
+    Eigen::Vector2d b;
+    if (!to_board(n, &b)) return options.background_albedo;
+    return CellAlbedo(AxisCell(b.x(), board.squares_x, board.square_mm, board.border_mm),
+                      AxisCell(b.y(), board.squares_y, board.square_mm, board.border_mm), board,
+                      options.background_albedo);
+  };
+  std::vector<float> img(static_cast<std::size_t>(w) * h);
+  const int ns = options.edge_samples;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const Eigen::Vector2d& c00 = corner_rays_[static_cast<std::size_t>(y) * (w + 1) + x];
+      const Eigen::Vector2d& c10 = corner_rays_[static_cast<std::size_t>(y) * (w + 1) + x + 1];
+      const Eigen::Vector2d& c01 = corner_rays_[static_cast<std::size_t>(y + 1) * (w + 1) + x];
+      const Eigen::Vector2d& c11 = corner_rays_[static_cast<std::size_t>(y + 1) * (w + 1) + x + 1];
+      // Uniform pixel: all four corners on the plate side of the camera and in one cell.
+      double albedo = -1;
+      Eigen::Vector2d b[4];
+      if (to_board(c00, &b[0]) && to_board(c10, &b[1]) && to_board(c01, &b[2]) &&
+          to_board(c11, &b[3])) {
+        int cx[4], cy[4];
+        for (int k = 0; k < 4; ++k) {
+          cx[k] = AxisCell(b[k].x(), board.squares_x, board.square_mm, board.border_mm);
+          cy[k] = AxisCell(b[k].y(), board.squares_y, board.square_mm, board.border_mm);
+        }
+        if (cx[0] == cx[1] && cx[0] == cx[2] && cx[0] == cx[3] && cy[0] == cy[1] &&
+            cy[0] == cy[2] && cy[0] == cy[3]) {
+          albedo = CellAlbedo(cx[0], cy[0], board, options.background_albedo);
+        }
+      }
+      if (albedo < 0) {
+        // An edge crosses the pixel: box-filter over ns x ns sub-samples.
+        double sum = 0;
+        for (int j = 0; j < ns; ++j) {
+          const double fy = (j + 0.5) / ns;
+          const Eigen::Vector2d left = (1 - fy) * c00 + fy * c01;
+          const Eigen::Vector2d right = (1 - fy) * c10 + fy * c11;
+          for (int i = 0; i < ns; ++i) {
+            const double fx = (i + 0.5) / ns;
+            sum += albedo_at((1 - fx) * left + fx * right);
+          }
+        }
+        albedo = sum / (ns * ns);
+      }
+      double gain = 1.0;
+      if (options.vignetting) {
+        const Eigen::Vector2d n = 0.25 * (c00 + c10 + c01 + c11);
+        const double cos2 = 1.0 / (1.0 + n.squaredNorm());
+        gain = cos2 * cos2;
+      }
+      img[static_cast<std::size_t>(y) * w + x] =
+          static_cast<float>(options.ambient + options.exposure * albedo * gain);
+    }
+  }
+  GaussianBlur(img, w, h, options.blur_sigma_px);
+  return Quantize(img, w, h, options.noise_sigma, seed);
+}
+
+GrayImage ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
+                                         const ImageRenderOptions& options,
+                                         std::uint64_t seed) const {
+  options.Check();
+  const int w = camera_.intrinsics().width_px;
+  const int h = camera_.intrinsics().height_px;
+  LASERCELL_CHECK(static_cast<int>(exposure.row_px.size()) == w, "exposure width matches camera");
+  std::vector<float> img(static_cast<std::size_t>(w) * h, static_cast<float>(options.ambient));
+  for (int x = 0; x < w; ++x) {
+    if (std::isnan(exposure.row_px[x])) continue;
+    const double sigma = exposure.width_px[x] / 2.3548200450309493;  // FWHM -> sigma
+    const double peak = 255.0 * exposure.intensity[x];
+    const int y0 = std::max(0, static_cast<int>(std::floor(exposure.row_px[x] - 5 * sigma)));
+    const int y1 = std::min(h - 1, static_cast<int>(std::ceil(exposure.row_px[x] + 5 * sigma)));
+    for (int y = y0; y <= y1; ++y) {
+      const double d = (y - exposure.row_px[x]) / sigma;
+      img[static_cast<std::size_t>(y) * w + x] += static_cast<float>(peak * std::exp(-0.5 * d * d));
+    }
+  }
+  return Quantize(img, w, h, options.noise_sigma, seed);
+}
+
+std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board,
+                                                   const CameraModel& camera, int count,
+                                                   std::uint64_t seed) {
+  board.Check();
+  Rng rng(seed);
+  const int w = camera.intrinsics().width_px;
+  const int h = camera.intrinsics().height_px;
+  const double sx = board.squares_x * board.square_mm;
+  const double sy = board.squares_y * board.square_mm;
+  const Eigen::Vector3d center(sx / 2, sy / 2, 0);
+  const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
+  const double bx = board.border_mm;
+  const std::array<Eigen::Vector3d, 4> plate = {Eigen::Vector3d(-bx, -bx, 0),
+                                                Eigen::Vector3d(sx + bx, -bx, 0),
+                                                Eigen::Vector3d(sx + bx, sy + bx, 0),
+                                                Eigen::Vector3d(-bx, sy + bx, 0)};
+  std::vector<Eigen::Isometry3d> poses;
+  for (int attempt = 0; static_cast<int>(poses.size()) < count; ++attempt) {
+    if (attempt > 1000 * count) {
+      throw OptionError("chessboard: no board pose of this size fits the camera's view; use a "
+                        "smaller board (squares, square_mm)");
+    }
+    const double distance = rng.Uniform(550, 850);
+    const double tilt = rng.Uniform(5, 40) * kDegToRad;
+    const double tilt_axis = rng.Uniform(0, 2 * std::numbers::pi);
+    const double yaw = rng.Uniform(-std::numbers::pi, std::numbers::pi);
+    const Eigen::Vector2d pixel(rng.Uniform(0.2, 0.8) * w, rng.Uniform(0.2, 0.8) * h);
+    // Board +z towards the camera (RotX(pi)), then yaw about the board normal, then tilt.
+    const Eigen::Matrix3d r =
+        (Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(tilt_axis), std::sin(tilt_axis), 0)) *
+         Eigen::AngleAxisd(std::numbers::pi, Eigen::Vector3d::UnitX()) *
+         Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()))
+            .toRotationMatrix();
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    pose.linear() = r;
+    pose.translation() = distance * camera.Unproject(pixel) - r * center;
+    bool ok = true;
+    for (const Eigen::Vector3d& p : plate) {
+      const auto q = camera.Project(pose * p);
+      ok = ok && q && camera.InImage(*q);
+    }
+    for (const Eigen::Vector3d& p : corners) {
+      const auto q = camera.Project(pose * p);
+      ok = ok && q && q->x() >= 25 && q->y() >= 25 && q->x() <= w - 26 && q->y() <= h - 26;
+    }
+    if (ok) poses.push_back(pose);
+  }
+  return poses;
+}
+
+std::string EncodePng(const GrayImage& image) {
+  const cv::Mat mat(image.height, image.width, CV_8UC1,
+                    const_cast<std::uint8_t*>(image.pixels.data()));
+  std::vector<unsigned char> buffer;
+  if (!cv::imencode(".png", mat, buffer, {cv::IMWRITE_PNG_COMPRESSION, 6})) {
+    throw InternalError("OpenCV could not encode a PNG");
+  }
+  return std::string(buffer.begin(), buffer.end());
+}
+
+}  // namespace lasercell::datasets

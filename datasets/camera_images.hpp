@@ -1,0 +1,98 @@
+#pragma once
+// Camera images of the simulated sensor: chessboard views for intrinsics calibration and raw
+// laser-line images for peak-detector tests, rendered through the true lens model.
+//
+// Chessboard rendering is exact up to the anti-aliasing: the board is planar, so every camera
+// ray (mrcal unprojection of the pixel corners, cached once per camera and interpolated
+// bilinearly inside a pixel) meets it through a homography. A pixel wholly inside one square
+// takes that square's albedo; a pixel an edge crosses is averaged over edge_samples^2
+// sub-samples (box filter = the pixel's area). Then: cos^4 vignetting, Gaussian optical blur,
+// Gaussian read noise, 8-bit quantization. Gray = ambient + exposure * albedo * vignetting.
+//
+// Frames: camera as in sensor.hpp; board frame: pattern in its xy plane (z = 0, +z out of the
+// printed face), square (i, j) at [i s, (i+1) s] x [j s, (j+1) s], dark when i + j is even (as
+// Material in scene.hpp), inner corner (i, j) at ((i+1) s, (j+1) s, 0). Images are row-major
+// 8-bit gray, width x height of the camera.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "datasets/laser_renderer.hpp"
+#include "datasets/sensor.hpp"
+
+namespace lasercell::datasets {
+
+/// A printed chessboard on a plate.
+struct ChessboardTarget {
+  int squares_x = 10;          ///< Squares along the board's x (inner corners: squares_x - 1).
+  int squares_y = 7;           ///< Squares along y.
+  double square_mm = 40.0;     ///< Square edge.
+  double border_mm = 20.0;     ///< Light margin around the pattern.
+  double dark_albedo = 0.04;   ///< Dark squares.
+  double light_albedo = 0.85;  ///< Light squares and border.
+
+  /// Inner corners in OpenCV order (row by row along x), board frame, mm.
+  std::vector<Eigen::Vector3d> InnerCorners() const;
+  /// Throws OptionError naming `what` and the field.
+  void Check(const std::string& what = "chessboard") const;
+};
+
+/// Photometry and image noise.
+struct ImageRenderOptions {
+  double exposure = 250.0;           ///< Gray level of albedo 1 on the optical axis.
+  double ambient = 6.0;              ///< Gray level offset (dark current, stray light).
+  double background_albedo = 0.25;   ///< Albedo seen where the ray misses the plate.
+  double blur_sigma_px = 0.6;        ///< Gaussian optical blur (0: none).
+  double noise_sigma = 1.5;          ///< Gaussian read noise, gray levels (0: none).
+  bool vignetting = true;            ///< cos^4 falloff.
+  int edge_samples = 16;             ///< Sub-samples per axis in pixels an edge crosses.
+
+  /// Throws OptionError naming `what` and the field.
+  void Check(const std::string& what = "images") const;
+};
+
+/// An 8-bit gray image.
+struct GrayImage {
+  int width = 0;
+  int height = 0;
+  std::vector<std::uint8_t> pixels;  ///< Row-major.
+  std::uint8_t at(int x, int y) const { return pixels[static_cast<std::size_t>(y) * width + x]; }
+};
+
+/// Renders images through one camera. Construction unprojects every pixel corner once.
+class ImageRenderer {
+ public:
+  explicit ImageRenderer(const CameraModel& camera);
+
+  /// The chessboard at camera_from_board; noise from `seed`.
+  GrayImage RenderChessboard(const ChessboardTarget& board,
+                             const Eigen::Isometry3d& camera_from_board,
+                             const ImageRenderOptions& options, std::uint64_t seed) const;
+
+  /// A raw sensor image of one exposure's laser line: per column a Gaussian stripe of the
+  /// exposure's exact row, FWHM width and intensity (saturating at 255) over a dark ambient, with
+  /// read noise; for peak-detector tests.
+  GrayImage RenderLaserLine(const ExposureTruth& exposure, const ImageRenderOptions& options,
+                            std::uint64_t seed) const;
+
+  const CameraModel& camera() const { return camera_; }
+
+ private:
+  CameraModel camera_;
+  std::vector<Eigen::Vector2d> corner_rays_;  // normalized (x/z, y/z) at pixel corners
+};
+
+/// `count` varied board poses (distance 550..850 mm, tilt 5..40 deg, any yaw, spread over the
+/// image) with the whole plate in view and every inner corner >= 25 px inside the image.
+std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board,
+                                                   const CameraModel& camera, int count,
+                                                   std::uint64_t seed);
+
+/// PNG bytes of an image (OpenCV imgcodecs; deterministic).
+std::string EncodePng(const GrayImage& image);
+
+}  // namespace lasercell::datasets

@@ -1,0 +1,318 @@
+#include "datasets/laser_renderer.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <numbers>
+#include <optional>
+
+#include "core/error.hpp"
+#include "datasets/rng.hpp"
+
+namespace lasercell::datasets {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+// One fan sample: the ray's hit and its projection.
+struct FanSample {
+  bool valid = false;  // hit and projected
+  double alpha = 0;
+  RayHit hit;
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
+};
+
+}  // namespace
+
+void LaserRenderOptions::Check(const std::string& what) const {
+  const auto fail = [&](const std::string& field, const std::string& rule, double got) {
+    throw OptionError(what + "." + field + " " + rule + " (got " + std::to_string(got) + ")");
+  };
+  if (fan_rays < 16 || fan_rays > 1'000'000) fail("fan_rays", "must be in [16, 1e6]", fan_rays);
+  if (!(max_range_mm > 0)) fail("max_range_mm", "must be positive", max_range_mm);
+  if (!(intensity_gain > 0)) fail("intensity_gain", "must be positive", intensity_gain);
+  if (!(reference_range_mm > 0)) fail("reference_range_mm", "must be positive", reference_range_mm);
+  if (!(min_intensity >= 0 && min_intensity < 1)) fail("min_intensity", "must be in [0, 1)", min_intensity);
+  if (!(max_view_angle_deg > 0 && max_view_angle_deg <= 90)) {
+    fail("max_view_angle_deg", "must be in (0, 90]", max_view_angle_deg);
+  }
+  if (!(sheet_thickness_mm >= 0)) fail("sheet_thickness_mm", "must be >= 0", sheet_thickness_mm);
+  if (!(min_width_px > 0)) fail("min_width_px", "must be positive", min_width_px);
+  if (!(row_sigma_px >= 0) || !std::isfinite(row_sigma_px)) fail("row_sigma_px", "must be >= 0", row_sigma_px);
+  if (!(intensity_sigma >= 0) || !std::isfinite(intensity_sigma)) {
+    fail("intensity_sigma", "must be >= 0", intensity_sigma);
+  }
+  if (!(dropout_probability >= 0 && dropout_probability < 1)) {
+    fail("dropout_probability", "must be in [0, 1)", dropout_probability);
+  }
+  if (!(occlusion_epsilon_mm > 0)) fail("occlusion_epsilon_mm", "must be positive", occlusion_epsilon_mm);
+}
+
+void SweepTiming::Check(const std::string& what) const {
+  if (profiles <= 0 || profiles > 10'000'000) {
+    throw OptionError(what + ".profiles must be in [1, 1e7] (got " + std::to_string(profiles) + ")");
+  }
+  if (!(rate_hz > 0) || !std::isfinite(rate_hz)) {
+    throw OptionError(what + ".rate_hz must be positive (got " + std::to_string(rate_hz) + ")");
+  }
+  if (!(jitter_s >= 0) || !(timestamp_noise_s >= 0) || jitter_s * rate_hz > 0.2) {
+    throw OptionError(what + ".jitter_s and timestamp_noise_s must be >= 0, jitter below 0.2 "
+                             "profile periods (got " + std::to_string(jitter_s) + ")");
+  }
+}
+
+std::size_t ExposureTruth::ValidCount() const {
+  std::size_t n = 0;
+  for (double r : row_px) n += std::isnan(r) ? 0 : 1;
+  return n;
+}
+
+LaserRenderer::LaserRenderer(const Scene& scene, const SensorModel& sensor,
+                             const LaserRenderOptions& options)
+    : scene_(scene), sensor_(sensor), options_(options) {
+  options_.Check();
+}
+
+ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sensor) const {
+  const CameraModel& camera = sensor_.camera;
+  const LaserPlane& laser = sensor_.laser;
+  const int width = camera.intrinsics().width_px;
+  const Eigen::Isometry3d sensor_from_scene = scene_from_sensor.inverse();
+  const Eigen::Matrix3d& rot = scene_from_sensor.linear();
+  const Eigen::Vector3d emitter = scene_from_sensor * laser.origin_in_sensor;
+  const Eigen::Vector3d camera_center = scene_from_sensor.translation();
+  const int n = options_.fan_rays;
+  const double half = laser.fan_angle_rad / 2;
+  const double step = laser.fan_angle_rad / (n - 1);
+  const double cos_view_min = std::cos(options_.max_view_angle_deg * kDegToRad);
+
+  ExposureTruth out;
+  out.row_px.assign(width, kNaN);
+  out.intensity.assign(width, 0.0);
+  out.width_px.assign(width, 0.0);
+  out.point_in_sensor.assign(width, Eigen::Vector3d::Zero());
+  out.object.assign(width, -1);
+
+  const auto direction = [&](double alpha) -> Eigen::Vector3d {
+    return rot * laser.RayDirection(alpha);
+  };
+  const auto project = [&](const Eigen::Vector3d& p_in_scene) {
+    return camera.Project(sensor_from_scene * p_in_scene);
+  };
+
+  // 1. Cast the fan.
+  std::vector<FanSample> fan(n);
+  for (int i = 0; i < n; ++i) {
+    FanSample& s = fan[i];
+    s.alpha = -half + step * i;
+    const auto hit = scene_.Intersect(emitter, direction(s.alpha), 0.0, options_.max_range_mm);
+    if (!hit) continue;
+    const auto q = project(hit->point);
+    if (!q) continue;
+    s.hit = *hit;
+    s.pixel = *q;
+    s.valid = true;
+  }
+
+  // 2. Per bracket of consecutive hits on one surface, solve u(alpha) = c for each column.
+  for (int i = 0; i + 1 < n; ++i) {
+    const FanSample& a = fan[i];
+    const FanSample& b = fan[i + 1];
+    if (!a.valid || !b.valid || a.hit.object != b.hit.object) continue;
+    const double max_gap = 20.0 * std::max(a.hit.t_mm, b.hit.t_mm) * step + 0.5;
+    if ((a.hit.point - b.hit.point).norm() > max_gap) continue;  // depth jump
+    const double lo = std::min(a.pixel.x(), b.pixel.x());
+    const double hi = std::max(a.pixel.x(), b.pixel.x());
+    const int c0 = std::max(0, static_cast<int>(std::ceil(lo)));
+    const int c1 = std::min(width - 1, static_cast<int>(std::floor(hi)));
+    if (c0 > c1) continue;
+    const MeshPart& geom = scene_.objects()[a.hit.object].geometry;
+    const bool same_patch = geom.face_patch[a.hit.face] == geom.face_patch[b.hit.face];
+    const bool analytic =
+        same_patch && geom.patches[geom.face_patch[a.hit.face]].kind != AnalyticSurface::Kind::kNone;
+
+    // Intersection of the fan ray at alpha with the bracket's surface.
+    const auto trace = [&](double alpha, double t_hint) -> std::optional<RayHit> {
+      const Eigen::Vector3d d = direction(alpha);
+      if (analytic) return scene_.IntersectFace(a.hit.object, a.hit.face, emitter, d, t_hint, 1e30);
+      if (same_patch) {
+        if (auto h = scene_.IntersectFace(a.hit.object, a.hit.face, emitter, d, t_hint, 1e-9)) return h;
+        if (auto h = scene_.IntersectFace(b.hit.object, b.hit.face, emitter, d, t_hint, 1e-9)) return h;
+      }
+      auto h = scene_.Intersect(emitter, d, 0.0, options_.max_range_mm);
+      if (h && h->object != a.hit.object) return std::nullopt;
+      return h;
+    };
+
+    for (int c = c0; c <= c1; ++c) {
+      // Illinois regula falsi on f(alpha) = u(alpha) - c, bracketed by the two samples.
+      double xa = a.alpha, xb = b.alpha;
+      double fa = a.pixel.x() - c, fb = b.pixel.x() - c;
+      std::optional<RayHit> hit;
+      Eigen::Vector2d pixel;
+      if (fa == 0) {
+        hit = a.hit;
+        pixel = a.pixel;
+      } else if (fb == 0) {
+        hit = b.hit;
+        pixel = b.pixel;
+      } else {
+        int side = 0;
+        bool ok = false;
+        for (int iter = 0; iter < 40; ++iter) {
+          const double x = xb - fb * (xb - xa) / (fb - fa);
+          const double w = (x - a.alpha) / (b.alpha - a.alpha);
+          hit = trace(x, (1 - w) * a.hit.t_mm + w * b.hit.t_mm);
+          if (!hit) break;
+          const auto q = project(hit->point);
+          if (!q) break;
+          pixel = *q;
+          const double f = pixel.x() - c;
+          if (std::abs(f) < 1e-9 || std::abs(xb - xa) < 1e-15) {
+            ok = true;
+            break;
+          }
+          if ((f > 0) == (fb > 0)) {
+            xb = x;
+            fb = f;
+            if (side == -1) fa /= 2;
+            side = -1;
+          } else {
+            xa = x;
+            fa = f;
+            if (side == 1) fb /= 2;
+            side = 1;
+          }
+        }
+        if (!ok) continue;
+      }
+      pixel.x() = c;  // exact by construction (to 1e-9 px)
+      if (!camera.InImage(pixel)) continue;
+
+      // 3. Visibility and photometry.
+      const Eigen::Vector3d& p = hit->point;
+      const Eigen::Vector3d d = (p - emitter).normalized();
+      Eigen::Vector3d normal = hit->normal;
+      if (normal.dot(d) > 0) normal = -normal;  // the side the laser lights
+      const double cos_incidence = -normal.dot(d);
+      const Eigen::Vector3d to_camera = camera_center - p;
+      const double camera_distance = to_camera.norm();
+      const Eigen::Vector3d view = to_camera / camera_distance;
+      const double cos_view = normal.dot(view);
+      if (cos_view <= cos_view_min) continue;  // back side or grazing view
+      const double laser_range = (p - emitter).norm();
+      double intensity = options_.intensity_gain * scene_.AlbedoAt(hit->object, p) *
+                         cos_incidence * options_.reference_range_mm / laser_range;
+      intensity = std::min(intensity, 1.0);
+      if (intensity < options_.min_intensity) continue;
+      if (intensity <= out.intensity[c]) continue;  // a brighter peak already owns the column
+      if (scene_.Occluded(p, view, options_.occlusion_epsilon_mm,
+                          camera_distance - options_.occlusion_epsilon_mm)) {
+        continue;
+      }
+      const Eigen::Vector3d p_in_sensor = sensor_from_scene * p;
+      const double spread = camera.intrinsics().fy_px * options_.sheet_thickness_mm * cos_view /
+                            (std::max(cos_incidence, 0.05) * p_in_sensor.z());
+      out.row_px[c] = pixel.y();
+      out.intensity[c] = intensity;
+      out.width_px[c] = std::hypot(options_.min_width_px, spread);
+      out.point_in_sensor[c] = p_in_sensor;
+      out.object[c] = hit->object;
+    }
+  }
+  return out;
+}
+
+triangulation::Profile LaserRenderer::ApplyNoise(const ExposureTruth& truth,
+                                                 std::uint64_t seed) const {
+  const auto columns = static_cast<std::uint32_t>(truth.row_px.size());
+  triangulation::Profile p = triangulation::Profile::Empty(columns);
+  Rng rng(seed);
+  const double rows_max = sensor_.camera.intrinsics().height_px - 1;
+  for (std::uint32_t c = 0; c < columns; ++c) {
+    if (std::isnan(truth.row_px[c])) continue;
+    // Draw all numbers of a column first so a dropout does not shift later columns' noise.
+    const double row_noise = rng.Normal();
+    const double intensity_noise = rng.Normal();
+    const double u = rng.Uniform();
+    const double intensity =
+        std::min(1.0, truth.intensity[c] * (1.0 + options_.intensity_sigma * intensity_noise));
+    if (intensity < options_.min_intensity || u < options_.dropout_probability) continue;
+    const double row = truth.row_px[c] + options_.row_sigma_px * row_noise;
+    if (row < 0 || row > rows_max) continue;
+    p.row_px[c] = static_cast<float>(row);
+    p.intensity[c] = static_cast<float>(intensity);
+    p.width_px[c] = static_cast<float>(truth.width_px[c]);
+  }
+  return p;
+}
+
+SweepResult RenderSweep(const LaserRenderer& renderer,
+                        const std::function<SensorState(double t_s)>& state_at,
+                        const SweepTiming& timing, std::uint64_t seed, std::uint32_t joint_count,
+                        const std::string& robot, int threads, const ProgressCallback& progress) {
+  timing.Check();
+  const int n = timing.profiles;
+  const auto& intrinsics = renderer.sensor().camera.intrinsics();
+  SweepResult result;
+  triangulation::ProfileHeader& header = result.profiles.header;
+  header.image_width = static_cast<std::uint32_t>(intrinsics.width_px);
+  header.image_height = static_cast<std::uint32_t>(intrinsics.height_px);
+  header.first_column = 0;
+  header.columns = header.image_width;
+  header.joint_count = joint_count;
+  header.robot = joint_count > 0 ? robot : "";
+  result.profiles.profiles.resize(n);
+  result.exposure_time_s.resize(n);
+  result.scene_from_sensor.resize(n);
+  std::vector<std::size_t> valid(n, 0);
+  std::atomic<int> done{0};
+  std::mutex progress_mutex;
+
+  const auto render_one = [&](int i) {
+    // Timing draws come from a stream of their own, so they never depend on scene content.
+    Rng timing_rng(StreamSeed(seed, 2 * static_cast<std::uint64_t>(i)));
+    const double t = i / timing.rate_hz + timing.jitter_s * timing_rng.Normal();
+    const double stamp = t + timing.timestamp_noise_s * timing_rng.Normal();
+    const SensorState state = state_at(t);
+    if (state.joints_rad.size() != joint_count) {
+      throw InputError("sweep: the trajectory gave " + std::to_string(state.joints_rad.size()) +
+                       " joint values, expected " + std::to_string(joint_count));
+    }
+    const ExposureTruth truth = renderer.RenderExact(state.scene_from_sensor);
+    triangulation::Profile profile =
+        renderer.ApplyNoise(truth, StreamSeed(seed, 2 * static_cast<std::uint64_t>(i) + 1));
+    profile.sequence = static_cast<std::uint64_t>(i);
+    profile.timestamp_ns = timing.start_ns + static_cast<std::int64_t>(std::llround(stamp * 1e9));
+    profile.joints_rad = state.joints_rad;
+    valid[i] = profile.ValidCount();
+    result.profiles.profiles[i] = std::move(profile);
+    result.exposure_time_s[i] = t;
+    result.scene_from_sensor[i] = state.scene_from_sensor;
+    const int k = ++done;
+    if (progress && (k % 16 == 0 || k == n)) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      ReportProgress(progress, "render sweep", static_cast<double>(k) / n);
+    }
+  };
+
+  const int max_threads = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
+  tbb::task_arena arena(max_threads);
+  arena.execute([&] {
+    tbb::parallel_for(tbb::blocked_range<int>(0, n, 4), [&](const tbb::blocked_range<int>& r) {
+      for (int i = r.begin(); i < r.end(); ++i) render_one(i);
+    });
+  });
+  for (std::size_t v : valid) result.valid_peaks += v;
+  return result;
+}
+
+}  // namespace lasercell::datasets

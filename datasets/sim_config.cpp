@@ -1,0 +1,582 @@
+#include "datasets/sim_config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <set>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/frame_graph.hpp"
+#include "core/io/file_util.hpp"
+
+namespace lasercell::datasets {
+
+namespace {
+
+// Walks one YAML map, reading the fields it knows and rejecting the rest. Field paths in
+// messages are dotted from the file's root ("sensor.camera.fx_px").
+class Fields {
+ public:
+  Fields(YAML::Node node, std::string path, const std::string& file)
+      : node_(std::move(node)), path_(std::move(path)), file_(file) {
+    if (node_ && !node_.IsNull() && !node_.IsMap()) {
+      throw Fail(path_.empty() ? "the document" : "field '" + path_ + "'",
+                 "must be a map of fields");
+    }
+  }
+
+  // Sub-map; absent -> an empty walker.
+  Fields Sub(const char* key) {
+    used_.insert(key);
+    return Fields(Child(key), Path(key), file_);
+  }
+
+  void Read(const char* key, double* out) {
+    if (auto n = Take(key)) *out = Scalar<double>(*n, Path(key), "a number");
+  }
+  void Read(const char* key, int* out) {
+    if (auto n = Take(key)) *out = Scalar<int>(*n, Path(key), "an integer");
+  }
+  void Read(const char* key, std::int64_t* out) {
+    if (auto n = Take(key)) *out = Scalar<std::int64_t>(*n, Path(key), "an integer");
+  }
+  void Read(const char* key, std::uint64_t* out) {
+    if (auto n = Take(key)) *out = Scalar<std::uint64_t>(*n, Path(key), "a non-negative integer");
+  }
+  void Read(const char* key, bool* out) {
+    if (auto n = Take(key)) *out = Scalar<bool>(*n, Path(key), "true or false");
+  }
+  void Read(const char* key, std::string* out) {
+    if (auto n = Take(key)) *out = Scalar<std::string>(*n, Path(key), "a string");
+  }
+  void Read(const char* key, std::vector<double>* out, std::size_t exact_size = 0) {
+    auto n = Take(key);
+    if (!n) return;
+    *out = List(*n, Path(key), exact_size);
+  }
+  template <int N>
+  void Read(const char* key, Eigen::Matrix<double, N, 1>* out) {
+    auto n = Take(key);
+    if (!n) return;
+    const std::vector<double> v = List(*n, Path(key), N);
+    for (int i = 0; i < N; ++i) (*out)[i] = v[i];
+  }
+  template <std::size_t N>
+  void Read(const char* key, std::array<double, N>* out) {
+    auto n = Take(key);
+    if (!n) return;
+    const std::vector<double> v = List(*n, Path(key), N);
+    for (std::size_t i = 0; i < N; ++i) (*out)[i] = v[i];
+  }
+  void Read(const char* key, std::vector<Eigen::Vector2d>* out) {
+    auto n = Take(key);
+    if (!n) return;
+    const std::string path = Path(key);
+    if (!n->IsSequence()) throw Fail("field '" + path + "'", "must be a list of [x, y] pairs");
+    out->clear();
+    for (std::size_t i = 0; i < n->size(); ++i) {
+      const std::vector<double> v = List((*n)[i], path + "[" + std::to_string(i) + "]", 2);
+      out->emplace_back(v[0], v[1]);
+    }
+  }
+
+  // Rejects fields not read.
+  void Done() const {
+    if (!node_ || node_.IsNull()) return;
+    for (const auto& entry : node_) {
+      const std::string key = entry.first.as<std::string>();
+      if (used_.count(key) == 0) {
+        std::string known;
+        for (const std::string& k : used_) known += (known.empty() ? "" : ", ") + k;
+        throw Fail("unknown field '" + Path(key.c_str()) + "'",
+                   "(known fields here: " + known + ")");
+      }
+    }
+  }
+
+  // Marks a key as known without reading it (read elsewhere).
+  void Known(const char* key) { used_.insert(key); }
+
+ private:
+  OptionError Fail(const std::string& what, const std::string& problem) const {
+    return OptionError(file_ + ": " + what + " " + problem);
+  }
+  std::string Path(const char* key) const { return path_.empty() ? key : path_ + "." + key; }
+  YAML::Node Child(const char* key) const {
+    if (!node_ || node_.IsNull()) return YAML::Node();
+    const YAML::Node& node = node_;  // const lookup never inserts
+    return node[key];
+  }
+  std::optional<YAML::Node> Take(const char* key) {
+    used_.insert(key);
+    YAML::Node n = Child(key);
+    if (!n || n.IsNull()) return std::nullopt;
+    return n;
+  }
+  template <typename T>
+  T Scalar(const YAML::Node& n, const std::string& path, const char* expected) const {
+    if (!n.IsScalar()) throw Fail("field '" + path + "'", std::string("must be ") + expected);
+    try {
+      T value = n.as<T>();
+      if constexpr (std::is_floating_point_v<T>) {
+        if (!std::isfinite(value)) throw YAML::BadConversion(n.Mark());
+      }
+      return value;
+    } catch (const YAML::Exception&) {
+      throw Fail("field '" + path + "'",
+                 std::string("must be ") + expected + " (got '" + n.Scalar() + "')");
+    }
+  }
+  std::vector<double> List(const YAML::Node& n, const std::string& path,
+                           std::size_t exact_size) const {
+    if (!n.IsSequence()) throw Fail("field '" + path + "'", "must be a list of numbers");
+    if (exact_size > 0 && n.size() != exact_size) {
+      throw Fail("field '" + path + "'", "must list exactly " + std::to_string(exact_size) +
+                                             " numbers (got " + std::to_string(n.size()) + ")");
+    }
+    std::vector<double> v;
+    for (std::size_t i = 0; i < n.size(); ++i) {
+      v.push_back(Scalar<double>(n[i], path + "[" + std::to_string(i) + "]", "a number"));
+    }
+    return v;
+  }
+
+  YAML::Node node_;
+  std::string path_;
+  const std::string& file_;
+  std::set<std::string> used_;
+};
+
+std::string Num(double v) { return FormatDouble(v); }
+
+template <typename Vec>
+std::string List(const Vec& v) {
+  std::string s = "[";
+  for (int i = 0; i < static_cast<int>(v.size()); ++i) s += (i ? ", " : "") + Num(v[i]);
+  return s + "]";
+}
+
+void CheckFinite(double v, const std::string& field) {
+  if (!std::isfinite(v)) throw OptionError("SimConfig." + field + " must be finite");
+}
+
+void CheckAlbedo(double v, const std::string& field) {
+  if (!(v >= 0 && v <= 1)) {
+    throw OptionError("SimConfig.cell.albedo." + field + " must be in [0, 1] (got " +
+                      std::to_string(v) + ")");
+  }
+}
+
+}  // namespace
+
+void SimConfig::Check() const {
+  sensor.Check("SimConfig.sensor");
+  render.Check("SimConfig.render");
+  timing.Check("SimConfig.timing");
+  if (!mount_translation_mm.allFinite() || mount_translation_mm.norm() > 1000) {
+    throw OptionError("SimConfig.sensor.mount_translation_mm must be finite and within 1000 mm "
+                      "of the flange");
+  }
+  if (!mount_rotation_deg.allFinite() || mount_rotation_deg.norm() > 30) {
+    throw OptionError("SimConfig.sensor.mount_rotation_deg must be finite, at most 30 deg");
+  }
+  for (int i = 0; i < 3; ++i) {
+    CheckFinite(vision_base_mm[i], "cell.vision_base_mm");
+    CheckFinite(handling_base_mm[i], "cell.handling_base_mm");
+  }
+  CheckFinite(vision_base_yaw_deg, "cell.vision_base_yaw_deg");
+  CheckFinite(handling_base_yaw_deg, "cell.handling_base_yaw_deg");
+  if (!(floor_size_mm >= 1500) || !std::isfinite(floor_size_mm)) {
+    throw OptionError("SimConfig.cell.floor_size_mm must be >= 1500 (got " +
+                      std::to_string(floor_size_mm) + ")");
+  }
+  CheckAlbedo(albedo.floor, "floor");
+  CheckAlbedo(albedo.pallet, "pallet");
+  CheckAlbedo(albedo.seat, "seat");
+  CheckAlbedo(albedo.white_plane, "white_plane");
+  CheckAlbedo(albedo.spheres, "spheres");
+  CheckAlbedo(albedo.stands, "stands");
+  CheckAlbedo(albedo.chessboard_light, "chessboard_light");
+  CheckAlbedo(albedo.chessboard_dark, "chessboard_dark");
+  if (joint_offsets_deg) {
+    if (joint_offsets_deg->size() != 6) {
+      throw OptionError("SimConfig.vision_robot.joint_offsets_deg must list 6 values (got " +
+                        std::to_string(joint_offsets_deg->size()) + ")");
+    }
+    for (double v : *joint_offsets_deg) {
+      if (!std::isfinite(v) || std::abs(v) > 10) {
+        throw OptionError("SimConfig.vision_robot.joint_offsets_deg values must be within +-10 deg");
+      }
+    }
+  }
+  if (!(joint_offset_sigma_deg >= 0 && joint_offset_sigma_deg <= 5)) {
+    throw OptionError("SimConfig.vision_robot.joint_offset_sigma_deg must be in [0, 5] (got " +
+                      std::to_string(joint_offset_sigma_deg) + ")");
+  }
+  CheckFinite(measuring_height_mm, "sweep.measuring_height_mm");
+  if (!(sweep_length_mm > 0) || sweep_length_mm > 5000) {
+    throw OptionError("SimConfig.sweep.length_mm must be in (0, 5000] (got " +
+                      std::to_string(sweep_length_mm) + ")");
+  }
+  CheckFinite(sweep_center_xy_mm.x(), "sweep.center_xy_mm");
+  CheckFinite(sweep_center_xy_mm.y(), "sweep.center_xy_mm");
+  CheckFinite(sweep_direction_deg, "sweep.direction_deg");
+  if (seat_count < 0 || seat_count > 100000 || (capture_seats && seat_count == 0)) {
+    throw OptionError("SimConfig.seats.count must be in [1, 100000] when captures.seats is true "
+                      "(got " + std::to_string(seat_count) + ")");
+  }
+  seat_placement.Check("SimConfig.seats");
+  seat_shape.Check("SimConfig.seats.shape");
+  if (capture_planes && plane_heights_mm.size() < 2) {
+    throw OptionError("SimConfig.planes.heights_mm must list at least 2 heights for the laser "
+                      "plane calibration (got " + std::to_string(plane_heights_mm.size()) + ")");
+  }
+  for (std::size_t i = 0; i < plane_heights_mm.size(); ++i) {
+    if (!(plane_heights_mm[i] >= 20) || !std::isfinite(plane_heights_mm[i])) {
+      throw OptionError("SimConfig.planes.heights_mm[" + std::to_string(i) +
+                        "] must be >= 20 mm (got " + std::to_string(plane_heights_mm[i]) + ")");
+    }
+  }
+  if (!(plane_size_mm.x() > 0) || !(plane_size_mm.y() > 0) || !plane_size_mm.allFinite()) {
+    throw OptionError("SimConfig.planes.size_mm must be positive (got [" +
+                      std::to_string(plane_size_mm.x()) + ", " + std::to_string(plane_size_mm.y()) +
+                      "])");
+  }
+  spheres.Check("SimConfig.spheres");
+  chessboard.Check("SimConfig.chessboard");
+  images.Check("SimConfig.images");
+  if (capture_chessboard_images && (chessboard_images < 1 || chessboard_images > 1000)) {
+    throw OptionError("SimConfig.chessboard.images must be in [1, 1000] when "
+                      "captures.chessboard_images is true (got " +
+                      std::to_string(chessboard_images) + ")");
+  }
+  if (!(arc_radius_mm >= 0 && arc_radius_mm <= 1000)) {
+    throw OptionError("SimConfig.trajectory.arc_radius_mm must be in [0, 1000] (got " +
+                      std::to_string(arc_radius_mm) + ")");
+  }
+  if (!(arc_angle_deg > 0 && arc_angle_deg <= 360)) {
+    throw OptionError("SimConfig.trajectory.arc_angle_deg must be in (0, 360] (got " +
+                      std::to_string(arc_angle_deg) + ")");
+  }
+  if (arc_waypoints < 2 || arc_waypoints > 1000) {
+    throw OptionError("SimConfig.trajectory.waypoints must be in [2, 1000] (got " +
+                      std::to_string(arc_waypoints) + ")");
+  }
+
+  // Does the sensor see the targets? The laser's central ray points straight down during a
+  // linear sweep and crosses the optical axis at measuring_height_mm, so a horizontal target at
+  // height h lies at range (measuring_height - h) + |emitter -> crossing| along it.
+  const SensorModel model = MakeSensor(sensor);
+  const double to_crossing = std::hypot(sensor.baseline_mm, sensor.standoff_mm);
+  const auto check_range = [&](double height, const std::string& field, const char* target) {
+    const double range = measuring_height_mm - height + to_crossing;
+    const double far = std::min(model.central_range_mm[1], render.max_range_mm);
+    if (!(range > model.central_range_mm[0] && range < far)) {
+      std::ostringstream msg;
+      msg << "SimConfig." << field << ": the sensor sees nothing of the " << target
+          << " at height " << height << " mm: the laser meets it " << range
+          << " mm from the emitter, outside the sensor's measuring range ["
+          << model.central_range_mm[0] << ", " << far
+          << "] mm along the laser; change " << field
+          << " or sweep.measuring_height_mm (or sensor.baseline_mm/standoff_mm/camera, "
+             "render.max_range_mm)";
+      throw OptionError(msg.str());
+    }
+  };
+  if (capture_planes) {
+    for (std::size_t i = 0; i < plane_heights_mm.size(); ++i) {
+      check_range(plane_heights_mm[i], "planes.heights_mm[" + std::to_string(i) + "]",
+                  "white plane");
+    }
+  }
+  if (capture_spheres) {
+    const std::vector<Eigen::Vector3d> centers = spheres.CentersInCell();
+    for (std::size_t i = 0; i < centers.size(); ++i) {
+      check_range(centers[i].z() + spheres.radius_mm,
+                  "spheres.stand_heights_mm[" + std::to_string(i) + "]", "sphere top");
+    }
+  }
+  if (capture_seats || capture_trajectory) {
+    check_range(kPalletHeightMm, "sweep.measuring_height_mm", "pallet deck under the seat");
+    const double seat_height = seat_shape.thickness_mm + seat_shape.front_roll_mm +
+                               seat_shape.crown_mm + seat_shape.side_lift_mm +
+                               seat_shape.boss_height_mm;
+    check_range(kPalletHeightMm + seat_height, "seats.shape.boss_height_mm",
+                "top of the seat's boss");
+  }
+}
+
+SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+  } catch (const YAML::Exception& e) {
+    throw OptionError(name + ": not valid YAML (" + e.what() + ")");
+  }
+  SimConfig c;
+  Fields top(root, "", name);
+  std::string format = "lasercell.sim_config";
+  int version = kSimConfigVersion;
+  top.Read("format", &format);
+  top.Read("version", &version);
+  if (format != "lasercell.sim_config") {
+    throw OptionError(name + ": field 'format' is '" + format +
+                      "', expected 'lasercell.sim_config'");
+  }
+  if (version != kSimConfigVersion) {
+    throw OptionError(name + ": field 'version' is " + std::to_string(version) +
+                      "; this build reads version " + std::to_string(kSimConfigVersion));
+  }
+  top.Read("seed", &c.seed);
+  {
+    Fields s = top.Sub("sensor");
+    {
+      Fields cam = s.Sub("camera");
+      cam.Read("width_px", &c.sensor.camera.width_px);
+      cam.Read("height_px", &c.sensor.camera.height_px);
+      cam.Read("fx_px", &c.sensor.camera.fx_px);
+      cam.Read("fy_px", &c.sensor.camera.fy_px);
+      cam.Read("cx_px", &c.sensor.camera.cx_px);
+      cam.Read("cy_px", &c.sensor.camera.cy_px);
+      cam.Read("distortion", &c.sensor.camera.distortion);
+      cam.Done();
+    }
+    s.Read("baseline_mm", &c.sensor.baseline_mm);
+    s.Read("standoff_mm", &c.sensor.standoff_mm);
+    s.Read("fan_angle_deg", &c.sensor.fan_angle_deg);
+    s.Read("mount_translation_mm", &c.mount_translation_mm);
+    s.Read("mount_rotation_deg", &c.mount_rotation_deg);
+    s.Done();
+  }
+  {
+    Fields r = top.Sub("render");
+    r.Read("fan_rays", &c.render.fan_rays);
+    r.Read("max_range_mm", &c.render.max_range_mm);
+    r.Read("intensity_gain", &c.render.intensity_gain);
+    r.Read("reference_range_mm", &c.render.reference_range_mm);
+    r.Read("min_intensity", &c.render.min_intensity);
+    r.Read("max_view_angle_deg", &c.render.max_view_angle_deg);
+    r.Read("sheet_thickness_mm", &c.render.sheet_thickness_mm);
+    r.Read("min_width_px", &c.render.min_width_px);
+    r.Read("row_sigma_px", &c.render.row_sigma_px);
+    r.Read("intensity_sigma", &c.render.intensity_sigma);
+    r.Read("dropout_probability", &c.render.dropout_probability);
+    r.Read("occlusion_epsilon_mm", &c.render.occlusion_epsilon_mm);
+    r.Done();
+  }
+  {
+    Fields t = top.Sub("timing");
+    t.Read("profiles", &c.timing.profiles);
+    t.Read("rate_hz", &c.timing.rate_hz);
+    t.Read("jitter_s", &c.timing.jitter_s);
+    t.Read("timestamp_noise_s", &c.timing.timestamp_noise_s);
+    t.Read("start_ns", &c.timing.start_ns);
+    t.Done();
+  }
+  {
+    Fields cell = top.Sub("cell");
+    cell.Read("vision_base_mm", &c.vision_base_mm);
+    cell.Read("vision_base_yaw_deg", &c.vision_base_yaw_deg);
+    cell.Read("handling_base_mm", &c.handling_base_mm);
+    cell.Read("handling_base_yaw_deg", &c.handling_base_yaw_deg);
+    cell.Read("floor_size_mm", &c.floor_size_mm);
+    Fields a = cell.Sub("albedo");
+    a.Read("floor", &c.albedo.floor);
+    a.Read("pallet", &c.albedo.pallet);
+    a.Read("seat", &c.albedo.seat);
+    a.Read("white_plane", &c.albedo.white_plane);
+    a.Read("spheres", &c.albedo.spheres);
+    a.Read("stands", &c.albedo.stands);
+    a.Read("chessboard_light", &c.albedo.chessboard_light);
+    a.Read("chessboard_dark", &c.albedo.chessboard_dark);
+    a.Done();
+    cell.Done();
+  }
+  {
+    Fields r = top.Sub("vision_robot");
+    std::vector<double> offsets;
+    r.Read("joint_offsets_deg", &offsets);
+    if (!offsets.empty()) c.joint_offsets_deg = offsets;
+    r.Read("joint_offset_sigma_deg", &c.joint_offset_sigma_deg);
+    r.Done();
+  }
+  {
+    Fields s = top.Sub("sweep");
+    s.Read("measuring_height_mm", &c.measuring_height_mm);
+    s.Read("length_mm", &c.sweep_length_mm);
+    s.Read("center_xy_mm", &c.sweep_center_xy_mm);
+    s.Read("direction_deg", &c.sweep_direction_deg);
+    s.Done();
+  }
+  {
+    Fields s = top.Sub("seats");
+    s.Read("count", &c.seat_count);
+    s.Read("max_shift_mm", &c.seat_placement.max_shift_mm);
+    s.Read("max_tilt_deg", &c.seat_placement.max_tilt_deg);
+    s.Read("max_yaw_deg", &c.seat_placement.max_yaw_deg);
+    Fields shape = s.Sub("shape");
+    ChairSeatOptions& o = c.seat_shape;
+    shape.Read("half_length_x_mm", &o.half_length_x_mm);
+    shape.Read("half_width_y_mm", &o.half_width_y_mm);
+    shape.Read("outline_exponent", &o.outline_exponent);
+    shape.Read("crown_mm", &o.crown_mm);
+    shape.Read("front_roll_mm", &o.front_roll_mm);
+    shape.Read("side_lift_mm", &o.side_lift_mm);
+    shape.Read("thickness_mm", &o.thickness_mm);
+    shape.Read("boss_offset_x_mm", &o.boss_offset_x_mm);
+    shape.Read("boss_radius_mm", &o.boss_radius_mm);
+    shape.Read("boss_height_mm", &o.boss_height_mm);
+    shape.Read("hole_diameter_mm", &o.hole_diameter_mm);
+    shape.Read("angular_steps", &o.angular_steps);
+    shape.Read("radial_steps", &o.radial_steps);
+    shape.Done();
+    s.Done();
+  }
+  {
+    Fields p = top.Sub("planes");
+    p.Read("heights_mm", &c.plane_heights_mm);
+    p.Read("size_mm", &c.plane_size_mm);
+    p.Done();
+  }
+  {
+    Fields s = top.Sub("spheres");
+    s.Read("radius_mm", &c.spheres.radius_mm);
+    s.Read("stand_heights_mm", &c.spheres.stand_heights_mm);
+    s.Read("positions_xy_mm", &c.spheres.positions_xy_mm);
+    s.Read("segments", &c.spheres.segments);
+    s.Done();
+  }
+  {
+    Fields t = top.Sub("trajectory");
+    t.Read("arc_radius_mm", &c.arc_radius_mm);
+    t.Read("arc_angle_deg", &c.arc_angle_deg);
+    t.Read("waypoints", &c.arc_waypoints);
+    t.Done();
+  }
+  {
+    Fields b = top.Sub("chessboard");
+    b.Read("images", &c.chessboard_images);
+    Eigen::Vector2d squares(c.chessboard.squares_x, c.chessboard.squares_y);
+    b.Read("squares", &squares);
+    if (squares.x() != std::round(squares.x()) || squares.y() != std::round(squares.y())) {
+      throw OptionError(name + ": field 'chessboard.squares' must hold two integers");
+    }
+    c.chessboard.squares_x = static_cast<int>(squares.x());
+    c.chessboard.squares_y = static_cast<int>(squares.y());
+    b.Read("square_mm", &c.chessboard.square_mm);
+    b.Read("border_mm", &c.chessboard.border_mm);
+    b.Done();
+  }
+  {
+    Fields i = top.Sub("images");
+    i.Read("exposure", &c.images.exposure);
+    i.Read("ambient", &c.images.ambient);
+    i.Read("background_albedo", &c.images.background_albedo);
+    i.Read("blur_sigma_px", &c.images.blur_sigma_px);
+    i.Read("noise_sigma", &c.images.noise_sigma);
+    i.Read("vignetting", &c.images.vignetting);
+    i.Read("edge_samples", &c.images.edge_samples);
+    i.Done();
+  }
+  {
+    Fields k = top.Sub("captures");
+    k.Read("planes", &c.capture_planes);
+    k.Read("spheres", &c.capture_spheres);
+    k.Read("seats", &c.capture_seats);
+    k.Read("trajectory", &c.capture_trajectory);
+    k.Read("chessboard_images", &c.capture_chessboard_images);
+    k.Read("laser_line_images", &c.capture_laser_line_images);
+    k.Read("meshes", &c.write_meshes);
+    k.Done();
+  }
+  top.Done();
+  return c;
+}
+
+SimConfig LoadSimConfig(const std::string& path) {
+  return SimConfigFromYaml(io::ReadFileBytes(path), path);
+}
+
+std::string SimConfigToYaml(const SimConfig& c) {
+  std::ostringstream o;
+  const auto& cam = c.sensor.camera;
+  const auto& r = c.render;
+  const auto& s = c.seat_shape;
+  o << "format: lasercell.sim_config\nversion: " << kSimConfigVersion << "\n";
+  o << "seed: " << c.seed << "\n";
+  o << "sensor:\n  camera: {width_px: " << cam.width_px << ", height_px: " << cam.height_px
+    << ", fx_px: " << Num(cam.fx_px) << ", fy_px: " << Num(cam.fy_px) << ", cx_px: "
+    << Num(cam.cx_px) << ", cy_px: " << Num(cam.cy_px) << ", distortion: " << List(cam.distortion)
+    << "}\n";
+  o << "  baseline_mm: " << Num(c.sensor.baseline_mm) << "\n  standoff_mm: "
+    << Num(c.sensor.standoff_mm) << "\n  fan_angle_deg: " << Num(c.sensor.fan_angle_deg)
+    << "\n  mount_translation_mm: " << List(c.mount_translation_mm)
+    << "\n  mount_rotation_deg: " << List(c.mount_rotation_deg) << "\n";
+  o << "render: {fan_rays: " << r.fan_rays << ", max_range_mm: " << Num(r.max_range_mm)
+    << ", intensity_gain: " << Num(r.intensity_gain) << ", reference_range_mm: "
+    << Num(r.reference_range_mm) << ", min_intensity: " << Num(r.min_intensity)
+    << ", max_view_angle_deg: " << Num(r.max_view_angle_deg) << ", sheet_thickness_mm: "
+    << Num(r.sheet_thickness_mm) << ", min_width_px: " << Num(r.min_width_px)
+    << ", row_sigma_px: " << Num(r.row_sigma_px) << ", intensity_sigma: "
+    << Num(r.intensity_sigma) << ", dropout_probability: " << Num(r.dropout_probability)
+    << ", occlusion_epsilon_mm: " << Num(r.occlusion_epsilon_mm) << "}\n";
+  o << "timing: {profiles: " << c.timing.profiles << ", rate_hz: " << Num(c.timing.rate_hz)
+    << ", jitter_s: " << Num(c.timing.jitter_s) << ", timestamp_noise_s: "
+    << Num(c.timing.timestamp_noise_s) << ", start_ns: " << c.timing.start_ns << "}\n";
+  o << "cell:\n  vision_base_mm: " << List(c.vision_base_mm) << "\n  vision_base_yaw_deg: "
+    << Num(c.vision_base_yaw_deg) << "\n  handling_base_mm: " << List(c.handling_base_mm)
+    << "\n  handling_base_yaw_deg: " << Num(c.handling_base_yaw_deg) << "\n  floor_size_mm: "
+    << Num(c.floor_size_mm) << "\n  albedo: {floor: " << Num(c.albedo.floor) << ", pallet: "
+    << Num(c.albedo.pallet) << ", seat: " << Num(c.albedo.seat) << ", white_plane: "
+    << Num(c.albedo.white_plane) << ", spheres: " << Num(c.albedo.spheres) << ", stands: "
+    << Num(c.albedo.stands) << ", chessboard_light: " << Num(c.albedo.chessboard_light)
+    << ", chessboard_dark: " << Num(c.albedo.chessboard_dark) << "}\n";
+  o << "vision_robot:\n";
+  if (c.joint_offsets_deg) o << "  joint_offsets_deg: " << List(*c.joint_offsets_deg) << "\n";
+  o << "  joint_offset_sigma_deg: " << Num(c.joint_offset_sigma_deg) << "\n";
+  o << "sweep: {measuring_height_mm: " << Num(c.measuring_height_mm) << ", length_mm: "
+    << Num(c.sweep_length_mm) << ", center_xy_mm: " << List(c.sweep_center_xy_mm)
+    << ", direction_deg: " << Num(c.sweep_direction_deg) << "}\n";
+  o << "seats:\n  count: " << c.seat_count << "\n  max_shift_mm: "
+    << Num(c.seat_placement.max_shift_mm) << "\n  max_tilt_deg: "
+    << Num(c.seat_placement.max_tilt_deg) << "\n  max_yaw_deg: "
+    << Num(c.seat_placement.max_yaw_deg) << "\n  shape: {half_length_x_mm: "
+    << Num(s.half_length_x_mm) << ", half_width_y_mm: " << Num(s.half_width_y_mm)
+    << ", outline_exponent: " << Num(s.outline_exponent) << ", crown_mm: " << Num(s.crown_mm)
+    << ", front_roll_mm: " << Num(s.front_roll_mm) << ", side_lift_mm: " << Num(s.side_lift_mm)
+    << ", thickness_mm: " << Num(s.thickness_mm) << ", boss_offset_x_mm: "
+    << Num(s.boss_offset_x_mm) << ", boss_radius_mm: " << Num(s.boss_radius_mm)
+    << ", boss_height_mm: " << Num(s.boss_height_mm) << ", hole_diameter_mm: "
+    << Num(s.hole_diameter_mm) << ", angular_steps: " << s.angular_steps
+    << ", radial_steps: " << s.radial_steps << "}\n";
+  o << "planes: {heights_mm: " << List(c.plane_heights_mm) << ", size_mm: "
+    << List(c.plane_size_mm) << "}\n";
+  o << "spheres:\n  radius_mm: " << Num(c.spheres.radius_mm) << "\n  stand_heights_mm: "
+    << List(c.spheres.stand_heights_mm) << "\n  positions_xy_mm: [";
+  for (std::size_t i = 0; i < c.spheres.positions_xy_mm.size(); ++i) {
+    o << (i ? ", " : "") << List(c.spheres.positions_xy_mm[i]);
+  }
+  o << "]\n  segments: " << c.spheres.segments << "\n";
+  o << "trajectory: {arc_radius_mm: " << Num(c.arc_radius_mm) << ", arc_angle_deg: "
+    << Num(c.arc_angle_deg) << ", waypoints: " << c.arc_waypoints << "}\n";
+  const auto b = [](bool v) { return v ? "true" : "false"; };
+  o << "chessboard: {images: " << c.chessboard_images << ", squares: ["
+    << c.chessboard.squares_x << ", " << c.chessboard.squares_y << "], square_mm: "
+    << Num(c.chessboard.square_mm) << ", border_mm: " << Num(c.chessboard.border_mm) << "}\n";
+  o << "images: {exposure: " << Num(c.images.exposure) << ", ambient: " << Num(c.images.ambient)
+    << ", background_albedo: " << Num(c.images.background_albedo) << ", blur_sigma_px: "
+    << Num(c.images.blur_sigma_px) << ", noise_sigma: " << Num(c.images.noise_sigma)
+    << ", vignetting: " << b(c.images.vignetting) << ", edge_samples: " << c.images.edge_samples
+    << "}\n";
+  o << "captures: {planes: " << b(c.capture_planes) << ", spheres: " << b(c.capture_spheres)
+    << ", seats: " << b(c.capture_seats) << ", trajectory: " << b(c.capture_trajectory)
+    << ", chessboard_images: " << b(c.capture_chessboard_images)
+    << ", laser_line_images: " << b(c.capture_laser_line_images)
+    << ", meshes: " << b(c.write_meshes) << "}\n";
+  return o.str();
+}
+
+}  // namespace lasercell::datasets

@@ -1,0 +1,127 @@
+#pragma once
+// Configuration of the workcell simulator (SIM.yaml). Every field has a default, so an empty
+// file (or none) gives the standard cell; a file only lists what it changes. Loading rejects
+// unknown fields and malformed values with an OptionError naming the field path (e.g.
+// "sim.yaml: unknown field 'sensor.camera.fx'"); Check() rejects values out of range, and a
+// sensor geometry that would see nothing of a target, naming the field to change.
+//
+// File layout (format lasercell.sim_config, version 1), all sections optional:
+//   format: lasercell.sim_config
+//   version: 1
+//   seed: 1
+//   sensor: {camera: {width_px, height_px, fx_px, fy_px, cx_px, cy_px, distortion: [8]},
+//            baseline_mm, standoff_mm, fan_angle_deg,
+//            mount_translation_mm: [x, y, z], mount_rotation_deg: [rx, ry, rz]}
+//   render: {fan_rays, max_range_mm, intensity_gain, reference_range_mm, min_intensity,
+//            max_view_angle_deg, sheet_thickness_mm, min_width_px, row_sigma_px,
+//            intensity_sigma, dropout_probability, occlusion_epsilon_mm}
+//   timing: {profiles, rate_hz, jitter_s, timestamp_noise_s, start_ns}
+//   cell: {vision_base_mm: [x, y, z], vision_base_yaw_deg, handling_base_mm: [x, y, z],
+//          handling_base_yaw_deg, floor_size_mm,
+//          albedo: {floor, pallet, seat, white_plane, spheres, stands, chessboard_light,
+//                   chessboard_dark}}
+//   vision_robot: {joint_offsets_deg: [6] (explicit), joint_offset_sigma_deg}
+//   sweep: {measuring_height_mm, length_mm, center_xy_mm: [x, y], direction_deg}
+//   seats: {count, max_shift_mm, max_tilt_deg, max_yaw_deg, shape: {ChairSeatOptions fields}}
+//   planes: {heights_mm: [...], size_mm: [x, y]}
+//   spheres: {radius_mm, stand_heights_mm: [...], positions_xy_mm: [[x, y], ...], segments}
+//   trajectory: {arc_radius_mm, arc_angle_deg, waypoints}
+//   chessboard: {images, squares: [x, y], square_mm, border_mm}
+//   images: {exposure, ambient, background_albedo, blur_sigma_px, noise_sigma, vignetting,
+//            edge_samples}
+//   captures: {planes, spheres, seats, trajectory, chessboard_images, laser_line_images,
+//              meshes}   (booleans)
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "datasets/camera_images.hpp"
+#include "datasets/cell.hpp"
+#include "datasets/chair_seat.hpp"
+#include "datasets/laser_renderer.hpp"
+#include "datasets/sensor.hpp"
+
+namespace lasercell::datasets {
+
+/// Current simulator configuration format version.
+inline constexpr int kSimConfigVersion = 1;
+
+/// Everything the simulator needs; defaults give the standard cell.
+struct SimConfig {
+  std::uint64_t seed = 1;  ///< Master seed: same seed (and config) -> identical files.
+
+  SensorOptions sensor;  ///< Camera, laser geometry.
+  /// Camera centre in the vision-robot flange frame, mm (the nominal mount puts the sensor
+  /// looking down along the flange's +z with the laser plane normal along flange +x).
+  Eigen::Vector3d mount_translation_mm = Eigen::Vector3d(12.0, -95.0, 160.0);
+  /// Extra rotation of the mount (rotation vector, deg) on top of the nominal orientation.
+  Eigen::Vector3d mount_rotation_deg = Eigen::Vector3d(0.8, -1.1, 2.3);
+
+  LaserRenderOptions render;  ///< Photometry, sampling and noise.
+  SweepTiming timing;         ///< Profiles per sweep, rate, jitter.
+
+  // Cell layout.
+  Eigen::Vector3d vision_base_mm = Eigen::Vector3d(0.0, -480.0, 750.0);  ///< UR5 base (cell).
+  double vision_base_yaw_deg = 90.0;  ///< UR5 base rotation about cell z.
+  Eigen::Vector3d handling_base_mm = Eigen::Vector3d(1350.0, 0.0, 0.0);  ///< Handling base.
+  double handling_base_yaw_deg = 180.0;  ///< Handling base rotation about cell z.
+  double floor_size_mm = 4000.0;         ///< Floor edge.
+  CellAlbedo albedo;                     ///< Surface reflectances.
+
+  // The true vision robot.
+  std::optional<std::vector<double>> joint_offsets_deg;  ///< Explicit true joint offsets.
+  double joint_offset_sigma_deg = 0.1;  ///< Else drawn N(0, sigma) per joint from the seed.
+
+  // Linear sweeps (calibration planes, spheres, part scenes).
+  double measuring_height_mm = 244.0;  ///< Height (cell z) where the laser crosses the optical axis.
+  double sweep_length_mm = 900.0;      ///< Travel of a linear sweep.
+  Eigen::Vector2d sweep_center_xy_mm = Eigen::Vector2d::Zero();  ///< Sweep midpoint (cell xy).
+  double sweep_direction_deg = 0.0;    ///< Sweep direction in the cell xy plane.
+
+  // Part scenes.
+  int seat_count = 3;                  ///< Seat placements in a cell capture set.
+  SeatPlacementOptions seat_placement;  ///< Table I ranges.
+  ChairSeatOptions seat_shape;          ///< Seat geometry.
+
+  // Calibration targets.
+  std::vector<double> plane_heights_mm = {150.0, 250.0, 350.0};  ///< White plane top heights.
+  Eigen::Vector2d plane_size_mm = Eigen::Vector2d(800.0, 600.0);  ///< White plane size.
+  SphereTargets spheres;                                          ///< Half spheres on stands.
+
+  // Robot-trajectory sweep: the sensor follows a horizontal arc about the sweep centre.
+  double arc_radius_mm = 150.0;  ///< Arc radius, mm.
+  double arc_angle_deg = 180.0;  ///< Arc angle (semicircle).
+  int arc_waypoints = 13;        ///< IK waypoints; joints are interpolated linearly between.
+
+  // Camera images (intrinsics calibration, peak-detector tests). The board's albedos come from
+  // cell.albedo.chessboard_light/dark.
+  ChessboardTarget chessboard;    ///< Printed board: squares, square_mm, border_mm.
+  int chessboard_images = 20;     ///< Chessboard views in a cell capture set.
+  ImageRenderOptions images;      ///< Photometry, blur, noise of the images.
+
+  // What a cell capture set contains.
+  bool capture_planes = true;
+  bool capture_spheres = true;
+  bool capture_seats = true;
+  bool capture_trajectory = true;
+  bool capture_chessboard_images = true;  ///< images/chessboard_NNN.png + truth/chessboard.yaml.
+  bool capture_laser_line_images = true;  ///< images/laser_line_*.png + truth/laser_lines.yaml.
+  bool write_meshes = true;
+
+  /// Throws OptionError naming the field ("SimConfig.<path>") when a value is out of range or a
+  /// target lies outside the sensor's measuring range at the configured sweep height.
+  void Check() const;
+};
+
+/// Parses SIM.yaml text; `name` (the file) appears in errors. Throws OptionError naming the
+/// field for unknown fields, wrong types, wrong list lengths, unknown format/version.
+SimConfig SimConfigFromYaml(const std::string& text, const std::string& name);
+/// Reads SIM.yaml.
+SimConfig LoadSimConfig(const std::string& path);
+/// Serializes every field (deterministic; numbers round-trip exactly).
+std::string SimConfigToYaml(const SimConfig& config);
+
+}  // namespace lasercell::datasets

@@ -1,0 +1,720 @@
+#include "datasets/simulate.hpp"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numbers>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/io/file_util.hpp"
+#include "core/io/point_cloud_io.hpp"
+#include "core/se3.hpp"
+#include "datasets/camera_images.hpp"
+#include "datasets/laser_renderer.hpp"
+#include "datasets/rng.hpp"
+#include "datasets/robots.hpp"
+#include "triangulation/profile_io.hpp"
+
+namespace lasercell::datasets {
+
+namespace {
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+// Random streams (rng.hpp StreamSeed): one per purpose, so adding a capture never changes the
+// others.
+constexpr std::uint64_t kRobotStream = 0x0B07;
+constexpr std::uint64_t kPlaneStream = 0x1000;
+constexpr std::uint64_t kSphereStream = 0x2000;
+constexpr std::uint64_t kTrajectoryStream = 0x3000;
+constexpr std::uint64_t kChessboardStream = 0x4000;
+constexpr std::uint64_t kLaserImageStream = 0x5000;
+constexpr std::uint64_t kSeatStream = 0x10000;
+
+const char* const kTool = "lasercell simulator " LASERCELL_VERSION;
+
+Eigen::Isometry3d YawPose(const Eigen::Vector3d& t, double yaw_deg) {
+  Eigen::Isometry3d p = Eigen::Isometry3d::Identity();
+  p.linear() = Eigen::AngleAxisd(yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  p.translation() = t;
+  return p;
+}
+
+// Shortest round-trip text; infinities in YAML spelling.
+std::string Num(double v) {
+  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
+  return FormatDouble(v);
+}
+
+std::string Vec(const Eigen::Vector3d& v) {
+  return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
+}
+
+std::string Pose(const Eigen::Isometry3d& p) { return PoseToFileNotation(p); }
+
+StaticEdge Edge(const std::string& parent, const std::string& child,
+                const Eigen::Isometry3d& parent_from_child, const std::string& note) {
+  StaticEdge e;
+  e.parent = parent;
+  e.child = child;
+  e.SetParentFromChild(parent_from_child);
+  e.provenance.tool = kTool;
+  e.provenance.residual_summary = note;
+  return e;
+}
+
+// Pose of the sensor looking down with the laser crossing the optical axis at `crossing` and
+// the laser plane normal (sweep direction) along `direction`.
+Eigen::Isometry3d LookingDownAt(const SensorModel& sensor, double standoff_mm,
+                                const Eigen::Vector3d& crossing, const Eigen::Vector3d& direction) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = SensorLookingDown(sensor.laser, direction);
+  pose.translation() = crossing - pose.linear() * Eigen::Vector3d(0, 0, standoff_mm);
+  return pose;
+}
+
+// Output folder with its subfolders, and the list of files written.
+class Output {
+ public:
+  explicit Output(const std::string& dir) : dir_(dir) {
+    std::error_code ec;
+    for (const char* sub : {"", "profiles", "truth", "models", "images"}) {
+      std::filesystem::create_directories(std::filesystem::path(dir) / sub, ec);
+      if (ec) throw FileError(dir, "cannot create the output folder: " + ec.message());
+    }
+  }
+  void Write(const std::string& relative, std::string_view bytes) {
+    io::WriteFileAtomically(Path(relative), bytes);
+    files_.push_back(relative);
+  }
+  void WriteMesh(const std::string& relative, const TriangleMesh& mesh) {
+    io::WritePlyMesh(Path(relative), mesh);
+    files_.push_back(relative);
+  }
+  std::string Path(const std::string& relative) const {
+    return (std::filesystem::path(dir_) / relative).string();
+  }
+  std::vector<std::string>& files() { return files_; }
+
+ private:
+  std::string dir_;
+  std::vector<std::string> files_;
+};
+
+// Renders one linear or robot sweep, writes its profile file, and fails loudly when the
+// sensor saw nothing.
+struct SweepJob {
+  std::string name;
+  std::string kind;
+  std::string target_fields;  // config fields to blame when nothing is seen
+};
+
+CaptureReport WriteSweep(const SweepJob& job, const SweepResult& result, const SimConfig& config,
+                         Output& out) {
+  if (result.valid_peaks == 0) {
+    throw OptionError("capture '" + job.name + "' (" + job.kind +
+                      "): the sensor sees nothing of the target in any of its " +
+                      std::to_string(result.profiles.profiles.size()) +
+                      " profiles; check " + job.target_fields +
+                      ", SimConfig.sweep.* and SimConfig.render.min_intensity");
+  }
+  triangulation::ProfileSet set = result.profiles;
+  set.header.metadata = "format: lasercell.capture\ncapture: " + job.name + "\nkind: " + job.kind +
+                        "\nsimulator: \"" + kTool + "\"\nseed: " + std::to_string(config.seed) +
+                        "\n";
+  CaptureReport r;
+  r.name = job.name;
+  r.kind = job.kind;
+  r.profiles_file = "profiles/" + job.name + ".lcp";
+  r.profiles = set.profiles.size();
+  r.valid_peaks = result.valid_peaks;
+  out.Write(r.profiles_file, triangulation::EncodeProfiles(set));
+  return r;
+}
+
+std::string LinearSweepTruth(const LinearSweep& sweep, const Eigen::Isometry3d& hb_from_cell,
+                             const SimConfig& config) {
+  std::ostringstream o;
+  o << "    sweep:\n      type: linear\n"
+    << "      t0_ns: " << config.timing.start_ns << "\n"
+    << "      cell_from_sensor_at_t0: " << Pose(sweep.cell_from_sensor_start) << "\n"
+    << "      velocity_mm_s_in_cell: " << Vec(sweep.velocity_mm_s) << "\n"
+    << "      handling_base_from_sensor_at_t0: " << Pose(hb_from_cell * sweep.cell_from_sensor_start)
+    << "\n      velocity_mm_s_in_handling_base: " << Vec(hb_from_cell.linear() * sweep.velocity_mm_s)
+    << "\n";
+  return o.str();
+}
+
+std::string ExposureTimesTruth(const SweepResult& result, const SimConfig& config) {
+  if (config.timing.timestamp_noise_s <= 0) return "";  // timestamps are the true times
+  std::ostringstream o;
+  o << "      true_exposure_ns: [";
+  for (std::size_t i = 0; i < result.exposure_time_s.size(); ++i) {
+    o << (i ? ", " : "")
+      << config.timing.start_ns + static_cast<std::int64_t>(std::llround(result.exposure_time_s[i] * 1e9));
+  }
+  o << "]\n";
+  return o.str();
+}
+
+std::string CaptureHeader(const CaptureReport& r) {
+  return "  - name: " + r.name + "\n    kind: " + r.kind + "\n    profiles_file: " +
+         r.profiles_file + "\n    profiles: " + std::to_string(r.profiles) +
+         "\n    valid_peaks: " + std::to_string(r.valid_peaks) + "\n";
+}
+
+struct SeatCapture {
+  std::string name;
+  SeatPlacement placement;
+};
+
+std::string SeatTruth(const SeatCapture& s, const CellTruth& truth,
+                      const Eigen::Isometry3d& hb_from_cell) {
+  const Eigen::Isometry3d hb_from_part = hb_from_cell * s.placement.cell_from_part;
+  std::ostringstream o;
+  o << "    part: seat\n    part_frame: " << s.name << "\n"
+    << "    placement: {shift_x_mm: " << Num(s.placement.shift_x_mm)
+    << ", shift_y_mm: " << Num(s.placement.shift_y_mm)
+    << ", tilt_x_deg: " << Num(s.placement.tilt_x_rad * kRadToDeg)
+    << ", tilt_y_deg: " << Num(s.placement.tilt_y_rad * kRadToDeg)
+    << ", yaw_deg: " << Num(s.placement.yaw_rad * kRadToDeg) << "}\n"
+    << "    cell_from_part: " << Pose(s.placement.cell_from_part) << "\n"
+    << "    handling_base_from_part: " << Pose(hb_from_part) << "\n"
+    << "    hole_center_in_handling_base: " << Vec(hb_from_part * truth.seat.hole_center_in_part)
+    << "\n    hole_axis_in_handling_base: "
+    << Vec(hb_from_part.linear() * truth.seat.hole_axis_in_part) << "\n"
+    << "    hole_center_in_cell: " << Vec(s.placement.cell_from_part * truth.seat.hole_center_in_part)
+    << "\n";
+  return o.str();
+}
+
+std::string SensorTruth(const CellTruth& t, const SimConfig& c) {
+  const LaserPlane& l = t.sensor.laser;
+  const Eigen::Vector4d coeff = l.Coefficients();
+  const auto& cam = c.sensor.camera;
+  std::ostringstream o;
+  o << "format: lasercell.sim_sensor\nversion: 1\n"
+    << "# The sensor frame is the camera frame (mrcal convention: x columns, y rows, z optical\n"
+    << "# axis); the laser plane is n . p + d = 0 in it, mm.\n"
+    << "sensor_from_camera: " << Pose(Eigen::Isometry3d::Identity()) << "\n"
+    << "vision_flange_from_sensor: " << Pose(t.vision_flange_from_sensor) << "\n"
+    << "laser_plane_in_sensor:\n"
+    << "  normal: " << Vec(l.normal_in_sensor) << "\n"
+    << "  d_mm: " << Num(coeff[3]) << "\n"
+    << "  point_mm: " << Vec(l.origin_in_sensor) << "\n"
+    << "laser:\n  emitter_in_sensor_mm: " << Vec(l.origin_in_sensor) << "\n"
+    << "  central_ray_in_sensor: " << Vec(l.center_in_sensor) << "\n"
+    << "  fan_angle_rad: " << Num(l.fan_angle_rad) << "\n"
+    << "  wavelength_nm: 660\n"
+    << "measuring_range_along_laser_mm: [" << Num(t.sensor.central_range_mm[0]) << ", "
+    << Num(t.sensor.central_range_mm[1]) << "]\n"
+    << "camera:\n  model_file: camera.cameramodel\n  lensmodel: LENSMODEL_OPENCV8\n"
+    << "  imagersize: [" << cam.width_px << ", " << cam.height_px << "]\n"
+    << "  intrinsics: [";
+  const auto v = cam.MrcalVector();
+  for (std::size_t i = 0; i < v.size(); ++i) o << (i ? ", " : "") << Num(v[i]);
+  o << "]\n  pixel_pitch_um: 10.6\n  focal_length_mm: " << Num(cam.fx_px * 10.6e-3) << "\n";
+  o << "noise:\n  row_sigma_px: " << Num(c.render.row_sigma_px) << "\n  intensity_sigma: "
+    << Num(c.render.intensity_sigma) << "\n  dropout_probability: "
+    << Num(c.render.dropout_probability) << "\n  min_intensity: " << Num(c.render.min_intensity)
+    << "\n  timing_jitter_s: " << Num(c.timing.jitter_s) << "\n  timestamp_noise_s: "
+    << Num(c.timing.timestamp_noise_s) << "\n";
+  return o.str();
+}
+
+std::string RobotsTruth(const CellTruth& t) {
+  std::ostringstream o;
+  o << "format: lasercell.sim_robots\nversion: 1\n"
+    << "vision_robot:\n  model: UR5 (core NominalUr5, standard DH)\n"
+    << "  # The true robot = nominal DH table + these offsets added to every joint angle.\n"
+    << "  joint_offsets_rad: [";
+  for (std::size_t i = 0; i < t.joint_offsets_rad.size(); ++i) {
+    o << (i ? ", " : "") << Num(t.joint_offsets_rad[i]);
+  }
+  o << "]\n  joint_offsets_deg: [";
+  for (std::size_t i = 0; i < t.joint_offsets_rad.size(); ++i) {
+    o << (i ? ", " : "") << Num(t.joint_offsets_rad[i] * kRadToDeg);
+  }
+  o << "]\nhandling_robot:\n  model: Nachi SC15F stand-in (datasets ApproximateNachiSc15f)\n";
+  return o.str();
+}
+
+TriangleMesh SphereTargetsMesh(const CellTruth& truth, const SimConfig& config) {
+  const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+  MeshPart all;
+  for (const SceneObject& o : scene.objects()) {
+    if (o.name != "floor" && o.name != "pallet") all.Append(o.geometry);
+  }
+  return all.mesh;
+}
+
+// Seat placements and their scenes.
+std::vector<SeatCapture> DrawSeats(const SimConfig& config, const CellTruth& truth, int count) {
+  std::vector<SeatCapture> seats;
+  for (int i = 0; i < count; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "seat_%03d", i);
+    seats.push_back({name, DrawSeatPlacement(config.seat_placement, truth.seat, config.seed, i)});
+  }
+  return seats;
+}
+
+// Renders and writes the seat scenes; appends their truth to `captures_yaml`.
+void RunSeats(const SimConfig& config, const CellTruth& truth,
+              const std::vector<SeatCapture>& seats, const LinearSweep& sweep,
+              const Eigen::Isometry3d& hb_from_cell, Output& out, SimulationReport& report,
+              std::string& captures_yaml, const ProgressCallback& progress, int threads) {
+  for (std::size_t i = 0; i < seats.size(); ++i) {
+    const Scene scene = MakeSeatScene(truth.layout, truth.seat, seats[i].placement.cell_from_part);
+    const LaserRenderer renderer(scene, truth.sensor, config.render);
+    const SweepResult result = RenderSweep(
+        renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
+        StreamSeed(config.seed, kSeatStream + i), 0, "", threads);
+    const CaptureReport r = WriteSweep(
+        {seats[i].name, "seat", "SimConfig.seats.* (placement " + std::to_string(i) + ")"},
+        result, config, out);
+    report.captures.push_back(r);
+    captures_yaml += CaptureHeader(r) + LinearSweepTruth(sweep, hb_from_cell, config) +
+                     ExposureTimesTruth(result, config) + SeatTruth(seats[i], truth, hb_from_cell);
+    ReportProgress(progress, "seats", static_cast<double>(i + 1) / seats.size());
+  }
+}
+
+// Runs f(i) for i in [0, n) on `threads` threads (<= 0: all cores).
+template <typename F>
+void ParallelFor(int n, int threads, F&& f) {
+  tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
+  arena.execute([&] { tbb::parallel_for(0, n, [&](int i) { f(i); }); });
+}
+
+ChessboardTarget BoardOf(const SimConfig& config) {
+  ChessboardTarget board = config.chessboard;
+  board.dark_albedo = config.albedo.chessboard_dark;
+  board.light_albedo = config.albedo.chessboard_light;
+  return board;
+}
+
+void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output& out,
+                         int threads) {
+  const ChessboardTarget board = BoardOf(config);
+  const CameraModel& camera = truth.sensor.camera;
+  const ImageRenderer renderer(camera);
+  const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(
+      board, camera, config.chessboard_images, StreamSeed(config.seed, kChessboardStream));
+  std::vector<std::string> pngs(poses.size());
+  ParallelFor(static_cast<int>(poses.size()), threads, [&](int i) {
+    pngs[i] = EncodePng(renderer.RenderChessboard(
+        board, poses[i], config.images, StreamSeed(config.seed, kChessboardStream + 1 + i)));
+  });
+  std::ostringstream o;
+  o << "format: lasercell.sim_chessboard\nversion: 1\n"
+    << "# Board frame: pattern in its xy plane, square (i, j) at [i s, (i+1) s] x [j s, (j+1) s],\n"
+    << "# dark when i + j is even; inner corner (i, j) at ((i+1) s, (j+1) s, 0), listed row by row\n"
+    << "# along x (OpenCV order). Pixel coordinates: centre of the top-left pixel is (0, 0).\n"
+    << "board: {squares: [" << board.squares_x << ", " << board.squares_y
+    << "], inner_corners: [" << board.squares_x - 1 << ", " << board.squares_y - 1
+    << "], square_mm: " << Num(board.square_mm) << ", border_mm: " << Num(board.border_mm)
+    << ", dark_albedo: " << Num(board.dark_albedo) << ", light_albedo: "
+    << Num(board.light_albedo) << "}\nimages:\n";
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    char name[48];
+    std::snprintf(name, sizeof(name), "images/chessboard_%03zu.png", i);
+    out.Write(name, pngs[i]);
+    o << "  - file: " << name << "\n    camera_from_board: " << Pose(poses[i])
+      << "\n    corners_px: [";
+    bool first = true;
+    for (const Eigen::Vector3d& p : board.InnerCorners()) {
+      const auto q = camera.Project(poses[i] * p);
+      o << (first ? "" : ", ") << "[" << Num(q->x()) << ", " << Num(q->y()) << "]";
+      first = false;
+    }
+    o << "]\n";
+  }
+  out.Write("truth/chessboard.yaml", o.str());
+}
+
+std::string RowList(const std::vector<double>& v) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    s += (i ? ", " : "") + (std::isnan(v[i]) ? std::string(".nan") : Num(v[i]));
+  }
+  return s + "]";
+}
+
+void RunLaserLineImages(const SimConfig& config, const CellTruth& truth, const LinearSweep& sweep,
+                        Output& out) {
+  const double mid = 0.5 * (config.timing.profiles - 1) / config.timing.rate_hz;
+  const Eigen::Isometry3d pose = sweep.At(mid);
+  // The stripe on the white plane (first height) and on a chessboard lying flat under the
+  // sweep's midpoint, pattern up.
+  const ChessboardTarget board = BoardOf(config);
+  Eigen::Isometry3d cell_from_board = Eigen::Isometry3d::Identity();
+  cell_from_board.translation() =
+      Eigen::Vector3d(config.sweep_center_xy_mm.x() - board.squares_x * board.square_mm / 2,
+                      config.sweep_center_xy_mm.y() - board.squares_y * board.square_mm / 2,
+                      config.plane_heights_mm.empty() ? 150.0 : config.plane_heights_mm.front());
+  struct Case {
+    std::string name;
+    Scene scene;
+  };
+  std::vector<Case> cases;
+  cases.push_back({"laser_line_plane",
+                   MakePlaneScene(truth.layout, cell_from_board.translation().z(),
+                                  config.plane_size_mm)});
+  cases.push_back({"laser_line_chessboard",
+                   MakeChessboardScene(truth.layout, cell_from_board,
+                                       {board.squares_x, board.squares_y}, board.square_mm)});
+  const ImageRenderer images(truth.sensor.camera);
+  std::ostringstream o;
+  o << "format: lasercell.sim_laser_lines\nversion: 1\n"
+    << "# Exact (noise-free) peak row per image column of each raw laser-line image; .nan where\n"
+    << "# the column has no peak. Stripe profile: Gaussian of FWHM width_px, peak 255 * intensity.\n"
+    << "images:\n";
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const LaserRenderer renderer(cases[k].scene, truth.sensor, config.render);
+    const ExposureTruth exposure = renderer.RenderExact(pose);
+    const std::string file = "images/" + cases[k].name + ".png";
+    out.Write(file, EncodePng(images.RenderLaserLine(
+                        exposure, config.images, StreamSeed(config.seed, kLaserImageStream + k))));
+    o << "  - file: " << file << "\n    cell_from_sensor: " << Pose(pose)
+      << "\n    rows_px: " << RowList(exposure.row_px)
+      << "\n    width_px: " << RowList(exposure.width_px)
+      << "\n    intensity: " << RowList(exposure.intensity) << "\n";
+  }
+  out.Write("truth/laser_lines.yaml", o.str());
+}
+
+void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
+                      const std::vector<SeatCapture>& seats, Output& out) {
+  FrameGraph graph = truth.Graph();
+  const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();
+  for (const SeatCapture& s : seats) {
+    graph.SetStaticEdge(Edge("handling_base", s.name, hb_from_cell * s.placement.cell_from_part,
+                             "simulated ground truth (part pose)"));
+  }
+  out.Write("truth/cell.yaml", FrameGraphToYaml(graph));
+  out.Write("truth/camera.cameramodel", MrcalCameraModelText(config.sensor.camera));
+  out.Write("truth/sensor.yaml", SensorTruth(truth, config));
+  out.Write("truth/robots.yaml", RobotsTruth(truth));
+  out.Write("truth/sim_config.yaml", SimConfigToYaml(config));
+  if (config.write_meshes) {
+    out.WriteMesh("models/seat.ply", truth.seat.part.mesh);
+    out.WriteMesh("models/pallet.ply", MakePallet().mesh);
+    out.WriteMesh("models/sphere_targets.ply", SphereTargetsMesh(truth, config));
+  }
+}
+
+std::string CapturesPreamble(const SimConfig& config, const CellTruth& truth) {
+  std::ostringstream o;
+  o << "format: lasercell.sim_truth\nversion: 1\nseed: " << config.seed << "\n"
+    << "# Poses: parent_from_child as {translation_mm, rotation_wxyz}; frames as in cell.yaml.\n"
+    << "cell_from_handling_base: " << Pose(truth.layout.cell_from_handling_base) << "\n"
+    << "cell_from_vision_base: " << Pose(truth.layout.cell_from_vision_base) << "\n"
+    << "hole_center_in_part: " << Vec(truth.seat.hole_center_in_part) << "\n"
+    << "captures:\n";
+  return o.str();
+}
+
+}  // namespace
+
+FrameGraph CellTruth::Graph() const {
+  FrameGraph g;
+  g.SetRobot("vision_robot", true_vision_robot);
+  g.SetRobot("handling_robot", handling_robot);
+  g.SetStaticEdge(Edge("cell", "vision_base", layout.cell_from_vision_base, "simulated ground truth"));
+  g.SetStaticEdge(
+      Edge("cell", "handling_base", layout.cell_from_handling_base, "simulated ground truth"));
+  g.SetDynamicEdge({"vision_base", "vision_flange", "vision_robot"});
+  g.SetDynamicEdge({"handling_base", "handling_flange", "handling_robot"});
+  g.SetStaticEdge(
+      Edge("vision_flange", "sensor", vision_flange_from_sensor, "simulated ground truth"));
+  g.SetStaticEdge(Edge("sensor", "camera", Eigen::Isometry3d::Identity(),
+                       "the simulated sensor frame is the camera frame"));
+  return g;
+}
+
+CellTruth MakeCellTruth(const SimConfig& config) {
+  config.Check();
+  CellTruth t;
+  t.layout.cell_from_vision_base = YawPose(config.vision_base_mm, config.vision_base_yaw_deg);
+  t.layout.cell_from_handling_base = YawPose(config.handling_base_mm, config.handling_base_yaw_deg);
+  t.layout.floor_size_mm = config.floor_size_mm;
+  t.layout.albedo = config.albedo;
+  t.sensor = MakeSensor(config.sensor);
+  // Nominal mount: with the flange pointing down (flange z = -cell z, flange x = cell x) the
+  // sensor looks down with its laser plane normal along cell x; then the configured extra
+  // rotation (in the flange frame) and the camera centre's position.
+  const Eigen::Matrix3d cell_from_flange_down = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  const Eigen::Matrix3d flange_from_sensor_nominal =
+      cell_from_flange_down.transpose() * SensorLookingDown(t.sensor.laser, Eigen::Vector3d::UnitX());
+  t.vision_flange_from_sensor.linear() =
+      QuaternionFromRotationVector(config.mount_rotation_deg * kDegToRad).toRotationMatrix() *
+      flange_from_sensor_nominal;
+  t.vision_flange_from_sensor.translation() = config.mount_translation_mm;
+  t.nominal_vision_robot = NominalUr5();
+  if (config.joint_offsets_deg) {
+    for (double d : *config.joint_offsets_deg) t.joint_offsets_rad.push_back(d * kDegToRad);
+  } else {
+    Rng rng(StreamSeed(config.seed, kRobotStream));
+    for (int i = 0; i < 6; ++i) {
+      t.joint_offsets_rad.push_back(rng.Normal(0.0, config.joint_offset_sigma_deg * kDegToRad));
+    }
+  }
+  t.true_vision_robot = ApplyRobotErrors(t.nominal_vision_robot, {t.joint_offsets_rad, {}, {}});
+  t.handling_robot = ApproximateNachiSc15f();
+  t.seat = MakeChairSeat(config.seat_shape);
+  return t;
+}
+
+LinearSweep MakeLinearSweep(const SimConfig& config, const SensorModel& sensor) {
+  const double a = config.sweep_direction_deg * kDegToRad;
+  const Eigen::Vector3d dir(std::cos(a), std::sin(a), 0.0);
+  const Eigen::Vector3d center(config.sweep_center_xy_mm.x(), config.sweep_center_xy_mm.y(),
+                               config.measuring_height_mm);
+  const double duration = (config.timing.profiles - 1) / config.timing.rate_hz;
+  LinearSweep s;
+  s.cell_from_sensor_start = LookingDownAt(sensor, config.sensor.standoff_mm,
+                                           center - 0.5 * config.sweep_length_mm * dir, dir);
+  s.velocity_mm_s = duration > 0 ? Eigen::Vector3d(dir * config.sweep_length_mm / duration)
+                                 : Eigen::Vector3d::Zero();
+  return s;
+}
+
+std::vector<double> JointTrajectory::At(double t) const {
+  LASERCELL_CHECK(!times_s.empty() && times_s.size() == joints_rad.size(), "trajectory shape");
+  if (t <= times_s.front()) return joints_rad.front();
+  if (t >= times_s.back()) return joints_rad.back();
+  std::size_t k = 1;
+  while (times_s[k] < t) ++k;
+  const double w = (t - times_s[k - 1]) / (times_s[k] - times_s[k - 1]);
+  std::vector<double> q(joints_rad[k].size());
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    q[j] = (1 - w) * joints_rad[k - 1][j] + w * joints_rad[k][j];
+  }
+  return q;
+}
+
+JointTrajectory MakeArcTrajectory(const SimConfig& config, const CellTruth& truth) {
+  const int n = config.arc_waypoints;
+  const double duration = (config.timing.profiles - 1) / config.timing.rate_hz;
+  const double arc = config.arc_angle_deg * kDegToRad;
+  const double phi0 = -std::numbers::pi / 2 - arc / 2;
+  const Eigen::Isometry3d base_from_cell = truth.layout.cell_from_vision_base.inverse();
+  const Eigen::Isometry3d sensor_from_flange = truth.vision_flange_from_sensor.inverse();
+  JointTrajectory traj;
+  std::vector<double> seed;
+  for (int k = 0; k < n; ++k) {
+    const double s = static_cast<double>(k) / (n - 1);
+    const double phi = phi0 + arc * s;
+    const Eigen::Vector3d crossing(
+        config.sweep_center_xy_mm.x() + config.arc_radius_mm * std::cos(phi),
+        config.sweep_center_xy_mm.y() + config.arc_radius_mm * std::sin(phi),
+        config.measuring_height_mm);
+    const Eigen::Vector3d tangent(-std::sin(phi), std::cos(phi), 0.0);
+    const Eigen::Isometry3d cell_from_sensor =
+        LookingDownAt(truth.sensor, config.sensor.standoff_mm, crossing, tangent);
+    const Eigen::Isometry3d base_from_flange = base_from_cell * cell_from_sensor * sensor_from_flange;
+    std::optional<std::vector<double>> q;
+    if (k == 0) {
+      // Deterministic multi-start: the first converged of a fixed list of UR5 postures.
+      constexpr double h = std::numbers::pi / 2;
+      for (double q1 : {0.0, h, -h, 2 * h}) {
+        for (double q3 : {h, -h}) {
+          for (double q5 : {-h, h}) {
+            q = SolveIk(truth.nominal_vision_robot, base_from_flange,
+                        {q1, -h, q3, -h, q5, 0.0});
+            if (q) break;
+          }
+          if (q) break;
+        }
+        if (q) break;
+      }
+    } else {
+      q = SolveIk(truth.nominal_vision_robot, base_from_flange, seed);
+    }
+    if (q && k == 0) {
+      // Start inside the UR5's +-2 pi joint ranges with room both ways; later waypoints follow
+      // continuously from here.
+      for (double& v : *q) v = std::remainder(v, 2 * std::numbers::pi);
+    }
+    if (!q) {
+      throw OptionError("SimConfig.trajectory: the vision robot (UR5 at cell.vision_base_mm) "
+                        "cannot reach arc waypoint " + std::to_string(k) + " of " +
+                        std::to_string(n) +
+                        "; change trajectory.arc_radius_mm, sweep.measuring_height_mm, "
+                        "sweep.center_xy_mm or cell.vision_base_mm");
+    }
+    seed = *q;
+    traj.times_s.push_back(duration * s);
+    traj.joints_rad.push_back(*q);
+  }
+  return traj;
+}
+
+std::string SimulationReport::Summary() const {
+  std::size_t peaks = 0;
+  for (const CaptureReport& c : captures) peaks += c.valid_peaks;
+  std::ostringstream o;
+  o.precision(3);
+  o << captures.size() << " captures, " << static_cast<double>(peaks) / 1e6 << "M peaks, "
+    << files.size() << " files in " << seconds << " s";
+  return o.str();
+}
+
+SimulationReport SimulateCell(const SimConfig& config, const std::string& out_dir,
+                              const ProgressCallback& progress, int threads) {
+  const auto start = std::chrono::steady_clock::now();
+  const CellTruth truth = MakeCellTruth(config);
+  Output out(out_dir);
+  SimulationReport report;
+  const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();
+  const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
+  std::string captures_yaml = CapturesPreamble(config, truth);
+
+  // Solve the robot trajectory first: an unreachable arc is a config error worth failing early.
+  JointTrajectory trajectory;
+  if (config.capture_trajectory) trajectory = MakeArcTrajectory(config, truth);
+
+  if (config.capture_planes) {
+    for (std::size_t i = 0; i < config.plane_heights_mm.size(); ++i) {
+      const double h = config.plane_heights_mm[i];
+      const Scene scene = MakePlaneScene(truth.layout, h, config.plane_size_mm);
+      const LaserRenderer renderer(scene, truth.sensor, config.render);
+      const SweepResult result = RenderSweep(
+          renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
+          StreamSeed(config.seed, kPlaneStream + i), 0, "", threads);
+      const std::string name = "plane_" + std::to_string(i);
+      const CaptureReport r = WriteSweep(
+          {name, "white_plane", "SimConfig.planes.heights_mm[" + std::to_string(i) + "]"}, result,
+          config, out);
+      report.captures.push_back(r);
+      const Eigen::Vector3d n_hb = hb_from_cell.linear() * Eigen::Vector3d::UnitZ();
+      const Eigen::Vector3d p_hb = hb_from_cell * Eigen::Vector3d(0, 0, h);
+      captures_yaml += CaptureHeader(r) + LinearSweepTruth(sweep, hb_from_cell, config) +
+                       ExposureTimesTruth(result, config) + "    plane_height_in_cell_mm: " +
+                       Num(h) + "\n    plane_in_handling_base: {normal: " + Vec(n_hb) +
+                       ", d_mm: " + Num(-n_hb.dot(p_hb)) + "}\n";
+      ReportProgress(progress, "white planes",
+                     static_cast<double>(i + 1) / config.plane_heights_mm.size());
+    }
+  }
+  if (config.capture_spheres) {
+    const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+    const LaserRenderer renderer(scene, truth.sensor, config.render);
+    const SweepResult result = RenderSweep(
+        renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
+        StreamSeed(config.seed, kSphereStream), 0, "", threads);
+    const CaptureReport r =
+        WriteSweep({"spheres", "spheres", "SimConfig.spheres.*"}, result, config, out);
+    report.captures.push_back(r);
+    std::string centers_cell, centers_hb;
+    for (const Eigen::Vector3d& c : config.spheres.CentersInCell()) {
+      centers_cell += (centers_cell.empty() ? "" : ", ") + Vec(c);
+      centers_hb += (centers_hb.empty() ? "" : ", ") + Vec(hb_from_cell * c);
+    }
+    captures_yaml += CaptureHeader(r) + LinearSweepTruth(sweep, hb_from_cell, config) +
+                     ExposureTimesTruth(result, config) +
+                     "    sphere_radius_mm: " + Num(config.spheres.radius_mm) +
+                     "\n    sphere_centers_in_cell: [" + centers_cell +
+                     "]\n    sphere_centers_in_handling_base: [" + centers_hb + "]\n";
+    ReportProgress(progress, "spheres", 1.0);
+  }
+  std::vector<SeatCapture> seats;
+  if (config.capture_seats || config.capture_trajectory) {
+    seats = DrawSeats(config, truth, config.capture_seats ? config.seat_count : 1);
+  }
+  if (config.capture_seats) {
+    RunSeats(config, truth, seats, sweep, hb_from_cell, out, report, captures_yaml, progress,
+             threads);
+  }
+  if (config.capture_trajectory) {
+    const SeatCapture& seat = seats.front();
+    const Scene scene = MakeSeatScene(truth.layout, truth.seat, seat.placement.cell_from_part);
+    const LaserRenderer renderer(scene, truth.sensor, config.render);
+    const Eigen::Isometry3d& cell_from_base = truth.layout.cell_from_vision_base;
+    const auto state_at = [&](double t) {
+      SensorState s;
+      s.joints_rad = trajectory.At(t);
+      s.scene_from_sensor = cell_from_base * truth.true_vision_robot.BaseFromFlange(s.joints_rad) *
+                            truth.vision_flange_from_sensor;
+      return s;
+    };
+    const SweepResult result =
+        RenderSweep(renderer, state_at, config.timing, StreamSeed(config.seed, kTrajectoryStream),
+                    6, "vision_robot", threads);
+    const std::string name = "trajectory_" + seat.name;
+    const CaptureReport r = WriteSweep(
+        {name, "seat_trajectory", "SimConfig.trajectory.* and SimConfig.seats.*"}, result, config,
+        out);
+    report.captures.push_back(r);
+    std::ostringstream o;
+    o << "    sweep:\n      type: joints\n      robot: vision_robot\n"
+      << "      interpolation: linear in joint space between waypoints\n"
+      << "      t0_ns: " << config.timing.start_ns << "\n      waypoint_times_s: [";
+    for (std::size_t k = 0; k < trajectory.times_s.size(); ++k) {
+      o << (k ? ", " : "") << Num(trajectory.times_s[k]);
+    }
+    o << "]\n      waypoints_rad:\n";
+    for (const auto& q : trajectory.joints_rad) {
+      o << "        - [";
+      for (std::size_t j = 0; j < q.size(); ++j) o << (j ? ", " : "") << Num(q[j]);
+      o << "]\n";
+    }
+    captures_yaml += CaptureHeader(r) + o.str() + ExposureTimesTruth(result, config) +
+                     SeatTruth({seat.name, seat.placement}, truth, hb_from_cell);
+    ReportProgress(progress, "robot trajectory", 1.0);
+  }
+  if (config.capture_chessboard_images) {
+    RunChessboardImages(config, truth, out, threads);
+    ReportProgress(progress, "chessboard images", 1.0);
+  }
+  if (config.capture_laser_line_images) {
+    RunLaserLineImages(config, truth, sweep, out);
+    ReportProgress(progress, "laser-line images", 1.0);
+  }
+  out.Write("truth/captures.yaml", captures_yaml);
+  WriteCommonTruth(config, truth, config.capture_seats || config.capture_trajectory
+                                      ? seats
+                                      : std::vector<SeatCapture>{},
+                   out);
+  report.files = out.files();
+  report.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+SimulationReport SimulateSeats(const SimConfig& config_in, int placements,
+                               const std::string& out_dir, const ProgressCallback& progress,
+                               int threads) {
+  if (placements < 1 || placements > 100000) {
+    throw OptionError("placements must be in [1, 100000] (got " + std::to_string(placements) + ")");
+  }
+  SimConfig config = config_in;
+  config.seat_count = placements;
+  config.capture_seats = true;
+  config.capture_planes = config.capture_spheres = config.capture_trajectory = false;
+  config.capture_chessboard_images = config.capture_laser_line_images = false;
+  const auto start = std::chrono::steady_clock::now();
+  const CellTruth truth = MakeCellTruth(config);
+  Output out(out_dir);
+  SimulationReport report;
+  const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();
+  const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
+  std::string captures_yaml = CapturesPreamble(config, truth);
+  const std::vector<SeatCapture> seats = DrawSeats(config, truth, placements);
+  RunSeats(config, truth, seats, sweep, hb_from_cell, out, report, captures_yaml, progress,
+           threads);
+  out.Write("truth/captures.yaml", captures_yaml);
+  WriteCommonTruth(config, truth, seats, out);
+  report.files = out.files();
+  report.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+}  // namespace lasercell::datasets

@@ -1,0 +1,262 @@
+#include "registration/icp.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <vector>
+
+#include "core/error.hpp"
+#include "core/se3.hpp"
+#include "registration/internal/parallel.hpp"
+
+namespace lasercell::registration {
+namespace {
+
+constexpr std::size_t kChunk = 256;  // fixed chunking: sums do not depend on the thread count
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+// One source point's correspondence at the current pose.
+struct Match {
+  std::uint32_t target = 0;
+  double residual = 0.0;  // signed point-to-plane distance or point distance, mm
+  bool valid = false;
+};
+
+double Weight(RobustKernel kernel, double r, double sigma) {
+  const double a = std::abs(r);
+  switch (kernel) {
+    case RobustKernel::kNone: return 1.0;
+    case RobustKernel::kHuber: return a <= 1.345 * sigma ? 1.0 : 1.345 * sigma / a;
+    case RobustKernel::kTukey: {
+      const double c = 4.685 * sigma;
+      if (a >= c) return 0.0;
+      const double u = 1.0 - (r / c) * (r / c);
+      return u * u;
+    }
+    case RobustKernel::kGemanMcClure: {
+      const double s2 = sigma * sigma;
+      const double u = s2 / (s2 + r * r);
+      return u * u;
+    }
+  }
+  return 1.0;
+}
+
+// Sums over one chunk of correspondences (both metrics' statistics; only one is used).
+struct Partial {
+  Matrix6d h = Matrix6d::Zero();      // point-to-plane normal equations
+  Vector6d b = Vector6d::Zero();
+  double w = 0.0;                     // point-to-point weighted moments about the centroid c
+  Eigen::Vector3d sum_a = Eigen::Vector3d::Zero(), sum_b = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
+};
+
+}  // namespace
+
+void IcpOptions::Check() const {
+  auto positive = [](double v, const char* field) {
+    if (!(v > 0.0) || !std::isfinite(v)) throw OptionError(std::string("IcpOptions.") + field + " = " + std::to_string(v) + ": must be > 0");
+  };
+  if (!(kernel_scale_mm >= 0.0) || !std::isfinite(kernel_scale_mm)) {
+    throw OptionError("IcpOptions.kernel_scale_mm = " + std::to_string(kernel_scale_mm) + ": must be >= 0 mm (0 = from MAD)");
+  }
+  positive(min_kernel_scale_mm, "min_kernel_scale_mm");
+  positive(max_correspondence_distance_mm, "max_correspondence_distance_mm");
+  positive(translation_tolerance_mm, "translation_tolerance_mm");
+  positive(rotation_tolerance_rad, "rotation_tolerance_rad");
+  if (max_iterations < 1) throw OptionError("IcpOptions.max_iterations must be >= 1");
+  if (min_correspondences < 3) throw OptionError("IcpOptions.min_correspondences must be >= 3");
+}
+
+const char* ToString(IcpTermination t) {
+  switch (t) {
+    case IcpTermination::kConverged: return "converged";
+    case IcpTermination::kMaxIterations: return "max_iterations";
+    case IcpTermination::kTooFewCorrespondences: return "too_few_correspondences";
+  }
+  return "unknown";
+}
+
+std::string IcpResult::Summary() const {
+  std::ostringstream s;
+  s << ToString(termination) << " after " << iterations << " iterations: rmse " << rmse_mm << " mm (point "
+    << point_rmse_mm << " mm), " << inliers << "/" << correspondences << " inliers, sigma " << kernel_scale_mm << " mm"
+    << (degenerate ? ", degenerate" : "");
+  return s.str();
+}
+
+IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target,
+                   std::span<const Eigen::Vector3d> target_normals,
+                   const Eigen::Isometry3d& initial_target_from_source, const IcpOptions& options) {
+  options.Check();
+  const bool plane = options.metric == IcpMetric::kPointToPlane;
+  if (plane && target_normals.size() != target.size()) {
+    throw InputError("AlignIcp: point-to-plane needs one target normal per target point (" +
+                     std::to_string(target_normals.size()) + " normals for " + std::to_string(target.size()) + " points)");
+  }
+  IcpResult result;
+  result.target_from_source = initial_target_from_source;
+  const std::size_t n = source.size();
+  std::vector<Match> matches(n);
+  std::vector<Eigen::Vector3d> moved(n);
+  const double max_sq = options.max_correspondence_distance_mm * options.max_correspondence_distance_mm;
+  const auto& target_points = target.points();
+
+  // Nearest target point and residual for every source point at the current pose.
+  auto associate = [&](const Eigen::Isometry3d& pose) {
+    internal::ParallelForChunks(options.threads, n, kChunk, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        moved[i] = pose * source[i];
+        Neighbor nn;
+        Match& m = matches[i];
+        m.valid = target.Nearest(moved[i], &nn) && nn.distance_sq <= max_sq;
+        if (!m.valid) continue;
+        m.target = nn.index;
+        m.residual = plane ? target_normals[nn.index].dot(moved[i] - target_points[nn.index]) : std::sqrt(nn.distance_sq);
+      }
+    });
+    std::vector<double> abs_r;
+    abs_r.reserve(n);
+    for (const Match& m : matches) {
+      if (m.valid) abs_r.push_back(std::abs(m.residual));
+    }
+    return abs_r;
+  };
+  // Kernel scale: fixed, or 1.4826 x MAD (median of |r|, residuals being centred at 0).
+  auto scale_of = [&](std::vector<double>& abs_r) {
+    if (options.kernel_scale_mm > 0.0) return options.kernel_scale_mm;
+    if (abs_r.empty()) return options.min_kernel_scale_mm;
+    auto mid = abs_r.begin() + static_cast<std::ptrdiff_t>(abs_r.size() / 2);
+    std::nth_element(abs_r.begin(), mid, abs_r.end());
+    return std::max(options.min_kernel_scale_mm, 1.4826 * *mid);
+  };
+
+  result.termination = IcpTermination::kMaxIterations;
+  for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
+    std::vector<double> abs_r = associate(result.target_from_source);
+    if (abs_r.size() < options.min_correspondences) {
+      result.termination = IcpTermination::kTooFewCorrespondences;
+      break;
+    }
+    const double sigma = scale_of(abs_r);
+    // Linearize about the centroid of the moved source points (conditioning far from origin).
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    std::size_t valid = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (matches[i].valid) { c += moved[i]; ++valid; }
+    }
+    c /= static_cast<double>(valid);
+
+    const std::size_t chunks = internal::ChunkCount(n, kChunk);
+    std::vector<Partial> partial(chunks);
+    internal::ParallelForChunks(options.threads, chunks, 1, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t k = begin; k < end; ++k) {
+        Partial& p = partial[k];
+        for (std::size_t i = k * kChunk; i < std::min(n, (k + 1) * kChunk); ++i) {
+          const Match& m = matches[i];
+          if (!m.valid) continue;
+          const double w = Weight(options.kernel, m.residual, sigma);
+          if (w <= 0.0) continue;
+          const Eigen::Vector3d a = moved[i] - c;
+          if (plane) {
+            // r(x) = n.(s' + w x (s'-c) + v - q): J = [((s'-c) x n)^T, n^T]  (Chen & Medioni).
+            const Eigen::Vector3d& nq = target_normals[m.target];
+            Vector6d j;
+            j << a.cross(nq), nq;
+            p.h.noalias() += w * j * j.transpose();
+            p.b.noalias() += w * m.residual * j;
+          } else {
+            const Eigen::Vector3d b = target_points[m.target] - c;
+            p.w += w;
+            p.sum_a += w * a;
+            p.sum_b += w * b;
+            p.cross.noalias() += w * b * a.transpose();
+          }
+        }
+      }
+    });
+    Partial total;
+    for (const Partial& p : partial) {
+      total.h += p.h;
+      total.b += p.b;
+      total.w += p.w;
+      total.sum_a += p.sum_a;
+      total.sum_b += p.sum_b;
+      total.cross += p.cross;
+    }
+
+    Eigen::Matrix3d d_rot = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d d_trans = Eigen::Vector3d::Zero();
+    if (plane) {
+      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(total.h);
+      const double max_eig = eig.eigenvalues().maxCoeff();
+      result.degenerate = !(max_eig > 0.0) || eig.eigenvalues().minCoeff() < 1e-9 * max_eig;
+      if (!(max_eig > 0.0)) {
+        result.termination = IcpTermination::kTooFewCorrespondences;
+        break;
+      }
+      // Tiny damping keeps unobservable directions (planes, cylinders) where they are.
+      const Vector6d x = -(total.h + 1e-9 * max_eig * Matrix6d::Identity()).ldlt().solve(total.b);
+      d_rot = QuaternionFromRotationVector(x.head<3>()).toRotationMatrix();
+      d_trans = x.tail<3>();
+    } else {
+      if (!(total.w > 0.0)) {
+        result.termination = IcpTermination::kTooFewCorrespondences;
+        break;
+      }
+      // Weighted Horn/Umeyama (no scale): rotation from the SVD of the cross-covariance.
+      const Eigen::Vector3d mean_a = total.sum_a / total.w, mean_b = total.sum_b / total.w;
+      const Eigen::Matrix3d cov = total.cross / total.w - mean_b * mean_a.transpose();
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix3d s = Eigen::Matrix3d::Identity();
+      if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) s(2, 2) = -1.0;
+      d_rot = svd.matrixU() * s * svd.matrixV().transpose();
+      d_trans = mean_b - d_rot * mean_a;
+      const Eigen::Vector3d sv = svd.singularValues();
+      result.degenerate = sv(1) < 1e-9 * sv(0);
+    }
+    // Update: p -> c + dR (p - c) + dt, applied on the left of the current pose.
+    Eigen::Isometry3d update = Eigen::Isometry3d::Identity();
+    update.linear() = d_rot;
+    update.translation() = c + d_trans - d_rot * c;
+    result.target_from_source = Orthonormalized(update * result.target_from_source);
+    ++result.iterations;
+    // Step size: motion of the linearization centre (the source centroid) and the turn.
+    const double turned = Eigen::AngleAxisd(d_rot).angle();
+    if (d_trans.norm() < options.translation_tolerance_mm && turned < options.rotation_tolerance_rad) {
+      result.termination = IcpTermination::kConverged;
+      break;
+    }
+  }
+  result.converged = result.termination == IcpTermination::kConverged;
+
+  // Statistics at the returned pose.
+  std::vector<double> abs_r = associate(result.target_from_source);
+  result.correspondences = abs_r.size();
+  result.kernel_scale_mm = scale_of(abs_r);
+  double sum_sq = 0.0, sum_point_sq = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Match& m = matches[i];
+    if (!m.valid || std::abs(m.residual) > 3.0 * result.kernel_scale_mm) continue;
+    ++result.inliers;
+    sum_sq += m.residual * m.residual;
+    sum_point_sq += (moved[i] - target_points[m.target]).squaredNorm();
+  }
+  if (result.inliers > 0) {
+    result.rmse_mm = std::sqrt(sum_sq / result.inliers);
+    result.point_rmse_mm = std::sqrt(sum_point_sq / result.inliers);
+  }
+  result.inlier_fraction = n > 0 ? static_cast<double>(result.inliers) / n : 0.0;
+  if (result.correspondences < options.min_correspondences) {
+    result.termination = IcpTermination::kTooFewCorrespondences;
+    result.converged = false;
+  }
+  return result;
+}
+
+}  // namespace lasercell::registration

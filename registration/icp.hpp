@@ -1,0 +1,80 @@
+#pragma once
+// Iterative closest point (Besl & McKay 1992; point-to-plane: Chen & Medioni 1992) with a robust
+// kernel whose scale follows the residuals (MAD), composed like small_gicp / KISS-ICP: nearest
+// neighbours -> residuals -> robust weights -> one linear solve -> pose update, until the update
+// is below tolerance. As in the seed (Skotheim IV-G) the scene is the source and the model the
+// target: the result is target_from_source (= model_from_scene). Units: mm, rad.
+// Deterministic for any thread count: partial sums are per fixed chunk, merged in chunk order.
+
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <span>
+#include <string>
+
+#include "registration/kdtree.hpp"
+
+namespace lasercell::registration {
+
+/// Error metric.
+enum class IcpMetric {
+  kPointToPlane,  ///< r = n_target . (T s - q); needs target normals. 6x6 Gauss-Newton step.
+  kPointToPoint,  ///< r = |T s - q|; closed-form weighted Horn/Umeyama step (no scale).
+};
+
+/// Robust kernel on the residual r with scale sigma.
+enum class RobustKernel {
+  kNone,          ///< Least squares.
+  kHuber,         ///< w = 1 for |r| <= 1.345 sigma, else 1.345 sigma / |r|.
+  kTukey,         ///< w = (1 - (r/c)^2)^2 for |r| < c = 4.685 sigma, else 0.
+  kGemanMcClure,  ///< w = (sigma^2 / (sigma^2 + r^2))^2.
+};
+
+/// Options for AlignIcp.
+struct IcpOptions {
+  IcpMetric metric = IcpMetric::kPointToPlane;
+  RobustKernel kernel = RobustKernel::kTukey;
+  /// Fixed kernel scale sigma, mm; 0 = re-estimated each iteration as 1.4826 x median |r|.
+  double kernel_scale_mm = 0.0;
+  /// Floor for the estimated scale, mm (about the sensor noise), > 0.
+  double min_kernel_scale_mm = 0.25;
+  /// Pairs farther apart than this are not correspondences, mm (> 0).
+  double max_correspondence_distance_mm = 10.0;
+  int max_iterations = 30;                 ///< >= 1.
+  double translation_tolerance_mm = 1e-3;  ///< Converged when the update moves less than this...
+  double rotation_tolerance_rad = 1e-5;    ///< ... and turns less than this.
+  std::size_t min_correspondences = 6;     ///< Fewer: terminate (>= 3).
+  int threads = 1;                         ///< 0 = all cores, 1 = calling thread.
+  /// Throws OptionError naming the field when a value is out of range.
+  void Check() const;
+};
+
+/// Why ICP stopped.
+enum class IcpTermination { kConverged, kMaxIterations, kTooFewCorrespondences };
+
+/// Outcome of AlignIcp. Statistics are evaluated at the returned pose.
+struct IcpResult {
+  Eigen::Isometry3d target_from_source = Eigen::Isometry3d::Identity();
+  bool converged = false;
+  IcpTermination termination = IcpTermination::kMaxIterations;
+  int iterations = 0;                 ///< Pose updates applied.
+  std::size_t correspondences = 0;    ///< Source points with a target point within max distance.
+  std::size_t inliers = 0;            ///< Correspondences with |r| <= 3 sigma.
+  double inlier_fraction = 0.0;       ///< inliers / source points.
+  double rmse_mm = 0.0;               ///< RMS of the metric's residual over inliers.
+  double point_rmse_mm = 0.0;         ///< RMS nearest-neighbour distance over inliers.
+  double kernel_scale_mm = 0.0;       ///< Final sigma.
+  bool degenerate = false;            ///< The last step was rank-deficient (e.g. a plane).
+  /// One line, e.g. "converged after 7 iterations: rmse 0.41 mm, 812/903 inliers".
+  std::string Summary() const;
+};
+
+/// Name of a termination reason ("converged", "max_iterations", "too_few_correspondences").
+const char* ToString(IcpTermination termination);
+
+/// Aligns `source` to the target cloud held by `target` (kd-tree; `target_normals` unit, same
+/// order, required for point-to-plane) starting from `initial_target_from_source`.
+IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target,
+                   std::span<const Eigen::Vector3d> target_normals,
+                   const Eigen::Isometry3d& initial_target_from_source, const IcpOptions& options = {});
+
+}  // namespace lasercell::registration

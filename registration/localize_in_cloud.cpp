@@ -1,0 +1,410 @@
+#include "registration/localize_in_cloud.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/se3.hpp"
+
+namespace lasercell::registration {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MillisecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+void CheckSizes(const PointCloud& scene) {
+  const std::size_t n = scene.size();
+  auto check = [&](std::size_t size, const char* name) {
+    if (size != 0 && size != n) {
+      throw InputError(std::string("LocalizeInCloud scene: attribute '") + name + "' has " + std::to_string(size) +
+                       " values for " + std::to_string(n) + " points; every attribute must be empty or one per point");
+    }
+  };
+  check(scene.normals.size(), "normals");
+  check(scene.intensity.size(), "intensity");
+  check(scene.profile.size(), "profile");
+  check(scene.column.size(), "column");
+  check(scene.timestamp_s.size(), "timestamp");
+}
+
+// Drops points with a non-finite position or a non-finite/zero normal; renormalizes normals.
+PointCloud CleanScene(const PointCloud& scene, std::size_t* dropped) {
+  CheckSizes(scene);
+  std::vector<std::size_t> keep;
+  keep.reserve(scene.size());
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    if (!scene.positions[i].allFinite()) continue;
+    if (scene.HasNormals() && !(scene.normals[i].allFinite() && scene.normals[i].norm() > 1e-12)) continue;
+    keep.push_back(i);
+  }
+  *dropped = scene.size() - keep.size();
+  PointCloud out = keep.size() == scene.size() ? scene : scene.Subset(keep);
+  for (Eigen::Vector3d& n : out.normals) n.normalize();
+  return out;
+}
+
+// Evenly spaced subset of at most `limit` indices (deterministic thinning of the ICP source).
+std::vector<Eigen::Vector3d> ThinnedPoints(const std::vector<Eigen::Vector3d>& points,
+                                           const std::vector<std::uint32_t>& indices, std::size_t limit) {
+  std::vector<Eigen::Vector3d> out;
+  const std::size_t n = indices.size();
+  const std::size_t m = std::min(n, limit);
+  out.reserve(m);
+  for (std::size_t k = 0; k < m; ++k) out.push_back(points[indices[k * n / m]]);
+  return out;
+}
+
+double Deg(double rad) { return rad * 180.0 / std::numbers::pi; }
+
+// What the verification and refinement steps share within one LocalizeInCloud call.
+struct RefineContext {
+  const PpfModel& model;
+  const LocalizeOptions& options;              // with derived absolute values
+  const std::vector<Eigen::Vector3d>& points;  // scene points for verification and ICP
+  VerificationOptions refined;                 // verification after ICP
+  LocalizationTimings* timings;
+};
+
+LocalizationCandidate CandidateFromCluster(const ClusteringResult& clustering, std::size_t index, const PpfModel& model) {
+  const PoseCluster& cluster = clustering.clusters[index];
+  LocalizationCandidate candidate;
+  candidate.cluster = index;
+  candidate.votes = cluster.seed_votes;
+  candidate.score = cluster.score;
+  candidate.cluster_members = cluster.members;
+  candidate.coarse_scene_from_model = cluster.scene_from_centered * model.model_from_centered().inverse();
+  candidate.scene_from_model = candidate.coarse_scene_from_model;
+  return candidate;
+}
+
+// Skotheim IV-G, repeated: ICP on the scene points the projection grid selects around the current
+// pose, then a new selection around the refined pose (so clutter picked up by a coarse pose drops
+// out), then the final verification with the tighter support distance.
+void Refine(const RefineContext& ctx, std::vector<std::uint32_t> overlap, LocalizationCandidate* candidate) {
+  const PpfModel& model = ctx.model;
+  const LocalizeOptions& options = ctx.options;
+  int iterations = 0;
+  for (int round = 0; round < options.icp_rounds; ++round) {
+    auto t = Clock::now();
+    if (round > 0) {
+      VerifyPose(ctx.points, model, candidate->scene_from_model, options.viewpoint, ctx.refined, &overlap);
+      ctx.timings->verification_ms += MillisecondsSince(t);
+      t = Clock::now();
+    }
+    const std::vector<Eigen::Vector3d> source = ThinnedPoints(ctx.points, overlap, options.max_icp_source_points);
+    const Eigen::Isometry3d centered_from_scene = (candidate->scene_from_model * model.model_from_centered()).inverse();
+    candidate->icp = AlignIcp(source, model.refinement_tree(), model.refinement_normals(), centered_from_scene, options.icp);
+    candidate->icp_run = true;
+    iterations += candidate->icp.iterations;
+    ctx.timings->icp_ms += MillisecondsSince(t);
+    if (candidate->icp.termination == IcpTermination::kTooFewCorrespondences) break;
+    candidate->scene_from_model = candidate->icp.target_from_source.inverse() * model.model_from_centered().inverse();
+  }
+  candidate->icp.iterations = iterations;
+  const auto t = Clock::now();
+  candidate->verification = VerifyPose(ctx.points, model, candidate->scene_from_model, options.viewpoint, ctx.refined);
+  ctx.timings->verification_ms += MillisecondsSince(t);
+}
+
+}  // namespace
+
+void LocalizeOptions::Check() const {
+  viewpoint.Check("LocalizeOptions.viewpoint");
+  if (use_roi && roi.Empty()) throw OptionError("LocalizeOptions.roi is empty (min > max) while use_roi is set");
+  if (remove_small_clusters) cluster_filter.Check();
+  normals.Check();
+  if (!(scene_sampling_step_mm >= 0.0) || !std::isfinite(scene_sampling_step_mm)) {
+    throw OptionError("LocalizeOptions.scene_sampling_step_mm = " + std::to_string(scene_sampling_step_mm) +
+                      ": must be >= 0 mm (0 = the model's sampling step)");
+  }
+  matching.Check();
+  clustering.Check();
+  verification.Check();
+  icp.Check();
+  auto non_negative = [](double v, const char* field) {
+    if (!(v >= 0.0) || !std::isfinite(v)) throw OptionError(std::string("LocalizeOptions.") + field + " = " + std::to_string(v) + ": must be >= 0");
+  };
+  non_negative(cluster_radius_relative, "cluster_radius_relative");
+  non_negative(support_distance_relative, "support_distance_relative");
+  non_negative(icp_max_distance_relative, "icp_max_distance_relative");
+  if (!(refined_support_distance_relative > 0.0) || !std::isfinite(refined_support_distance_relative)) {
+    throw OptionError("LocalizeOptions.refined_support_distance_relative = " + std::to_string(refined_support_distance_relative) +
+                      ": must be > 0 (fraction of the model diameter)");
+  }
+  if (!(refined_min_support >= 0.0 && refined_min_support <= 1.0)) {
+    throw OptionError("LocalizeOptions.refined_min_support = " + std::to_string(refined_min_support) + ": must be in [0, 1]");
+  }
+  if (max_verified_clusters < 1) throw OptionError("LocalizeOptions.max_verified_clusters must be >= 1");
+  if (!(extra_refined_min_relative_support >= 0.0 && extra_refined_min_relative_support <= 1.0)) {
+    throw OptionError("LocalizeOptions.extra_refined_min_relative_support = " + std::to_string(extra_refined_min_relative_support) +
+                      ": must be in [0, 1]");
+  }
+  if (icp_rounds < 1 || icp_rounds > 10) throw OptionError("LocalizeOptions.icp_rounds = " + std::to_string(icp_rounds) + ": must be in [1, 10]");
+  if (max_icp_source_points < 10) throw OptionError("LocalizeOptions.max_icp_source_points must be >= 10");
+  if (max_instances < 1) throw OptionError("LocalizeOptions.max_instances must be >= 1");
+  if (!(ambiguity_score_ratio > 0.0 && ambiguity_score_ratio <= 1.0)) {
+    throw OptionError("LocalizeOptions.ambiguity_score_ratio = " + std::to_string(ambiguity_score_ratio) + ": must be in (0, 1]");
+  }
+  non_negative(planarity_ratio, "planarity_ratio");
+}
+
+std::string LocalizationResult::Summary() const {
+  std::ostringstream s;
+  if (!found) {
+    s << "not found: " << message;
+  } else {
+    const LocalizationCandidate& best = candidates.front();
+    s << "found " << candidates.size() << " instance(s); best support " << best.verification.support;
+    if (best.icp_run) s << ", icp rmse " << best.icp.rmse_mm << " mm, " << best.icp.inliers << " inliers";
+  }
+  if (ambiguous) s << "; AMBIGUOUS: " << ambiguity_reason;
+  s << "; " << timings.total_ms << " ms (match " << timings.matching_ms << ", icp " << timings.icp_ms << ")";
+  return s.str();
+}
+
+LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& model, const LocalizeOptions& options_in) {
+  options_in.Check();
+  const auto start = Clock::now();
+  LocalizationResult result;
+  result.scene_points = scene_in.size();
+  if (scene_in.empty()) throw InputError("LocalizeInCloud: the scene cloud is empty; nothing to search");
+  if (model.points().empty()) throw InputError("LocalizeInCloud: the PPF model is empty; build it from a model cloud");
+
+  // Derived stage options: relative values are fractions of the model diameter.
+  LocalizeOptions options = options_in;
+  const double diameter = model.diameter_mm();
+  if (options.cluster_radius_relative > 0.0) {
+    options.clustering.translation_radius_mm = options.cluster_radius_relative * diameter;
+    options.clustering.duplicate_radius_mm = options.cluster_radius_relative * diameter;
+  }
+  if (options.support_distance_relative > 0.0) options.verification.support_distance_mm = options.support_distance_relative * diameter;
+  if (options.icp_max_distance_relative > 0.0) {
+    options.icp.max_correspondence_distance_mm = options.icp_max_distance_relative * diameter;
+    options.verification.overlap_band_mm = options.icp.max_correspondence_distance_mm;
+  }
+  options.matching.threads = options.normals.threads = options.icp.threads = options.threads;
+  options.normals.viewpoint = options.viewpoint;
+
+  // Step 1: clean, region of interest, small clusters (Skotheim IV-A).
+  auto t = Clock::now();
+  PointCloud scene = CleanScene(scene_in, &result.dropped_points);
+  if (options.use_roi) scene = CropBox(scene, options.roi, options.roi_from_scene);
+  if (options.remove_small_clusters && !scene.empty()) scene = scene.Subset(RemoveSmallClusters(scene, options.cluster_filter).kept);
+  result.timings.preprocess_ms = MillisecondsSince(t);
+  ReportProgress(options.progress, "preprocess", 1.0);
+
+  // Step 2: normals toward the sensor (IV-B).
+  t = Clock::now();
+  if (!scene.empty()) {
+    if (!scene.HasNormals() || options.recompute_normals) {
+      std::size_t dropped = 0;
+      scene = WithEstimatedNormals(scene, options.normals, &dropped);
+      result.dropped_points += dropped;
+    } else if (options.orient_normals) {
+      OrientNormalsTowardViewpoint(&scene, options.viewpoint);
+    }
+  }
+  result.timings.normals_ms = MillisecondsSince(t);
+  ReportProgress(options.progress, "normals", 1.0);
+  result.used_points = scene.size();
+  if (scene.size() < 3) {
+    result.message = "fewer than 3 scene points left after cleaning, ROI and filters";
+    result.timings.total_ms = MillisecondsSince(start);
+    return result;
+  }
+
+  // Step 3: voxel grid at the model's sampling step (IV-C).
+  t = Clock::now();
+  VoxelGridOptions voxel;
+  voxel.voxel_size_mm = options.scene_sampling_step_mm > 0.0 ? options.scene_sampling_step_mm : model.sampling_step_mm();
+  voxel.normal_mode = options.scene_normal_mode == VoxelNormalMode::kNone ? VoxelNormalMode::kAverage : options.scene_normal_mode;
+  PointCloud sampled = VoxelGridDownsample(scene, voxel);
+  result.sampled_points = sampled.size();
+  result.timings.subsample_ms = MillisecondsSince(t);
+  ReportProgress(options.progress, "subsample", 1.0);
+
+  // Step 4: PPF voting (IV-D, Drost 2010).
+  t = Clock::now();
+  const KdTree scene_tree(std::move(sampled.positions));
+  result.timings.kdtree_ms = MillisecondsSince(t);
+  t = Clock::now();
+  const PpfMatchResult match = MatchPpf(scene_tree, sampled.normals, model, options.matching);
+  result.reference_points = match.reference_points;
+  result.scene_pairs = match.scene_pairs;
+  result.votes_cast = match.votes_cast;
+  result.hypotheses = match.hypotheses.size();
+  result.timings.matching_ms = MillisecondsSince(t);
+  ReportProgress(options.progress, "matching", 1.0);
+
+  // Step 5: clustering (IV-E).
+  t = Clock::now();
+  const ClusteringResult clustering = ClusterPoses(match.hypotheses, options.clustering);
+  result.clusters = clustering.clusters.size();
+  result.timings.clustering_ms = MillisecondsSince(t);
+  ReportProgress(options.progress, "clustering", 1.0);
+
+  // Step 6: coarse verification (IV-F) of the best kept clusters, each followed by the
+  // orientations it suppressed at the same place with nearly its score (symmetric or ambiguous
+  // views: ICP and the final support decide between them, and the result says so).
+  t = Clock::now();
+  std::vector<Eigen::Vector3d> thinned;
+  const std::vector<Eigen::Vector3d>* check_points = &scene.positions;
+  if (options.verification_max_points > 0 && scene.size() > options.verification_max_points) {
+    const std::size_t stride = (scene.size() + options.verification_max_points - 1) / options.verification_max_points;
+    thinned.reserve(scene.size() / stride + 1);
+    for (std::size_t i = 0; i < scene.size(); i += stride) thinned.push_back(scene.positions[i]);
+    check_points = &thinned;
+  }
+  struct Pending {
+    LocalizationCandidate candidate;
+    std::vector<std::uint32_t> overlap;
+    bool primary;  // a kept cluster (not an alternative orientation)
+  };
+  auto examine = [&](std::size_t index, bool primary, std::vector<Pending>* batch) {
+    Pending p{CandidateFromCluster(clustering, index, model), {}, primary};
+    p.candidate.coarse_verification =
+        VerifyPose(*check_points, model, p.candidate.scene_from_model, options.viewpoint, options.verification, &p.overlap);
+    p.candidate.verification = p.candidate.coarse_verification;
+    if (!p.candidate.coarse_verification.accepted) {
+      p.candidate.rejection_reason = "before ICP: " + p.candidate.coarse_verification.rejection_reason;
+      result.rejected.push_back(std::move(p.candidate));
+      return false;
+    }
+    batch->push_back(std::move(p));
+    return primary;
+  };
+  result.timings.verification_ms = MillisecondsSince(t);
+
+  // Step 7: ICP with the scene as source and the model as target (IV-G), then re-verification.
+  // Clusters are taken in batches of max_instances + extra_refined_candidates that pass the
+  // coarse check: the first max_instances of a batch are always refined, the others only when
+  // their coarse support is close to the best seen. Another batch follows while fewer than
+  // max_instances candidates pass the final check (up to max_verified_clusters clusters).
+  RefineContext ctx{model, options, *check_points, options.verification, &result.timings};
+  ctx.refined.support_distance_mm = options.refined_support_distance_relative * diameter;
+  ctx.refined.min_support = options.refined_min_support;
+  const std::size_t batch_size = options.max_instances + options.extra_refined_candidates;
+  std::vector<LocalizationCandidate> refined;
+  std::size_t next_cluster = 0, examined = 0, final_accepted = 0;
+  double best_coarse_support = 0.0;
+  while (final_accepted < options.max_instances) {
+    t = Clock::now();
+    std::vector<Pending> batch;
+    std::size_t primaries = 0;
+    for (; next_cluster < clustering.clusters.size() && primaries < batch_size; ++next_cluster) {
+      const std::size_t c = next_cluster;
+      if (clustering.clusters[c].suppressed_by >= 0) continue;
+      if (examined >= options.max_verified_clusters) break;
+      ++examined;
+      primaries += examine(c, true, &batch) ? 1 : 0;
+      std::size_t alternatives = 0;
+      for (std::size_t a = c + 1; a < clustering.clusters.size() && alternatives < 2; ++a) {
+        const PoseCluster& alt = clustering.clusters[a];
+        if (alt.suppressed_by != static_cast<int>(c) || alt.score < options.ambiguity_score_ratio * clustering.clusters[c].score) continue;
+        examine(a, false, &batch);
+        ++alternatives;
+      }
+    }
+    result.timings.verification_ms += MillisecondsSince(t);
+    if (batch.empty()) break;
+    for (const Pending& p : batch) best_coarse_support = std::max(best_coarse_support, p.candidate.coarse_verification.support);
+    std::size_t primary_rank = 0;
+    for (Pending& p : batch) {
+      LocalizationCandidate& candidate = p.candidate;
+      const bool always = p.primary && primary_rank++ < options.max_instances;
+      if (!options.run_icp) {
+        refined.push_back(std::move(candidate));
+        continue;
+      }
+      if (!always && candidate.coarse_verification.support < options.extra_refined_min_relative_support * best_coarse_support) {
+        candidate.rejection_reason = "coarse support " + std::to_string(candidate.coarse_verification.support) +
+                                     " far below the best " + std::to_string(best_coarse_support) + " (not refined)";
+        result.rejected.push_back(std::move(candidate));
+        continue;
+      }
+      Refine(ctx, std::move(p.overlap), &candidate);
+      final_accepted += candidate.verification.accepted ? 1 : 0;
+      refined.push_back(std::move(candidate));
+    }
+    if (!options.run_icp) break;
+  }
+
+  ReportProgress(options.progress, "refinement", 1.0);
+
+  // A planar model is ambiguous whatever the scene: rotations about its normal are unobservable.
+  const Eigen::Vector3d& var = model.principal_variances();
+  if (var(0) > 0.0 && var(2) / var(0) < options.planarity_ratio) {
+    result.ambiguous = true;
+    result.ambiguity_reason = "planar model (principal variance ratio " + std::to_string(var(2) / var(0)) +
+                              "): rotations about its normal are not observable";
+  }
+
+  // Rank by support after refinement (ties: cluster score); one instance per place. A second
+  // orientation at the same place with nearly the winner's support makes the result ambiguous.
+  std::stable_sort(refined.begin(), refined.end(), [](const LocalizationCandidate& a, const LocalizationCandidate& b) {
+    if (a.verification.accepted != b.verification.accepted) return a.verification.accepted;
+    if (a.verification.support != b.verification.support) return a.verification.support > b.verification.support;
+    return a.score > b.score;
+  });
+  const double same_place_mm = options.clustering.duplicate_radius_mm;
+  for (LocalizationCandidate& candidate : refined) {
+    if (!candidate.verification.accepted) {
+      candidate.rejection_reason = (candidate.icp_run ? "after ICP: " : "") + candidate.verification.rejection_reason;
+      result.rejected.push_back(std::move(candidate));
+      continue;
+    }
+    const LocalizationCandidate* same_place = nullptr;
+    for (const LocalizationCandidate& kept : result.candidates) {
+      if (TranslationDistance(kept.scene_from_model * model.model_from_centered(),
+                              candidate.scene_from_model * model.model_from_centered()) < same_place_mm) {
+        same_place = &kept;
+        break;
+      }
+    }
+    if (same_place != nullptr) {
+      const double turn = RotationDistance(same_place->scene_from_model, candidate.scene_from_model);
+      if (!result.ambiguous && turn > options.clustering.rotation_threshold_rad &&
+          candidate.verification.support >= options.ambiguity_score_ratio * same_place->verification.support) {
+        result.ambiguous = true;
+        result.ambiguity_reason = "two orientations " + std::to_string(Deg(turn)) + " deg apart at the same place have support " +
+                                  std::to_string(same_place->verification.support) + " and " + std::to_string(candidate.verification.support);
+      }
+      candidate.rejection_reason = "duplicate of rank " + std::to_string(same_place->rank) + " (same place after ICP)";
+      result.rejected.push_back(std::move(candidate));
+      continue;
+    }
+    if (result.candidates.size() >= options.max_instances) {
+      candidate.rejection_reason = "beyond max_instances";
+      result.rejected.push_back(std::move(candidate));
+      continue;
+    }
+    candidate.rank = static_cast<int>(result.candidates.size()) + 1;
+    result.candidates.push_back(std::move(candidate));
+  }
+  result.found = !result.candidates.empty();
+  if (!result.found) {
+    const auto best = std::max_element(result.rejected.begin(), result.rejected.end(), [](const auto& a, const auto& b) {
+      return a.verification.support < b.verification.support;
+    });
+    result.message = clustering.clusters.empty() ? "no pose hypotheses: no scene pair matched the model's features"
+                     : best == result.rejected.end()
+                         ? "no cluster could be examined"
+                         : "no candidate passed verification (" + std::to_string(result.rejected.size()) +
+                               " rejected; the best: " + best->rejection_reason + ")";
+  }
+
+  result.timings.total_ms = MillisecondsSince(start);
+  return result;
+}
+
+LocalizationResult LocalizeInCloud(const PointCloud& scene, const PointCloud& model_cloud,
+                                   const PpfModelOptions& model_options, const LocalizeOptions& options) {
+  return LocalizeInCloud(scene, PpfModel::Build(model_cloud, model_options), options);
+}
+
+}  // namespace lasercell::registration

@@ -1,0 +1,164 @@
+#include "registration/normals.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <string>
+
+#include "core/error.hpp"
+#include "registration/internal/parallel.hpp"
+#include "registration/kdtree.hpp"
+
+namespace lasercell::registration {
+namespace {
+
+// Fits a plane to `count` points given by accessor(i). Returns false when degenerate.
+template <typename Accessor>
+bool FitPlane(std::size_t count, const Accessor& point, Eigen::Vector3d* normal, float* curvature) {
+  if (count < 3) return false;
+  // Covariance around the mean, accumulated relative to the first point for numerical safety
+  // far from the origin.
+  const Eigen::Vector3d origin = point(0);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d sum_sq = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < count; ++i) {
+    const Eigen::Vector3d d = point(i) - origin;
+    sum += d;
+    sum_sq.noalias() += d * d.transpose();
+  }
+  const Eigen::Vector3d mean = sum / static_cast<double>(count);
+  const Eigen::Matrix3d cov = sum_sq / static_cast<double>(count) - mean * mean.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(cov);
+  const Eigen::Vector3d eig = solver.eigenvalues();  // ascending
+  const double total = eig.sum();
+  // A line or a single point has no plane. The closed-form solver's error on a double (zero)
+  // eigenvalue is ~sqrt(eps) relative, hence the 1e-6 threshold (spread ratio 1e-3).
+  if (!(total > 0.0) || !(eig(1) > 1e-6 * total)) return false;
+  *normal = solver.eigenvectors().col(0).normalized();
+  *curvature = static_cast<float>(std::max(0.0, eig(0)) / total);
+  return normal->allFinite();
+}
+
+}  // namespace
+
+void NormalOptions::Check() const {
+  if (k < 3) throw OptionError("NormalOptions.k = " + std::to_string(k) + ": must be >= 3 neighbours");
+  if (!(radius_mm >= 0.0) || !std::isfinite(radius_mm)) {
+    throw OptionError("NormalOptions.radius_mm = " + std::to_string(radius_mm) +
+                      ": must be >= 0 mm (0 selects the k nearest neighbours)");
+  }
+  if (grid_window < 1 || grid_window > 16) {
+    throw OptionError("NormalOptions.grid_window = " + std::to_string(grid_window) +
+                      ": must be in [1, 16] cells");
+  }
+  if (!(grid_max_distance_mm >= 0.0)) {
+    throw OptionError("NormalOptions.grid_max_distance_mm must be >= 0 mm (0 = no limit)");
+  }
+  if (min_neighbors < 3) throw OptionError("NormalOptions.min_neighbors must be >= 3");
+  viewpoint.Check("NormalOptions.viewpoint");
+}
+
+NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOptions& options,
+                                       std::span<const Eigen::Vector3d> line_of_sight) {
+  options.Check();
+  cloud.Validate("EstimateNormals input");
+  const std::size_t n = cloud.size();
+  if (!line_of_sight.empty() && line_of_sight.size() != n) {
+    throw InputError("EstimateNormals: line_of_sight has " + std::to_string(line_of_sight.size()) +
+                     " vectors for " + std::to_string(n) + " points; give one per point or none");
+  }
+  NormalEstimationResult result;
+  result.normals.assign(n, Eigen::Vector3d::Zero());
+  result.valid.assign(n, 0);
+  result.curvature.assign(n, 0.0F);
+  result.used_grid = options.use_grid_when_organized && cloud.IsOrganized();
+
+  KdTree tree;
+  std::vector<std::int32_t> cell;
+  const std::size_t cols = static_cast<std::size_t>(std::max(cloud.grid_cols, 0));
+  if (result.used_grid) {
+    cell.assign(static_cast<std::size_t>(cloud.grid_rows) * cols, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+      cell[static_cast<std::size_t>(cloud.profile[i]) * cols + static_cast<std::size_t>(cloud.column[i])] =
+          static_cast<std::int32_t>(i);
+    }
+  } else {
+    tree = KdTree(cloud.positions);
+  }
+  const double max_d_sq = options.grid_max_distance_mm > 0.0
+                              ? options.grid_max_distance_mm * options.grid_max_distance_mm
+                              : std::numeric_limits<double>::infinity();
+
+  // Each point's fit only reads the cloud and writes its own slot: thread-count independent.
+  internal::ParallelForChunks(options.threads, n, 512, [&](std::size_t begin, std::size_t end) {
+    std::vector<Neighbor> hits;
+    std::vector<std::uint32_t> grid_hits;
+    for (std::size_t i = begin; i < end; ++i) {
+      const Eigen::Vector3d& p = cloud.positions[i];
+      Eigen::Vector3d normal;
+      float curvature = 0.0F;
+      bool ok = false;
+      if (result.used_grid) {
+        grid_hits.clear();
+        const int w = options.grid_window;
+        for (int r = cloud.profile[i] - w; r <= cloud.profile[i] + w; ++r) {
+          if (r < 0 || r >= cloud.grid_rows) continue;
+          for (int c = cloud.column[i] - w; c <= cloud.column[i] + w; ++c) {
+            if (c < 0 || c >= cloud.grid_cols) continue;
+            const std::int32_t j = cell[static_cast<std::size_t>(r) * cols + static_cast<std::size_t>(c)];
+            if (j >= 0 && (cloud.positions[static_cast<std::size_t>(j)] - p).squaredNorm() <= max_d_sq) {
+              grid_hits.push_back(static_cast<std::uint32_t>(j));
+            }
+          }
+        }
+        if (grid_hits.size() >= options.min_neighbors) {
+          ok = FitPlane(grid_hits.size(), [&](std::size_t m) { return cloud.positions[grid_hits[m]]; },
+                        &normal, &curvature);
+        }
+      } else {
+        if (options.radius_mm > 0.0) tree.RadiusSearch(p, options.radius_mm, &hits);
+        else tree.KNearest(p, options.k, &hits);
+        if (hits.size() >= options.min_neighbors) {
+          ok = FitPlane(hits.size(), [&](std::size_t m) { return cloud.positions[hits[m].index]; },
+                        &normal, &curvature);
+        }
+      }
+      if (!ok) continue;
+      const Eigen::Vector3d toward = line_of_sight.empty() ? options.viewpoint.TowardSensor(p)
+                                                           : Eigen::Vector3d(line_of_sight[i]);
+      if (normal.dot(toward) < 0.0) normal = -normal;
+      result.normals[i] = normal;
+      result.valid[i] = 1;
+      result.curvature[i] = curvature;
+    }
+  });
+  for (std::uint8_t v : result.valid) result.invalid_count += v ? 0 : 1;
+  return result;
+}
+
+PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& options,
+                                std::size_t* dropped) {
+  NormalEstimationResult normals = EstimateNormals(cloud, options);
+  std::vector<std::size_t> keep;
+  keep.reserve(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (normals.valid[i]) keep.push_back(i);
+  }
+  PointCloud out = cloud;
+  out.normals = std::move(normals.normals);
+  if (dropped) *dropped = cloud.size() - keep.size();
+  if (keep.size() == cloud.size()) return out;
+  return out.Subset(keep);
+}
+
+void OrientNormalsTowardViewpoint(PointCloud* cloud, const Viewpoint& viewpoint) {
+  LASERCELL_CHECK(cloud->normals.size() == cloud->positions.size(),
+                  "OrientNormalsTowardViewpoint needs one normal per point");
+  for (std::size_t i = 0; i < cloud->size(); ++i) {
+    if (cloud->normals[i].dot(viewpoint.TowardSensor(cloud->positions[i])) < 0.0) {
+      cloud->normals[i] = -cloud->normals[i];
+    }
+  }
+}
+
+}  // namespace lasercell::registration

@@ -1,0 +1,64 @@
+#pragma once
+// Surface normals by local plane fit (PCA) on k nearest neighbours or a radius (Skotheim et al.
+// IV-B, SEED.md localization step 2), oriented toward the sensor. Units: mm; normals are unit.
+// Organized clouds (sweeps, depth images) can use their grid neighbours instead of a kd-tree.
+// Multi-threaded with TBB; the result does not depend on the thread count.
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "core/point_cloud.hpp"
+#include "registration/viewpoint.hpp"
+
+namespace lasercell::registration {
+
+/// Options for EstimateNormals.
+struct NormalOptions {
+  /// Neighbours per plane fit (kd-tree path), including the point itself (>= 3).
+  std::size_t k = 12;
+  /// When > 0, use every neighbour within this radius (mm) instead of the k nearest.
+  double radius_mm = 0.0;
+  /// Orientation: normals point toward the sensor (unless per-point line of sight is given).
+  Viewpoint viewpoint;
+  /// Organized clouds: use grid neighbours (+-grid_window rows/columns) when true.
+  bool use_grid_when_organized = true;
+  /// Half-width of the grid neighbourhood, cells (2 = 5x5 window).
+  int grid_window = 2;
+  /// Grid neighbours farther than this from the point are ignored (depth jumps), mm; 0 = no limit.
+  double grid_max_distance_mm = 0.0;
+  /// Fewer neighbours than this (including the point) leave the point without a normal (>= 3).
+  std::size_t min_neighbors = 3;
+  /// Worker threads: 0 = all cores, 1 = calling thread only.
+  int threads = 0;
+  /// Throws OptionError naming the field when a value is out of range.
+  void Check() const;
+};
+
+/// Normals and, per point, whether the fit succeeded.
+struct NormalEstimationResult {
+  std::vector<Eigen::Vector3d> normals;  ///< Unit normal per point (zero when invalid).
+  std::vector<std::uint8_t> valid;       ///< 1 when the plane fit had enough neighbours.
+  std::vector<float> curvature;          ///< Surface variation l0/(l0+l1+l2) per point, in [0, 1/3].
+  std::size_t invalid_count = 0;         ///< Points without a normal.
+  bool used_grid = false;                ///< True when grid neighbours were used.
+};
+
+/// PCA plane fit per point: normal = eigenvector of the smallest eigenvalue of the neighbourhood
+/// covariance, flipped to face the sensor. `line_of_sight`, when not empty, gives per point a
+/// vector from the point toward the sensor (sweeps with a moving sensor) and overrides the
+/// viewpoint. Throws InputError when the cloud is invalid or line_of_sight has the wrong size.
+NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOptions& options,
+                                       std::span<const Eigen::Vector3d> line_of_sight = {});
+
+/// A copy of `cloud` with normals from EstimateNormals; points without a valid fit are dropped
+/// (their count in *dropped when given).
+PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& options,
+                                std::size_t* dropped = nullptr);
+
+/// Flips every normal to face the sensor (n . (sensor - p) >= 0). Normals must be present.
+void OrientNormalsTowardViewpoint(PointCloud* cloud, const Viewpoint& viewpoint);
+
+}  // namespace lasercell::registration

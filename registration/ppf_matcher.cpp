@@ -1,0 +1,186 @@
+#include "registration/ppf_matcher.hpp"
+
+#include <tbb/enumerable_thread_specific.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/error.hpp"
+#include "registration/internal/parallel.hpp"
+
+namespace lasercell::registration {
+namespace {
+
+// Per-thread scratch: the accumulator over (model point, alpha bin), cleared per reference.
+struct Voter {
+  std::vector<std::uint32_t> accumulator;
+  std::vector<Neighbor> hits;
+};
+
+// Bin of a continuous quantized value and its nearer neighbour (-1 when out of range).
+struct BinPair {
+  int bin;
+  int neighbor;
+};
+
+BinPair NearBins(double value, int bins) {
+  const int bin = std::clamp(static_cast<int>(value), 0, bins - 1);
+  const double frac = value - bin;
+  const int neighbor = frac < 0.5 ? bin - 1 : bin + 1;
+  return {bin, (neighbor >= 0 && neighbor < bins) ? neighbor : -1};
+}
+
+// Keys to look up for one scene pair: the feature's own key, plus (with spreading) the keys of
+// the nearer neighbouring bin in every dimension (2^4 combinations, Hinterstoisser 2016).
+int SpreadFeatureKeys(const PpfModel& model, const PpfFeature& f, std::uint32_t keys[16]) {
+  const double d = f.distance_mm / model.distance_step_mm();
+  if (!(d < model.distance_bins())) return 0;
+  const BinPair dims[4] = {NearBins(d, model.distance_bins()),
+                           NearBins(f.angle_n1_d / model.angle_step_rad(), model.angle_bins()),
+                           NearBins(f.angle_n2_d / model.angle_step_rad(), model.angle_bins()),
+                           NearBins(f.angle_n1_n2 / model.angle_step_rad(), model.angle_bins())};
+  int count = 0;
+  for (int mask = 0; mask < 16; ++mask) {
+    int b[4];
+    bool valid = true;
+    for (int k = 0; k < 4; ++k) {
+      b[k] = (mask >> k) & 1 ? dims[k].neighbor : dims[k].bin;
+      valid = valid && b[k] >= 0;
+    }
+    if (!valid) continue;
+    keys[count++] = model.Key({b[0], b[1], b[2], b[3]});
+  }
+  return count;
+}
+
+}  // namespace
+
+void PpfMatchOptions::Check() const {
+  if (reference_stride < 1) throw OptionError("PpfMatchOptions.reference_stride must be >= 1 (1 = every scene point)");
+  if (peaks_per_reference < 1 || peaks_per_reference > 16) {
+    throw OptionError("PpfMatchOptions.peaks_per_reference = " + std::to_string(peaks_per_reference) + ": must be in [1, 16]");
+  }
+  if (!(peak_min_relative >= 0.0 && peak_min_relative <= 1.0)) {
+    throw OptionError("PpfMatchOptions.peak_min_relative = " + std::to_string(peak_min_relative) + ": must be in [0, 1]");
+  }
+  if (min_votes < 1) throw OptionError("PpfMatchOptions.min_votes must be >= 1");
+}
+
+PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3d> scene_normals,
+                        const PpfModel& model, const PpfMatchOptions& options) {
+  options.Check();
+  if (scene_normals.size() != scene_tree.size()) {
+    throw InputError("MatchPpf: " + std::to_string(scene_normals.size()) + " scene normals for " +
+                     std::to_string(scene_tree.size()) + " scene points; give one unit normal per point");
+  }
+  PpfMatchResult result;
+  const std::vector<Eigen::Vector3d>& scene = scene_tree.points();
+  const std::size_t refs = (scene.size() + options.reference_stride - 1) / options.reference_stride;
+  result.reference_points = refs;
+  if (refs == 0 || model.points().empty()) return result;
+
+  const std::size_t alpha_bins = static_cast<std::size_t>(model.alpha_bins());
+  const double alpha_step = model.alpha_step_rad();
+  const double radius = model.max_pair_distance_mm();
+  std::vector<std::vector<PoseHypothesis>> per_reference(refs);
+  std::vector<std::size_t> pairs_of(refs, 0), votes_of(refs, 0);
+  tbb::enumerable_thread_specific<Voter> voters([&] {
+    Voter v;
+    v.accumulator.assign(model.points().size() * alpha_bins, 0);
+    return v;
+  });
+  const std::uint32_t spread_alpha = options.spread_alpha && alpha_bins > 1 ? 1 : 0;
+
+  internal::ParallelForChunks(options.threads, refs, 4, [&](std::size_t begin, std::size_t end) {
+    Voter& voter = voters.local();
+    std::uint32_t* acc = voter.accumulator.data();
+    const std::size_t cells = voter.accumulator.size();
+    for (std::size_t ref = begin; ref < end; ++ref) {
+      const std::size_t r = ref * options.reference_stride;
+      const Eigen::Vector3d& s_r = scene[r];
+      const Eigen::Vector3d& n_r = scene_normals[r];
+      const Eigen::Matrix3d rot_s = RotationNormalToX(n_r);
+      scene_tree.RadiusSearch(s_r, radius, &voter.hits);
+      std::fill(acc, acc + cells, 0U);
+      std::size_t pairs = 0, votes = 0;
+      std::uint32_t keys[16];
+      for (const Neighbor& hit : voter.hits) {
+        if (hit.index == r) continue;
+        const Eigen::Vector3d& s_i = scene[hit.index];
+        const Eigen::Vector3d& n_i = scene_normals[hit.index];
+        int key_count = 0;
+        if (options.spread_features) key_count = SpreadFeatureKeys(model, ComputePpf(s_r, n_r, s_i, n_i), keys);
+        else key_count = model.PairKey(s_r, n_r, s_i, n_i, &keys[0]) ? 1 : 0;
+        if (key_count == 0) continue;
+        ++pairs;
+        // alpha = phi_s - phi_m (Drost Sec. 3.5, alpha split into a scene and a model part), in
+        // 16-bit turns so the wrap to [0, 2 pi) is the natural unsigned overflow.
+        const std::uint16_t phi_s = PlaneAngleToTurn16(PairPlaneAngle(rot_s, s_r, s_i));
+        for (int k = 0; k < key_count; ++k) {
+          const std::span<const PpfPairEntry> entries = model.Lookup(keys[k]);
+          votes += entries.size() << spread_alpha;
+          for (const PpfPairEntry& e : entries) {
+            const std::uint32_t scaled = static_cast<std::uint16_t>(phi_s - e.plane_angle) * static_cast<std::uint32_t>(alpha_bins);
+            const std::uint32_t bin = scaled >> 16;
+            std::uint32_t* row = acc + static_cast<std::size_t>(e.reference) * alpha_bins;
+            ++row[bin];
+            if (spread_alpha) {
+              // The nearer neighbouring alpha bin also gets a vote (upper or lower half of the bin).
+              const bool upper = (scaled >> 15) & 1U;
+              ++row[upper ? (bin + 1 == alpha_bins ? 0 : bin + 1) : (bin == 0 ? alpha_bins - 1 : bin - 1)];
+            }
+          }
+        }
+      }
+      pairs_of[ref] = pairs;
+      votes_of[ref] = votes;
+
+      // Accumulator maxima: the best peaks_per_reference cells, ties by lower cell index.
+      const std::size_t keep = options.peaks_per_reference;
+      std::uint32_t best_cell[16];
+      std::uint32_t best_votes[16];
+      std::size_t found = 0;
+      const std::uint32_t floor_votes = options.min_votes;
+      for (std::size_t cell = 0; cell < cells; ++cell) {
+        const std::uint32_t v = acc[cell];
+        if (v < floor_votes || (found == keep && v <= best_votes[found - 1])) continue;
+        std::size_t pos = found < keep ? found++ : keep - 1;
+        while (pos > 0 && best_votes[pos - 1] < v) {
+          best_votes[pos] = best_votes[pos - 1];
+          best_cell[pos] = best_cell[pos - 1];
+          --pos;
+        }
+        best_votes[pos] = v;
+        best_cell[pos] = static_cast<std::uint32_t>(cell);
+      }
+      for (std::size_t p = 0; p < found; ++p) {
+        const std::uint32_t cell = best_cell[p];
+        const double v = best_votes[p];
+        if (v < options.peak_min_relative * best_votes[0]) break;
+        PoseHypothesis h;
+        h.votes = v;
+        h.scene_reference = static_cast<std::uint32_t>(r);
+        h.model_reference = static_cast<std::uint32_t>(cell / alpha_bins);
+        h.alpha_bin = static_cast<std::int32_t>(cell % alpha_bins);
+        // scene_from_centered = T(s_r)^-1 R_x(alpha) T(m_r), alpha at the bin centre.
+        const double alpha = (h.alpha_bin + 0.5) * alpha_step;
+        const Eigen::Vector3d& m_r = model.points()[h.model_reference];
+        const Eigen::Matrix3d rot = rot_s.transpose() * Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+                                    RotationNormalToX(model.normals()[h.model_reference]);
+        h.scene_from_centered.linear() = rot;
+        h.scene_from_centered.translation() = s_r - rot * m_r;
+        per_reference[ref].push_back(h);
+      }
+    }
+  });
+
+  for (std::size_t ref = 0; ref < refs; ++ref) {
+    result.scene_pairs += pairs_of[ref];
+    result.votes_cast += votes_of[ref];
+    result.hypotheses.insert(result.hypotheses.end(), per_reference[ref].begin(), per_reference[ref].end());
+  }
+  return result;
+}
+
+}  // namespace lasercell::registration

@@ -1,0 +1,246 @@
+#include "datasets/laser_renderer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "core/error.hpp"
+#include "core/se3.hpp"
+#include "datasets/cell.hpp"
+#include "datasets/geometry.hpp"
+#include "datasets/sensor.hpp"
+
+namespace lasercell::datasets {
+namespace {
+
+constexpr double kExactMm = 1e-6;
+
+// Sensor above the cell looking down, laser plane normal along +x, the laser crossing the optical
+// axis at `crossing` (cell frame).
+Eigen::Isometry3d LookDownPose(const SensorModel& sensor, const Eigen::Vector3d& crossing,
+                               double standoff_mm) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = SensorLookingDown(sensor.laser, Eigen::Vector3d::UnitX());
+  pose.translation() = crossing - pose.linear() * Eigen::Vector3d(0, 0, standoff_mm);
+  return pose;
+}
+
+struct Fixture {
+  SensorOptions sensor_options;
+  SensorModel sensor = MakeSensor(sensor_options);
+  CellLayout layout;
+  LaserRenderOptions render;
+};
+
+TEST(Sensor, LaserGeometryMatchesTheOptions) {
+  Fixture f;
+  const LaserPlane& l = f.sensor.laser;
+  EXPECT_NEAR(l.normal_in_sensor.norm(), 1.0, 1e-15);
+  EXPECT_NEAR(l.normal_in_sensor.dot(l.center_in_sensor), 0.0, 1e-15);
+  // The plane contains the emitter and the optical-axis point at the standoff.
+  const Eigen::Vector4d c = l.Coefficients();
+  EXPECT_NEAR(c.head<3>().dot(l.origin_in_sensor) + c[3], 0.0, 1e-12);
+  EXPECT_NEAR(c.head<3>().dot(Eigen::Vector3d(0, 0, f.sensor_options.standoff_mm)) + c[3], 0.0,
+              1e-12);
+  // Positive fan angles move towards +x (higher columns).
+  EXPECT_GT(l.Lateral().x(), 0.99);
+  // The measuring range brackets the standoff along the central ray.
+  const double crossing = std::hypot(f.sensor_options.baseline_mm, f.sensor_options.standoff_mm);
+  EXPECT_LT(f.sensor.central_range_mm[0], crossing);
+  EXPECT_GT(f.sensor.central_range_mm[1], crossing);
+  // Looking down: central ray along -z, plane normal along the sweep direction.
+  const Eigen::Matrix3d r = SensorLookingDown(l, Eigen::Vector3d(1, 1, 0));
+  EXPECT_NEAR((r * l.center_in_sensor - Eigen::Vector3d(0, 0, -1)).norm(), 0.0, 1e-12);
+  EXPECT_NEAR((r * l.normal_in_sensor - Eigen::Vector3d(1, 1, 0).normalized()).norm(), 0, 1e-12);
+}
+
+TEST(Sensor, CameraModelTextRoundTripsThroughMrcal) {
+  CameraIntrinsics c;
+  c.fx_px = 1131.987654321;
+  c.distortion[7] = 1.234567890123e-7;  // mrcal's own writer would print 0.000000
+  const std::string text = MrcalCameraModelText(c);
+  const CameraIntrinsics back = CameraIntrinsicsFromMrcalText(text, "memory");
+  EXPECT_EQ(back.fx_px, c.fx_px);
+  EXPECT_EQ(back.distortion, c.distortion);
+  EXPECT_EQ(back.width_px, 1024);
+  EXPECT_THROW(CameraIntrinsicsFromMrcalText("{ 'lensmodel': 'LENSMODEL_PINHOLE', 'intrinsics': "
+                                             "[1,1,1,1], 'imagersize': [2,2]}",
+                                             "pinhole.cameramodel"),
+               FileError);
+}
+
+TEST(LaserRenderer, PlanePeaksAreExact) {
+  Fixture f;
+  const double height = 150.0;
+  const Scene scene = MakePlaneScene(f.layout, height, {1500, 1500});
+  const LaserRenderer renderer(scene, f.sensor, f.render);
+  const Eigen::Isometry3d cell_from_sensor =
+      LookDownPose(f.sensor, {12.3, -4.5, 200.0}, f.sensor_options.standoff_mm);
+  const ExposureTruth truth = renderer.RenderExact(cell_from_sensor);
+  ASSERT_GT(truth.ValidCount(), 900u);  // the line spans the image
+  const Eigen::Vector4d laser = f.sensor.laser.Coefficients();
+  for (int c = 0; c < 1024; ++c) {
+    if (std::isnan(truth.row_px[c])) continue;
+    const Eigen::Vector3d& p = truth.point_in_sensor[c];
+    const Eigen::Vector3d p_cell = cell_from_sensor * p;
+    EXPECT_NEAR(p_cell.z(), height, kExactMm) << "column " << c;
+    EXPECT_NEAR(laser.head<3>().dot(p) + laser[3], 0.0, kExactMm) << "column " << c;
+    const auto q = f.sensor.camera.Project(p);
+    ASSERT_TRUE(q.has_value());
+    EXPECT_NEAR(q->x(), c, 1e-6);
+    EXPECT_NEAR(q->y(), truth.row_px[c], 1e-6);
+    EXPECT_GT(truth.intensity[c], f.render.min_intensity);
+    EXPECT_GE(truth.width_px[c], f.render.min_width_px);
+  }
+}
+
+TEST(LaserRenderer, SpherePeaksAreExact) {
+  Fixture f;
+  SphereTargets spheres;
+  const Scene scene = MakeSphereScene(f.layout, spheres);
+  const LaserRenderer renderer(scene, f.sensor, f.render);
+  const std::vector<Eigen::Vector3d> centers = spheres.CentersInCell();
+  int on_sphere = 0;
+  for (std::size_t s = 0; s < centers.size(); ++s) {
+    // Cut each sphere off-centre so the line crosses a curved part.
+    const Eigen::Vector3d crossing(centers[s].x() + 7.0, 0.0, 250.0);
+    const Eigen::Isometry3d pose = LookDownPose(f.sensor, crossing, f.sensor_options.standoff_mm);
+    const ExposureTruth truth = renderer.RenderExact(pose);
+    const std::int32_t sphere_object = scene.Find("sphere_" + std::to_string(s));
+    for (int c = 0; c < 1024; ++c) {
+      if (truth.object[c] != sphere_object) continue;
+      ++on_sphere;
+      const Eigen::Vector3d p = pose * truth.point_in_sensor[c];
+      EXPECT_NEAR((p - centers[s]).norm(), spheres.radius_mm, kExactMm) << "column " << c;
+      EXPECT_GE(p.z(), centers[s].z() - 1e-9);
+    }
+  }
+  EXPECT_GT(on_sphere, 4 * 30);
+}
+
+TEST(LaserRenderer, OccludedPointsGiveNoPeak) {
+  Fixture f;
+  const Eigen::Isometry3d pose = LookDownPose(f.sensor, {0, 0, 200}, f.sensor_options.standoff_mm);
+  const Eigen::Vector3d camera_in_cell = pose.translation();
+  // Without a wall: a full line on the plane.
+  const Scene open = MakePlaneScene(f.layout, 150.0, {1500, 1500});
+  const ExposureTruth free = LaserRenderer(open, f.sensor, f.render).RenderExact(pose);
+  // A wall between the lit line and the camera covering the cell's +y half (the camera sits on
+  // the +x side of the laser plane x = 0; the wall stands at x = 95..105, away from the laser).
+  ASSERT_GT(camera_in_cell.x(), 150.0);
+  Scene walled;
+  Material white;
+  white.albedo = 0.9;
+  walled.Add({"plane", MakeBox(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 145)), {1500, 1500, 10}),
+              white});
+  walled.Add({"wall", MakeBox(Eigen::Isometry3d(Eigen::Translation3d(100, 400, 400)),
+                              {10, 800, 500}),
+              white});
+  walled.Commit();
+  const ExposureTruth blocked = LaserRenderer(walled, f.sensor, f.render).RenderExact(pose);
+  int hidden = 0, visible = 0;
+  for (int c = 0; c < 1024; ++c) {
+    if (std::isnan(free.row_px[c])) continue;
+    const Eigen::Vector3d p = pose * free.point_in_sensor[c];
+    // Where does the straight segment from p to the camera cross the wall's two faces?
+    bool behind_wall = true, clear = true;
+    for (double x : {95.0, 105.0}) {
+      const double s = (x - p.x()) / (camera_in_cell.x() - p.x());
+      const Eigen::Vector3d at = p + s * (camera_in_cell - p);
+      behind_wall = behind_wall && at.y() > 5 && at.z() < 645 && at.z() > 155;
+      clear = clear && (at.y() < -5 || at.z() > 655);
+    }
+    if (behind_wall) {
+      EXPECT_TRUE(std::isnan(blocked.row_px[c])) << "column " << c << " should be hidden";
+      ++hidden;
+    } else if (clear) {
+      EXPECT_FALSE(std::isnan(blocked.row_px[c])) << "column " << c << " should be seen";
+      if (!std::isnan(blocked.row_px[c])) {
+        EXPECT_NEAR(blocked.row_px[c], free.row_px[c], 1e-9);
+      }
+      ++visible;
+    }
+  }
+  EXPECT_GT(hidden, 300);
+  EXPECT_GT(visible, 300);
+}
+
+TEST(LaserRenderer, DarkSurfacesDropOut) {
+  Fixture f;
+  CellLayout dark = f.layout;
+  dark.albedo.white_plane = 0.002;  // 8 * 0.002 = 0.016 < min_intensity
+  dark.albedo.floor = 0.002;
+  const Scene scene = MakePlaneScene(dark, 150.0, {1500, 1500});
+  const Eigen::Isometry3d pose = LookDownPose(f.sensor, {0, 0, 200}, f.sensor_options.standoff_mm);
+  EXPECT_EQ(LaserRenderer(scene, f.sensor, f.render).RenderExact(pose).ValidCount(), 0u);
+  const Scene bright = MakePlaneScene(f.layout, 150.0, {1500, 1500});
+  EXPECT_GT(LaserRenderer(bright, f.sensor, f.render).RenderExact(pose).ValidCount(), 900u);
+}
+
+TEST(LaserRenderer, RowNoiseHasTheConfiguredSigma) {
+  Fixture f;
+  f.render.row_sigma_px = 0.25;
+  f.render.intensity_sigma = 0.0;
+  const Scene scene = MakePlaneScene(f.layout, 150.0, {1500, 1500});
+  const LaserRenderer renderer(scene, f.sensor, f.render);
+  const Eigen::Isometry3d pose = LookDownPose(f.sensor, {0, 0, 200}, f.sensor_options.standoff_mm);
+  const ExposureTruth truth = renderer.RenderExact(pose);
+  std::vector<double> residuals;
+  for (std::uint64_t seed = 0; seed < 20; ++seed) {
+    const triangulation::Profile p = renderer.ApplyNoise(truth, 1000 + seed);
+    for (int c = 0; c < 1024; ++c) {
+      if (std::isnan(truth.row_px[c])) continue;
+      ASSERT_FALSE(std::isnan(p.row_px[c]));
+      residuals.push_back(static_cast<double>(p.row_px[c]) - truth.row_px[c]);
+    }
+  }
+  const double n = static_cast<double>(residuals.size());
+  ASSERT_GT(n, 18000);
+  const double mean = std::accumulate(residuals.begin(), residuals.end(), 0.0) / n;
+  double ss = 0;
+  for (double r : residuals) ss += (r - mean) * (r - mean);
+  const double sigma = std::sqrt(ss / (n - 1));
+  // Standard error of the mean sigma/sqrt(n); of the sample sigma ~ sigma/sqrt(2n) (plus float
+  // rounding of the rows, 3e-5 px). Bounds at 5 standard errors.
+  EXPECT_NEAR(mean, 0.0, 5 * 0.25 / std::sqrt(n));
+  EXPECT_NEAR(sigma, 0.25, 5 * 0.25 / std::sqrt(2 * n));
+  // Different seeds give different noise; the same seed the same.
+  EXPECT_NE(renderer.ApplyNoise(truth, 1).row_px, renderer.ApplyNoise(truth, 2).row_px);
+  const auto a = renderer.ApplyNoise(truth, 3);
+  const auto b = renderer.ApplyNoise(truth, 3);
+  EXPECT_EQ(triangulation::EncodeProfiles({{}, {a}}), triangulation::EncodeProfiles({{}, {b}}));
+}
+
+TEST(LaserRenderer, SweepsAreIdenticalForAnyThreadCount) {
+  Fixture f;
+  const ChairSeat seat = MakeChairSeat();
+  const Scene scene = MakeSeatScene(f.layout, seat, DrawSeatPlacement({}, seat, 9, 0).cell_from_part);
+  const LaserRenderer renderer(scene, f.sensor, f.render);
+  SweepTiming timing;
+  timing.profiles = 24;
+  const Eigen::Isometry3d start =
+      LookDownPose(f.sensor, {-200, 0, 250}, f.sensor_options.standoff_mm);
+  const auto state_at = [&](double t) {
+    SensorState s;
+    s.scene_from_sensor = Eigen::Translation3d(400.0 * t, 0, 0) * start;
+    return s;
+  };
+  const SweepResult one = RenderSweep(renderer, state_at, timing, 42, 0, "", 1);
+  const SweepResult two = RenderSweep(renderer, state_at, timing, 42, 0, "", 2);
+  const SweepResult other = RenderSweep(renderer, state_at, timing, 43, 0, "", 2);
+  EXPECT_GT(one.valid_peaks, 24u * 300u);
+  EXPECT_EQ(triangulation::EncodeProfiles(one.profiles), triangulation::EncodeProfiles(two.profiles));
+  EXPECT_NE(triangulation::EncodeProfiles(one.profiles),
+            triangulation::EncodeProfiles(other.profiles));
+  // Timestamps: nominal grid plus jitter, in ns.
+  for (int i = 0; i < timing.profiles; ++i) {
+    const double nominal_ns = timing.start_ns + 1e9 * i / timing.rate_hz;
+    EXPECT_NEAR(static_cast<double>(one.profiles.profiles[i].timestamp_ns), nominal_ns,
+                6 * timing.jitter_s * 1e9 + 1);
+    EXPECT_EQ(one.profiles.profiles[i].sequence, static_cast<std::uint64_t>(i));
+  }
+}
+
+}  // namespace
+}  // namespace lasercell::datasets

@@ -1,0 +1,165 @@
+#include "registration/normals.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/error.hpp"
+#include "registration_test_util.hpp"
+
+namespace lasercell::registration {
+namespace {
+
+using ::testing::HasSubstr;
+
+double AngleTo(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(std::abs(a.normalized().dot(b.normalized())), 0.0, 1.0));
+}
+
+// z = 0.3 x + 0.2 y on a 1 mm grid with Gaussian noise along z, as an organized cloud.
+PointCloud NoisyPlaneGrid(int rows, int cols, double noise_mm, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> g(0.0, noise_mm);
+  PointCloud cloud;
+  cloud.grid_rows = rows;
+  cloud.grid_cols = cols;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) {
+      const double x = c, y = r;
+      cloud.positions.push_back({x, y, -200.0 + 0.3 * x + 0.2 * y + g(rng)});
+      cloud.profile.push_back(r);
+      cloud.column.push_back(c);
+    }
+  }
+  return cloud;
+}
+
+const Eigen::Vector3d kPlaneNormal = Eigen::Vector3d(-0.3, -0.2, 1.0).normalized();
+
+TEST(NormalsTest, SphereNormalsAreRadialAndFaceTheViewpoint) {
+  std::mt19937_64 rng(21);
+  const Eigen::Vector3d centre(0, 0, -300);
+  const PointCloud sphere = test::SpherePoints(6000, 50.0, centre, rng);
+  PointCloud cloud;
+  cloud.positions = sphere.positions;
+  NormalOptions options;
+  options.viewpoint = Viewpoint::AtPoint(Eigen::Vector3d::Zero());
+  const NormalEstimationResult result = EstimateNormals(cloud, options);
+  EXPECT_EQ(result.invalid_count, 0U);
+  double sum = 0.0, worst = 0.0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const double error = AngleTo(result.normals[i], cloud.positions[i] - centre);
+    sum += error;
+    worst = std::max(worst, error);
+    EXPECT_GE(result.normals[i].dot(-cloud.positions[i]), 0.0) << "point " << i << " faces away from the sensor";
+    EXPECT_NEAR(result.normals[i].norm(), 1.0, 1e-12);
+  }
+  // 12 neighbours span ~5 mm on a 50 mm sphere: the fit is nearly unbiased; sampling
+  // asymmetry bounds the worst case at a few degrees.
+  EXPECT_LT(sum / cloud.size(), 0.02);
+  EXPECT_LT(worst, 0.12);
+}
+
+TEST(NormalsTest, NoisyPlaneByKdTreeRadiusAndGrid) {
+  const PointCloud plane = NoisyPlaneGrid(60, 60, 0.05, 22);
+  NormalOptions options;
+  options.viewpoint = Viewpoint::AlongDirection(-Eigen::Vector3d::UnitZ());
+  options.k = 20;
+  for (int mode = 0; mode < 3; ++mode) {
+    NormalOptions o = options;
+    PointCloud cloud = plane;
+    if (mode == 0) cloud.grid_rows = cloud.grid_cols = 0;  // unorganized: k nearest
+    if (mode == 1) {
+      cloud.grid_rows = cloud.grid_cols = 0;
+      o.radius_mm = 2.6;
+    }
+    const NormalEstimationResult result = EstimateNormals(cloud, o);
+    EXPECT_EQ(result.used_grid, mode == 2);
+    double sum = 0.0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      sum += AngleTo(result.normals[i], kPlaneNormal);
+      ASSERT_GT(result.normals[i].z(), 0.0);  // toward the sensor above
+    }
+    // sigma / (extent * sqrt(k)) ~ 0.05 / (2 * 4.5) ~ 0.006 rad; allow 3x.
+    EXPECT_LT(sum / cloud.size(), 0.02) << "mode " << mode;
+  }
+}
+
+TEST(NormalsTest, GridDistanceLimitSeparatesDepthJumps) {
+  // Two parallel planes 30 mm apart interleaved by column halves: with the limit the normals at
+  // the seam stay exact; without it the fit mixes both planes.
+  PointCloud cloud = NoisyPlaneGrid(20, 20, 0.0, 23);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    if (cloud.column[i] >= 10) cloud.positions[i].z() += 30.0;
+  }
+  NormalOptions options;
+  options.viewpoint = Viewpoint::AlongDirection(-Eigen::Vector3d::UnitZ());
+  options.grid_max_distance_mm = 5.0;
+  const auto limited = EstimateNormals(cloud, options);
+  options.grid_max_distance_mm = 0.0;
+  const auto mixed = EstimateNormals(cloud, options);
+  const std::size_t seam = 5 * 20 + 9;  // row 5, column 9
+  EXPECT_LT(AngleTo(limited.normals[seam], kPlaneNormal), 1e-6);
+  EXPECT_GT(AngleTo(mixed.normals[seam], kPlaneNormal), 0.1);
+}
+
+TEST(NormalsTest, PerPointLineOfSightOrientsEachNormal) {
+  PointCloud cloud = NoisyPlaneGrid(10, 10, 0.0, 24);
+  std::vector<Eigen::Vector3d> line_of_sight(cloud.size(), Eigen::Vector3d::UnitZ());
+  for (std::size_t i = 0; i < cloud.size(); i += 2) line_of_sight[i] = -Eigen::Vector3d::UnitZ();
+  const auto result = EstimateNormals(cloud, NormalOptions{}, line_of_sight);
+  for (std::size_t i = 0; i < cloud.size(); ++i) EXPECT_GT(result.normals[i].dot(line_of_sight[i]), 0.9);
+  const std::vector<Eigen::Vector3d> wrong(3, Eigen::Vector3d::UnitZ());
+  EXPECT_THAT([&] { EstimateNormals(cloud, NormalOptions{}, wrong); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("line_of_sight has 3 vectors for 100 points")));
+}
+
+TEST(NormalsTest, IdenticalForAnyThreadCount) {
+  std::mt19937_64 rng(25);
+  PointCloud cloud;
+  cloud.positions = test::SpherePoints(20000, 40.0, {0, 0, -250}, rng).positions;
+  NormalOptions options;
+  options.threads = 1;
+  const auto one = EstimateNormals(cloud, options);
+  options.threads = 2;
+  const auto two = EstimateNormals(cloud, options);
+  options.threads = 0;
+  const auto all = EstimateNormals(cloud, options);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    ASSERT_EQ(one.normals[i], two.normals[i]);
+    ASSERT_EQ(one.normals[i], all.normals[i]);
+  }
+}
+
+TEST(NormalsTest, DegenerateNeighbourhoodsAreReportedAndDropped) {
+  PointCloud cloud;
+  for (int i = 0; i < 20; ++i) cloud.positions.push_back({i * 1.0, 0, 0});  // a line: no plane
+  cloud.positions.push_back({100, 100, 100});  // its neighbourhood (itself + the line) is a plane
+  const auto result = EstimateNormals(cloud, NormalOptions{});
+  EXPECT_EQ(result.invalid_count, 20U);
+  EXPECT_EQ(result.valid[20], 1);
+  std::size_t dropped = 0;
+  const PointCloud kept = WithEstimatedNormals(cloud, NormalOptions{}, &dropped);
+  EXPECT_EQ(dropped, 20U);
+  ASSERT_EQ(kept.size(), 1U);
+  EXPECT_EQ(kept.positions[0], Eigen::Vector3d(100, 100, 100));
+}
+
+TEST(NormalsTest, RejectsBadOptionsAndInput) {
+  NormalOptions options;
+  options.k = 2;
+  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("NormalOptions.k")));
+  options = {};
+  options.radius_mm = -1.0;
+  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("radius_mm")));
+  options = {};
+  options.viewpoint = Viewpoint::AlongDirection(Eigen::Vector3d::Zero());
+  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("direction")));
+  PointCloud nan_cloud;
+  nan_cloud.positions = {{0, 0, 0}, {std::nan(""), 0, 0}, {1, 1, 0}};
+  EXPECT_THROW(EstimateNormals(nan_cloud, NormalOptions{}), InputError);
+}
+
+}  // namespace
+}  // namespace lasercell::registration

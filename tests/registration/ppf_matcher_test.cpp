@@ -1,0 +1,130 @@
+#include "registration/ppf_matcher.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "core/error.hpp"
+#include "registration/clustering.hpp"
+#include "registration/filters.hpp"
+#include "registration_test_util.hpp"
+
+namespace lasercell::registration {
+namespace {
+
+using ::testing::HasSubstr;
+
+// The sampled scene (voxel grid at the model's step) as MatchPpf expects it.
+struct SampledScene {
+  KdTree tree;
+  std::vector<Eigen::Vector3d> normals;
+};
+
+SampledScene Sample(const PointCloud& scene, double step_mm) {
+  VoxelGridOptions voxel;
+  voxel.voxel_size_mm = step_mm;
+  PointCloud sampled = VoxelGridDownsample(scene, voxel);
+  return {KdTree(std::move(sampled.positions)), std::move(sampled.normals)};
+}
+
+class PpfMatcherTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (test::UwaModel() == nullptr || test::UwaScene() == nullptr) GTEST_FAIL() << "bundled UWA data missing from datasets/real/uwa";
+    model_ = PpfModel::Build(*test::UwaModel());
+    std::mt19937_64 rng(71);
+    truth_ = test::RandomPlacementInRs1(test::UwaModel()->Centroid(), rng);
+    scene_ = Sample(test::SyntheticRs1Scan({truth_}, 0.3, rng), model_.sampling_step_mm());
+  }
+
+  PpfModel model_;
+  Eigen::Isometry3d truth_;
+  SampledScene scene_;
+};
+
+TEST_F(PpfMatcherTest, VotesAndClustersFindASyntheticPoseInRealClutter) {
+  const PpfMatchResult match = MatchPpf(scene_.tree, scene_.normals, model_);
+  EXPECT_EQ(match.reference_points, (scene_.tree.size() + 4) / 5);
+  EXPECT_GT(match.hypotheses.size(), match.reference_points / 2);
+  EXPECT_GT(match.votes_cast, match.scene_pairs);
+  PoseClusteringOptions clustering;
+  clustering.translation_radius_mm = clustering.duplicate_radius_mm = 0.1 * model_.diameter_mm();
+  const ClusteringResult clusters = ClusterPoses(match.hypotheses, clustering);
+  ASSERT_FALSE(clusters.clusters.empty());
+  // The best cluster is the part: within the clustering radius and two angle steps. (The
+  // coarse pose is refined by ICP later; here only the voting is tested.)
+  const Eigen::Isometry3d scene_from_centered = truth_ * model_.model_from_centered();
+  EXPECT_THAT(clusters.clusters[0].scene_from_centered,
+              test::PoseNear(scene_from_centered, 2 * model_.angle_step_rad(), 0.1 * model_.diameter_mm()));
+  EXPECT_GT(clusters.clusters[0].score, 2.0 * clusters.clusters[1].score);
+}
+
+TEST_F(PpfMatcherTest, SpreadingStillFindsThePose) {
+  PpfMatchOptions options;
+  options.spread_features = true;
+  options.spread_alpha = true;
+  options.reference_stride = 10;
+  const PpfMatchResult spread = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  options.spread_features = options.spread_alpha = false;
+  const PpfMatchResult plain = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  EXPECT_GT(spread.votes_cast, 8 * plain.votes_cast);  // 2^4 feature cells x 2 alpha bins
+  PoseClusteringOptions clustering;
+  clustering.translation_radius_mm = clustering.duplicate_radius_mm = 0.1 * model_.diameter_mm();
+  const ClusteringResult clusters = ClusterPoses(spread.hypotheses, clustering);
+  ASSERT_FALSE(clusters.clusters.empty());
+  EXPECT_THAT(clusters.clusters[0].scene_from_centered,
+              test::PoseNear(truth_ * model_.model_from_centered(), 2 * model_.angle_step_rad(), 0.1 * model_.diameter_mm()));
+}
+
+TEST_F(PpfMatcherTest, IdenticalForAnyThreadCount) {
+  PpfMatchOptions options;
+  options.threads = 1;
+  const PpfMatchResult one = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  for (int threads : {2, 0}) {
+    options.threads = threads;
+    const PpfMatchResult other = MatchPpf(scene_.tree, scene_.normals, model_, options);
+    ASSERT_EQ(one.hypotheses.size(), other.hypotheses.size());
+    EXPECT_EQ(one.votes_cast, other.votes_cast);
+    for (std::size_t i = 0; i < one.hypotheses.size(); ++i) {
+      EXPECT_EQ(one.hypotheses[i].scene_from_centered.matrix(), other.hypotheses[i].scene_from_centered.matrix());
+      EXPECT_EQ(one.hypotheses[i].votes, other.hypotheses[i].votes);
+    }
+  }
+}
+
+TEST_F(PpfMatcherTest, PeaksPerReferenceAreBestFirst) {
+  PpfMatchOptions options;
+  options.peaks_per_reference = 4;
+  options.peak_min_relative = 0.0;
+  const PpfMatchResult match = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  std::size_t with_several = 0;
+  for (std::size_t i = 1; i < match.hypotheses.size(); ++i) {
+    const auto& a = match.hypotheses[i - 1];
+    const auto& b = match.hypotheses[i];
+    if (a.scene_reference != b.scene_reference) continue;
+    ++with_several;
+    EXPECT_GE(a.votes, b.votes);
+  }
+  EXPECT_GT(with_several, match.reference_points);
+}
+
+TEST(PpfMatcherOptionsTest, RejectsBadOptionsAndInput) {
+  PpfMatchOptions options;
+  options.reference_stride = 0;
+  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("reference_stride")));
+  options = {};
+  options.peaks_per_reference = 0;
+  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("peaks_per_reference")));
+  options = {};
+  options.peak_min_relative = -0.5;
+  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("peak_min_relative")));
+  const PpfModel model = PpfModel::Build(test::BoxPoints({30, 20, 10}, 2.0));
+  const KdTree tree(std::vector<Eigen::Vector3d>{{0, 0, 0}, {1, 0, 0}});
+  const std::vector<Eigen::Vector3d> one_normal = {{0, 0, 1}};
+  EXPECT_THAT([&] { MatchPpf(tree, one_normal, model); }, ::testing::ThrowsMessage<InputError>(HasSubstr("1 scene normals for 2")));
+  EXPECT_TRUE(MatchPpf(KdTree(), {}, model).hypotheses.empty());
+}
+
+}  // namespace
+}  // namespace lasercell::registration
