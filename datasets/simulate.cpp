@@ -699,22 +699,7 @@ SimulationReport SimulateSeats(const SimConfig& config_in, int placements,
   config.capture_seats = true;
   config.capture_planes = config.capture_spheres = config.capture_trajectory = false;
   config.capture_chessboard_images = config.capture_laser_line_images = false;
-  const auto start = std::chrono::steady_clock::now();
-  const CellTruth truth = MakeCellTruth(config);
-  Output out(out_dir);
-  SimulationReport report;
-  const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();
-  const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
-  std::string captures_yaml = CapturesPreamble(config, truth);
-  const std::vector<SeatCapture> seats = DrawSeats(config, truth, placements);
-  RunSeats(config, truth, seats, sweep, hb_from_cell, out, report, captures_yaml, progress,
-           threads);
-  out.Write("truth/captures.yaml", captures_yaml);
-  WriteCommonTruth(config, truth, seats, out);
-  report.files = out.files();
-  report.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return report;
+  return SimulateCell(config, out_dir, progress, threads);
 }
 
 }  // namespace lasercell::datasets
