@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "tools/bench.hpp"
 #include "tools/commands.hpp"
 
 int main(int argc, char** argv) {
@@ -17,6 +18,7 @@ int main(int argc, char** argv) {
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
+  lasercell::tools::AddBenchCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

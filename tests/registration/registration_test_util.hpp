@@ -1,7 +1,9 @@
 #pragma once
 // Helpers shared by the registration tests: real UWA data (cached per test binary), seeded
 // synthetic shapes with exact normals, random poses, a simulated single-view scan, pose
-// comparison by model-point displacement, and the committed rs1 reference pose.
+// comparison by model-point displacement, and the committed rs1 reference pose. The synthetic
+// rs1 scenes are datasets/synthetic_scan.hpp's (one implementation with `lasercell bench
+// robustness`), wrapped here with the real inputs cached.
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -10,7 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <unordered_map>
+#include <utility>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -20,6 +22,7 @@
 #include "core/io/point_cloud_io.hpp"
 #include "core/point_cloud.hpp"
 #include "core/se3.hpp"
+#include "datasets/synthetic_scan.hpp"
 #include "registration/kdtree.hpp"
 #include "registration/normals.hpp"
 #include "registration/viewpoint.hpp"
@@ -58,20 +61,7 @@ inline const PointCloud* UwaScene() {
 
 /// The committed reference pose scene_from_model of the parasaurolophus in rs1.
 inline Eigen::Isometry3d Rs1ReferencePose() {
-  std::ifstream in(std::string(LASERCELL_SOURCE_DIR) + "/tests/registration/data/rs1_parasaurolophus_reference.txt");
-  std::string line, numbers;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line[0] != '#') numbers += line + " ";
-  }
-  std::istringstream s(numbers);
-  Eigen::Matrix4d m;
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) s >> m(r, c);
-  }
-  if (!s) throw InputError("rs1_parasaurolophus_reference.txt: expected 16 numbers");
-  Eigen::Isometry3d pose;
-  pose.matrix() = m;
-  return pose;
+  return datasets::ReadPoseFile(std::string(LASERCELL_SOURCE_DIR) + "/tests/registration/data/rs1_parasaurolophus_reference.txt");
 }
 
 /// RMS displacement of `points` between two poses, mm (the pose error tests use).
@@ -90,13 +80,7 @@ MATCHER_P3(PoseNear, expected, rot_tol_rad, trans_tol_mm, "") {
 }
 
 /// A uniformly random rotation (random unit quaternion) and a translation in a cube of +-half_mm.
-inline Eigen::Isometry3d RandomPose(std::mt19937_64& rng, double half_mm) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  std::uniform_real_distribution<double> u(-half_mm, half_mm);
-  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
-  q.normalize();
-  return PoseFromQuaternion(q, Eigen::Vector3d(u(rng), u(rng), u(rng)));
-}
+inline Eigen::Isometry3d RandomPose(std::mt19937_64& rng, double half_mm) { return datasets::RandomPose(rng, half_mm); }
 
 /// A small random rotation of exactly `angle_rad` about a random axis, then a translation of
 /// exactly `trans_mm` in a random direction.
@@ -170,78 +154,34 @@ inline PointCloud SimulateView(const PointCloud& cloud, const Viewpoint& viewpoi
   return out;
 }
 
+// The synthetic rs1 scenes come from datasets/synthetic_scan.hpp (shared with
+// `lasercell bench robustness`); these wrappers cache the real inputs per test binary.
+
 /// rs1 with the real parasaurolophus cut out: scene points within `margin_mm` of the model
 /// posed at the reference pose are dropped. Real clutter (the other UWA objects) remains.
 inline PointCloud Rs1WithoutParasaurolophus(double margin_mm = 8.0) {
-  const PointCloud& scene = *UwaScene();
-  const PointCloud posed = UwaModel()->Transformed(Rs1ReferencePose());
-  const KdTree tree(posed.positions);
-  std::vector<std::size_t> keep;
-  for (std::size_t i = 0; i < scene.size(); ++i) {
-    Neighbor nn;
-    tree.Nearest(scene.positions[i], &nn);
-    if (nn.distance_sq > margin_mm * margin_mm) keep.push_back(i);
-  }
-  return scene.Subset(keep);
+  return datasets::CutOutModel(*UwaScene(), UwaModel()->Transformed(Rs1ReferencePose()), margin_mm);
 }
 
 /// The UWA parasaurolophus mesh sampled uniformly at about rs1's density (one point per
-/// 0.5 mm^2, normals interpolated from the vertex normals), cached.
+/// 0.5 mm^2, normals interpolated from the vertex normals, seed 99), cached.
 inline const PointCloud& UwaModelDenseSurface() {
-  static const PointCloud cloud = [] {
-    const TriangleMesh mesh = io::ReadPlyMesh(RealDataFile("uwa", "parasaurolophus_6700.ply"));
-    std::mt19937_64 rng(99);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    PointCloud out;
-    for (const Eigen::Vector3i& f : mesh.faces) {
-      const auto& v = mesh.vertices;
-      const Eigen::Vector3d a = v.positions[f(0)], b = v.positions[f(1)], c = v.positions[f(2)];
-      const double area = 0.5 * (b - a).cross(c - a).norm();
-      const double expected = area / 0.5;
-      auto count = static_cast<int>(expected);
-      if (u(rng) < expected - count) ++count;
-      for (int k = 0; k < count; ++k) {
-        double s = u(rng), t = u(rng);
-        if (s + t > 1.0) s = 1.0 - s, t = 1.0 - t;
-        out.positions.push_back(a + s * (b - a) + t * (c - a));
-        out.normals.push_back(((1 - s - t) * v.normals[f(0)].normalized() + s * v.normals[f(1)].normalized() +
-                               t * v.normals[f(2)].normalized()).normalized());
-      }
-    }
-    return out;
-  }();
+  static const PointCloud cloud = datasets::SampleMeshSurface(io::ReadPlyMesh(RealDataFile("uwa", "parasaurolophus_6700.ply")), 0.5, 99);
   return cloud;
 }
 
 /// Perspective z-buffer from the origin: per angular cell (cell_mm at 600 mm), the points within
 /// depth_tol_mm of the nearest; back faces (normal away from the sensor) are dropped.
 inline std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, double cell_mm, double depth_tol_mm) {
-  const double scale = 600.0 / cell_mm;
-  auto key = [&](const Eigen::Vector3d& p) {
-    const double depth = p.norm();
-    return (static_cast<std::int64_t>(std::floor(p.x() / depth * scale)) << 32) ^
-           static_cast<std::int64_t>(std::floor(p.y() / depth * scale) + (1LL << 30));
-  };
-  std::unordered_map<std::int64_t, double> front;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3d& p = cloud.positions[i];
-    if (cloud.normals[i].dot(-p) <= 0.0) continue;
-    auto [it, inserted] = front.emplace(key(p), p.norm());
-    if (!inserted) it->second = std::min(it->second, p.norm());
-  }
-  std::vector<std::size_t> visible;
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    const Eigen::Vector3d& p = cloud.positions[i];
-    if (cloud.normals[i].dot(-p) > 0.0 && p.norm() <= front.at(key(p)) + depth_tol_mm) visible.push_back(i);
-  }
-  return visible;
+  return datasets::VisibleFromOrigin(cloud, cell_mm, depth_tol_mm);
 }
 
-/// A synthetic rs1-like scan: the real rs1 clutter (parasaurolophus removed) plus the model's
-/// dense surface at each pose of `scene_from_model`, with Gaussian noise `noise_mm` along the line of sight,
-/// occlusions resolved by a z-buffer from the origin (the scanner). The part's normals are
-/// re-estimated from its noisy visible points (k = 12); the clutter keeps rs1's normals.
-/// `part_points` (optional) receives how many points of the part are visible.
+/// A synthetic rs1-like scan (datasets::RenderSyntheticScan): the real rs1 clutter
+/// (parasaurolophus removed) plus the model's dense surface at each pose of `scene_from_model`,
+/// with Gaussian noise `noise_mm` along the line of sight, occlusions resolved by a z-buffer from
+/// the origin (the scanner). The part's normals are re-estimated from its noisy visible points
+/// (k = 12); the clutter keeps rs1's normals. `part_points` (optional) receives how many points
+/// of the part are visible.
 inline PointCloud SyntheticRs1Scan(const std::vector<Eigen::Isometry3d>& scene_from_model, double noise_mm,
                                    std::mt19937_64& rng, std::size_t* part_points = nullptr) {
   static const PointCloud clutter = [] {
@@ -249,31 +189,17 @@ inline PointCloud SyntheticRs1Scan(const std::vector<Eigen::Isometry3d>& scene_f
     for (auto& n : c.normals) n.normalize();
     return c;
   }();
-  PointCloud part;
-  for (const Eigen::Isometry3d& pose : scene_from_model) part.Append(UwaModelDenseSurface().Transformed(pose));
-  std::normal_distribution<double> g(0.0, noise_mm);
-  for (auto& p : part.positions) p += g(rng) * p.normalized();
-  PointCloud combined = clutter;
-  combined.Append(part);
-  std::vector<std::size_t> visible_clutter, visible_part;
-  for (std::size_t i : VisibleFromOrigin(combined, 0.8, 2.0)) (i < clutter.size() ? visible_clutter : visible_part).push_back(i - (i < clutter.size() ? 0 : clutter.size()));
-  PointCloud scan = clutter.Subset(visible_clutter);
-  PointCloud seen = part.Subset(visible_part);
-  seen.normals.clear();
-  NormalOptions normals;
-  normals.threads = 1;
-  scan.Append(WithEstimatedNormals(seen, normals));
-  if (part_points) *part_points = visible_part.size();
-  return scan;
+  datasets::SyntheticScanOptions options;
+  options.noise_sigma_mm = noise_mm;
+  datasets::SyntheticScan scan = datasets::RenderSyntheticScan(clutter, UwaModelDenseSurface(), scene_from_model, options, rng);
+  if (part_points) *part_points = scan.part_points;
+  return std::move(scan.cloud);
 }
 
 /// A random placement of a model (frame `model`, centroid `model_centroid`) in rs1's field of
 /// view: uniform random rotation, centroid within the scene's x/y footprint at its depth.
 inline Eigen::Isometry3d RandomPlacementInRs1(const Eigen::Vector3d& model_centroid, std::mt19937_64& rng) {
-  std::uniform_real_distribution<double> x(-110.0, 70.0), y(-90.0, 90.0), z(-640.0, -600.0);
-  Eigen::Isometry3d pose = RandomPose(rng, 0.0);
-  pose.translation() = Eigen::Vector3d(x(rng), y(rng), z(rng)) - pose.linear() * model_centroid;
-  return pose;
+  return datasets::RandomPlacementInRs1(model_centroid, rng);
 }
 
 }  // namespace lasercell::registration::test

@@ -315,4 +315,33 @@ TEST_F(CliTest, SimulateBadConfigNamesTheField) {
   EXPECT_THAT(r.err, HasSubstr("standof_mm"));
 }
 
+TEST_F(CliTest, BenchRegistrationPrintsPoseErrorTable) {
+  // OpenCV training takes about a minute: the full comparison runs by hand (BENCHMARKS.md).
+  const std::string json = (dir_ / "bench.json").string();
+  const RunResult r = Run("bench registration --runs 2 --skip-opencv --skip-pcl --icp-starts 3 --json " + json);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(r.out, HasSubstr("| lasercell |"));
+  EXPECT_THAT(r.out, HasSubstr("pose error"));
+  EXPECT_THAT(r.out, HasSubstr("RMS err mm"));
+  EXPECT_THAT(r.out, HasSubstr("lasercell AlignIcp"));
+  EXPECT_THAT(r.out, ::testing::Not(HasSubstr("OpenCV")));
+  const auto j = nlohmann::json::parse(Slurp(json));
+  ASSERT_GE(j["rows"].size(), 2u);
+  EXPECT_EQ(j["rows"][1]["method"], "lasercell");
+  EXPECT_EQ(j["rows"][1]["top_pose"], "<= 2 mm");
+  EXPECT_LT(j["rows"][1]["pose_error"]["rms_mm"].get<double>(), 2.0);
+}
+
+TEST_F(CliTest, BenchRegistrationBadArgumentsExitTwo) {
+  RunResult r = Run("bench registration --runs 0 --skip-opencv --skip-pcl");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(CountLines(r.err), 1) << r.err;
+  EXPECT_THAT(r.err, HasSubstr("--runs"));
+  r = Run("bench registration --runs 1 --skip-opencv --skip-pcl --model " + (dir_ / "missing.ply").string());
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("missing.ply"));
+  r = Run("bench");
+  EXPECT_EQ(r.exit_code, 2);
+}
+
 }  // namespace

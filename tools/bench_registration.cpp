@@ -1,0 +1,400 @@
+// The peers of `lasercell bench registration`: OpenCV cv::ppf_match_3d and PCL PPF + ICP on the
+// same in-memory clouds as lasercell. The only file of the tool that includes OpenCV or PCL
+// headers (PCL compiles slowly); see bench_registration.hpp.
+#include "tools/bench_registration.hpp"
+
+#include <opencv2/core.hpp>
+#include <opencv2/surface_matching.hpp>
+#include <opencv2/surface_matching/ppf_helpers.hpp>
+#include <pcl/console/print.h>
+#include <pcl/features/impl/ppf.hpp>
+#include <pcl/features/ppf.h>
+#include <pcl/filters/voxel_grid.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <pcl/registration/icp.h>
+#include <pcl/registration/impl/ppf_registration.hpp>
+#include <pcl/registration/ppf_registration.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <memory>
+#include <random>
+#include <sstream>
+
+#include "registration/icp.hpp"
+#include "registration/verification.hpp"
+
+namespace lasercell::tools {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using PclCloud = pcl::PointCloud<pcl::PointNormal>;
+
+// PCL's point-to-plane ICP with its iteration count exposed, and convergence tolerances set like
+// lasercell's IcpOptions (update below 1e-3 mm and 1e-5 rad; PCL compares the squared
+// translation and the rotation's cosine, the latter in float).
+class PclIcp : public pcl::IterativeClosestPointWithNormals<pcl::PointNormal, pcl::PointNormal> {
+ public:
+  PclIcp(double max_distance_mm, int max_iterations) {
+    setMaxCorrespondenceDistance(max_distance_mm);
+    setMaximumIterations(max_iterations);
+    setTransformationEpsilon(1e-3 * 1e-3);
+    setTransformationRotationEpsilon(std::cos(1e-5));
+  }
+  int Iterations() const { return nr_iterations_; }
+};
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+std::string Format(const char* format, double a, double b = 0.0, double c = 0.0) {
+  char buffer[256];
+  std::snprintf(buffer, sizeof buffer, format, a, b, c);
+  return buffer;
+}
+
+// Eigen -> cv::Mat N x 6 float (x y z nx ny nz), unit normals, as ppf_helpers' loadPLYSimple.
+cv::Mat ToCvMat(const PointCloud& cloud) {
+  cv::Mat mat(static_cast<int>(cloud.size()), 6, CV_32F);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    float* row = mat.ptr<float>(static_cast<int>(i));
+    const Eigen::Vector3d n = cloud.normals[i].normalized();
+    for (int k = 0; k < 3; ++k) {
+      row[k] = static_cast<float>(cloud.positions[i](k));
+      row[3 + k] = static_cast<float>(n(k));
+    }
+  }
+  return mat;
+}
+
+Eigen::Isometry3d FromCv(const cv::Matx44d& m) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 4; ++c) pose.matrix()(r, c) = m(r, c);
+  }
+  return pose;
+}
+
+Eigen::Isometry3d FromPcl(const Eigen::Matrix4f& m) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.matrix().topRows<3>() = m.cast<double>().topRows<3>();
+  return pose;
+}
+
+Eigen::Matrix4f ToPcl(const Eigen::Isometry3d& pose) { return pose.matrix().cast<float>(); }
+
+PclCloud::Ptr ToPcl(const std::vector<Eigen::Vector3d>& points,
+                    const std::vector<Eigen::Vector3d>& normals) {
+  auto cloud = std::make_shared<PclCloud>();
+  cloud->resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    pcl::PointNormal& p = (*cloud)[i];
+    const Eigen::Vector3f n = normals[i].normalized().cast<float>();
+    p.x = static_cast<float>(points[i].x());
+    p.y = static_cast<float>(points[i].y());
+    p.z = static_cast<float>(points[i].z());
+    p.normal_x = n.x();
+    p.normal_y = n.y();
+    p.normal_z = n.z();
+    p.curvature = 0.0f;
+  }
+  return cloud;
+}
+
+// pcl::VoxelGrid averages every field (positions and normals); normals are re-normalized.
+PclCloud::Ptr VoxelSubsample(const PclCloud::Ptr& cloud, double leaf_mm) {
+  pcl::VoxelGrid<pcl::PointNormal> grid;
+  const auto leaf = static_cast<float>(leaf_mm);
+  grid.setLeafSize(leaf, leaf, leaf);
+  grid.setInputCloud(cloud);
+  auto out = std::make_shared<PclCloud>();
+  grid.filter(*out);
+  for (auto& p : *out) p.getNormalVector3fMap().normalize();
+  return out;
+}
+
+// PCL's point-to-plane ICP on a fixed target (the ICP-only comparison).
+struct PclIcpTrial {
+  Eigen::Isometry3d target_from_source = Eigen::Isometry3d::Identity();
+  double ms = 0.0;
+  int iterations = 0;
+};
+
+class PclPointToPlaneIcp {
+ public:
+  PclPointToPlaneIcp(const std::vector<Eigen::Vector3d>& target,
+                     const std::vector<Eigen::Vector3d>& target_normals, double max_distance_mm,
+                     int max_iterations)
+      : icp_(max_distance_mm, max_iterations) {
+    icp_.setInputTarget(ToPcl(target, target_normals));
+  }
+  PclIcpTrial Align(const std::vector<Eigen::Vector3d>& source,
+                    const std::vector<Eigen::Vector3d>& source_normals,
+                    const Eigen::Isometry3d& initial) {
+    PclIcpTrial trial;
+    const PclCloud::Ptr cloud = ToPcl(source, source_normals);
+    PclCloud aligned;
+    const auto start = Clock::now();
+    icp_.setInputSource(cloud);
+    icp_.align(aligned, ToPcl(initial));
+    trial.ms = MsSince(start);
+    trial.iterations = icp_.Iterations();
+    trial.target_from_source = FromPcl(icp_.getFinalTransformation());
+    return trial;
+  }
+
+ private:
+  PclIcp icp_;
+};
+
+}  // namespace
+
+double CpuMs() { return 1000.0 * static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return -1.0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string Ms(double ms) {
+  if (ms < 0.0) return "-";
+  char b[32];
+  std::snprintf(b, sizeof b, ms < 100.0 ? "%.1f" : "%.0f", ms);
+  return b;
+}
+
+std::vector<BenchRow> RunOpenCvPpf(const PointCloud& model, const PointCloud& scene,
+                                   const OpenCvBenchOptions& options) {
+  cv::setNumThreads(options.threads == 0 ? -1 : options.threads);
+  const cv::Mat model_mat = ToCvMat(model), scene_mat = ToCvMat(scene);
+  cv::ppf_match_3d::PPF3DDetector detector(options.relative_sampling_step,
+                                           options.relative_distance_step);
+  auto start = Clock::now();
+  detector.trainModel(model_mat);
+  const double train_ms = MsSince(start);
+
+  std::vector<BenchRow> rows;
+  for (double step : options.scene_sample_steps) {
+    const std::string label = "OpenCV PPF 1/" + Format("%.0f", 1.0 / step);
+    BenchRow coarse{label, "", train_ms, -1.0, -1.0, -1.0, -1.0, {}};
+    coarse.note = Format("PPF3DDetector(%.3g, %.3g), ", options.relative_sampling_step,
+                         options.relative_distance_step) +
+                  Format("match(scene, 1/%.0f, %.3g), trained once", 1.0 / step,
+                         options.relative_scene_distance);
+    std::vector<cv::ppf_match_3d::Pose3DPtr> results;
+    start = Clock::now();
+    const double cpu_start = CpuMs();
+    detector.match(scene_mat, results, step, options.relative_scene_distance);
+    coarse.match_ms = MsSince(start);
+    coarse.total_ms = coarse.match_ms;
+    coarse.total_cpu_ms = CpuMs() - cpu_start;
+    for (const auto& r : results) coarse.poses.push_back(FromCv(r->pose));
+
+    BenchRow refined = coarse;
+    refined.method = label + " + ICP";
+    refined.note = "+ cv::ppf_match_3d::ICP(100, 0.005, 2.5, 8) on the top " +
+                   std::to_string(options.icp_poses) + " poses (model: all points)";
+    std::vector<cv::ppf_match_3d::Pose3DPtr> top(
+        results.begin(),
+        results.begin() + static_cast<std::ptrdiff_t>(std::min(options.icp_poses, results.size())));
+    refined.poses.clear();
+    if (!top.empty()) {
+      cv::ppf_match_3d::ICP icp(100, 0.005f, 2.5f, 8);
+      start = Clock::now();
+      const double icp_cpu_start = CpuMs();
+      icp.registerModelToScene(model_mat, scene_mat, top);
+      refined.icp_ms = MsSince(start);
+      refined.total_cpu_ms += CpuMs() - icp_cpu_start;
+      for (const auto& r : top) refined.poses.push_back(FromCv(r->pose));
+    }
+    refined.total_ms = refined.match_ms + std::max(0.0, refined.icp_ms);
+    rows.push_back(std::move(coarse));
+    rows.push_back(std::move(refined));
+  }
+  return rows;
+}
+
+std::vector<BenchRow> RunPclPpf(const PointCloud& model, const PointCloud& scene,
+                                const PclBenchOptions& options) {
+  pcl::console::setVerbosityLevel(
+      pcl::console::L_WARN);  // PPFRegistration prints progress at L_INFO
+  const PclCloud::Ptr model_full = ToPcl(model.positions, model.normals);
+  const PclCloud::Ptr scene_full = ToPcl(scene.positions, scene.normals);
+
+  // Offline: voxel grid, every ordered pair's feature (PPFEstimation), the hash map.
+  auto start = Clock::now();
+  const PclCloud::Ptr model_sampled = VoxelSubsample(model_full, options.sampling_step_mm);
+  pcl::PPFEstimation<pcl::PointNormal, pcl::PointNormal, pcl::PPFSignature> estimation;
+  estimation.setInputCloud(model_sampled);
+  estimation.setInputNormals(model_sampled);
+  auto features = std::make_shared<pcl::PointCloud<pcl::PPFSignature>>();
+  estimation.compute(*features);
+  auto search = std::make_shared<pcl::PPFHashMapSearch>(
+      static_cast<float>(options.angle_step_rad), static_cast<float>(options.distance_step_mm));
+  search->setInputFeatureCloud(features);
+  const double build_ms = MsSince(start);
+
+  // How many model pairs a key returns (pcl#5288 reported one; PCL 1.13 stores a multimap).
+  std::size_t looked_up = 0, returned = 0;
+  std::vector<std::pair<std::size_t, std::size_t>> found;
+  for (std::size_t i = 0; i < features->size() && looked_up < 2000; i += 97) {
+    pcl::PPFSignature f = (*features)[i];
+    if (!std::isfinite(f.f1)) continue;
+    search->nearestNeighborSearch(f.f1, f.f2, f.f3, f.f4, found);
+    ++looked_up;
+    returned += found.size();
+  }
+
+  // Online: scene voxel grid, PPFRegistration (votes, clustering), then point-to-plane ICP.
+  start = Clock::now();
+  const double cpu_start = CpuMs();
+  const PclCloud::Ptr scene_sampled = VoxelSubsample(scene_full, options.sampling_step_mm);
+  pcl::PPFRegistration<pcl::PointNormal, pcl::PointNormal> registration;
+  registration.setSceneReferencePointSamplingRate(options.reference_stride);
+  registration.setPositionClusteringThreshold(static_cast<float>(options.cluster_translation_mm));
+  registration.setRotationClusteringThreshold(static_cast<float>(options.cluster_rotation_rad));
+  registration.setSearchMethod(search);
+  registration.setInputSource(model_sampled);
+  registration.setInputTarget(scene_sampled);
+  PclCloud aligned;
+  registration.align(aligned);
+  const double match_ms = MsSince(start);
+  const double match_cpu_ms = CpuMs() - cpu_start;
+
+  BenchRow coarse{"PCL PPFRegistration", "", build_ms, match_ms, -1.0, match_ms, match_cpu_ms, {}};
+  std::ostringstream note;
+  note << "voxel " << Format("%.1f", options.sampling_step_mm) << " mm: " << model_sampled->size()
+       << " model / " << scene_sampled->size() << " scene points, stride "
+       << options.reference_stride << "; "
+       << Format("%.2f",
+                 looked_up ? static_cast<double>(returned) / static_cast<double>(looked_up) : 0.0)
+       << " model pairs per looked-up key";
+  coarse.note = note.str();
+  if (registration.hasConverged())
+    coarse.poses.push_back(FromPcl(registration.getFinalTransformation()));
+
+  BenchRow refined = coarse;
+  refined.method = "PCL PPFRegistration + ICP";
+  refined.note =
+      "+ IterativeClosestPointWithNormals (point-to-plane), model (all points) -> "
+      "scene (all points), " +
+      Format("max distance %.1f mm, <= %.0f iterations", options.icp_max_distance_mm,
+             options.icp_iterations);
+  refined.poses.clear();
+  if (!coarse.poses.empty()) {
+    start = Clock::now();
+    const double icp_cpu_start = CpuMs();
+    PclIcp icp(options.icp_max_distance_mm, options.icp_iterations);
+    icp.setInputSource(model_full);
+    icp.setInputTarget(scene_full);
+    icp.align(aligned, ToPcl(coarse.poses.front()));
+    refined.icp_ms = MsSince(start);
+    refined.total_cpu_ms += CpuMs() - icp_cpu_start;
+    refined.poses.push_back(FromPcl(icp.getFinalTransformation()));
+    refined.note += ", " + std::to_string(icp.Iterations()) + " iterations run";
+  }
+  refined.total_ms = refined.match_ms + std::max(0.0, refined.icp_ms);
+  return {coarse, refined};
+}
+
+nlohmann::json RunIcpComparison(const registration::PpfModel& model, const PointCloud& scene,
+                                const Eigen::Isometry3d& reference, const PoseEvaluator& evaluate,
+                                const IcpComparisonOptions& options) {
+  const double diameter = model.diameter_mm();
+  registration::IcpOptions icp;
+  icp.max_correspondence_distance_mm = 0.03 * diameter;
+  icp.threads = options.threads;
+  registration::VerificationOptions select;
+  select.support_distance_mm = 0.02 * diameter;
+  select.overlap_band_mm = icp.max_correspondence_distance_mm;
+  std::unique_ptr<PclPointToPlaneIcp> pcl;
+  if (options.with_pcl) {
+    pcl = std::make_unique<PclPointToPlaneIcp>(
+        model.refinement_points(), model.refinement_normals(), icp.max_correspondence_distance_mm,
+        icp.max_iterations);
+  }
+  std::vector<Eigen::Vector3d> scene_normals = scene.normals;
+  for (auto& n : scene_normals) n.normalize();
+
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const Eigen::Vector3d centre = reference * model.model_from_centered().translation();
+  std::vector<double> start_rms, ours_ms, ours_rms, ours_it, pcl_ms, pcl_rms, pcl_it;
+  for (int k = 0; k < options.starts; ++k) {
+    const Eigen::Vector3d axis = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    const Eigen::Vector3d shift = 5.0 * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    const Eigen::Isometry3d delta = Eigen::Translation3d(centre + shift) *
+                                    Eigen::AngleAxisd(3.0 * std::numbers::pi / 180.0, axis) *
+                                    Eigen::Translation3d(-centre);
+    const Eigen::Isometry3d start = delta * reference;
+    start_rms.push_back(evaluate(start).rms_mm);
+    std::vector<std::uint32_t> overlap;
+    registration::VerifyPose(scene.positions, model, start, registration::Viewpoint{}, select,
+                             &overlap);
+    const std::size_t n = overlap.size(), m = std::min<std::size_t>(n, 1500);
+    std::vector<Eigen::Vector3d> source, source_normals;
+    for (std::size_t i = 0; i < m; ++i) {
+      source.push_back(scene.positions[overlap[i * n / m]]);
+      source_normals.push_back(scene_normals[overlap[i * n / m]]);
+    }
+    const Eigen::Isometry3d centered_from_scene = (start * model.model_from_centered()).inverse();
+    auto t = Clock::now();
+    const registration::IcpResult ours = registration::AlignIcp(
+        source, model.refinement_tree(), model.refinement_normals(), centered_from_scene, icp);
+    ours_ms.push_back(MsSince(t));
+    ours_it.push_back(ours.iterations);
+    ours_rms.push_back(
+        evaluate(ours.target_from_source.inverse() * model.model_from_centered().inverse()).rms_mm);
+    if (pcl) {
+      // The first call builds PCL's target kd-tree; it is repeated so that no trial times it.
+      if (k == 0) pcl->Align(source, source_normals, centered_from_scene);
+      const PclIcpTrial trial = pcl->Align(source, source_normals, centered_from_scene);
+      pcl_ms.push_back(trial.ms);
+      pcl_it.push_back(trial.iterations);
+      pcl_rms.push_back(
+          evaluate(trial.target_from_source.inverse() * model.model_from_centered().inverse())
+              .rms_mm);
+    }
+  }
+  std::printf(
+      "\nICP alone: %d seeded starts 3 deg / 5 mm about the model centre from the reference "
+      "(start offset median %.1f mm RMS, max %.1f); source = scene points selected around the "
+      "start (<= 1500), target = %zu model points; max distance %.1f mm, <= %d iterations; "
+      "threads %d\n\n",
+      options.starts, Median(start_rms), *std::max_element(start_rms.begin(), start_rms.end()),
+      model.refinement_points().size(), icp.max_correspondence_distance_mm, icp.max_iterations,
+      options.threads);
+  std::printf(
+      "| ICP | median ms | median iterations | median RMS error mm | max RMS error mm | "
+      "within 0.1 mm | within 2 mm |\n");
+  std::printf("|---|---|---|---|---|---|---|\n");
+  nlohmann::json out = nlohmann::json::array();
+  auto row = [&](const char* name, const std::vector<double>& ms, const std::vector<double>& it,
+                 const std::vector<double>& rms) {
+    const auto count = [&](double limit) {
+      return std::count_if(rms.begin(), rms.end(), [&](double r) { return r <= limit; });
+    };
+    std::printf("| %s | %s | %.0f | %.3f | %.3f | %ld/%zu | %ld/%zu |\n", name,
+                Ms(Median(ms)).c_str(), Median(it), Median(rms),
+                *std::max_element(rms.begin(), rms.end()), static_cast<long>(count(0.1)),
+                rms.size(), static_cast<long>(count(2.0)), rms.size());
+    out.push_back({{"method", name},
+                   {"median_ms", Median(ms)},
+                   {"rms_error_mm", rms},
+                   {"ms", ms},
+                   {"iterations", it}});
+  };
+  row("lasercell AlignIcp (point-to-plane, Tukey)", ours_ms, ours_it, ours_rms);
+  if (pcl)
+    row("PCL IterativeClosestPointWithNormals (point-to-plane LLS)", pcl_ms, pcl_it, pcl_rms);
+  return out;
+}
+
+}  // namespace lasercell::tools
