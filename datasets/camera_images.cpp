@@ -222,15 +222,23 @@ GrayImage ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
   const int h = camera_.intrinsics().height_px;
   LASERCELL_CHECK(static_cast<int>(exposure.row_px.size()) == w, "exposure width matches camera");
   std::vector<float> img(static_cast<std::size_t>(w) * h, static_cast<float>(options.ambient));
-  for (int x = 0; x < w; ++x) {
-    if (std::isnan(exposure.row_px[x])) continue;
-    const double sigma = exposure.width_px[x] / 2.3548200450309493;  // FWHM -> sigma
-    const double peak = 255.0 * exposure.intensity[x];
-    const int y0 = std::max(0, static_cast<int>(std::floor(exposure.row_px[x] - 5 * sigma)));
-    const int y1 = std::min(h - 1, static_cast<int>(std::ceil(exposure.row_px[x] + 5 * sigma)));
+  const auto stripe = [&](int x, double row, double width_px, double intensity) {
+    const double sigma = width_px / 2.3548200450309493;  // FWHM -> sigma
+    const double peak = 255.0 * intensity;
+    const int y0 = std::max(0, static_cast<int>(std::floor(row - 5 * sigma)));
+    const int y1 = std::min(h - 1, static_cast<int>(std::ceil(row + 5 * sigma)));
     for (int y = y0; y <= y1; ++y) {
-      const double d = (y - exposure.row_px[x]) / sigma;
+      const double d = (y - row) / sigma;
       img[static_cast<std::size_t>(y) * w + x] += static_cast<float>(peak * std::exp(-0.5 * d * d));
+    }
+  };
+  for (int x = 0; x < w; ++x) {
+    if (!std::isnan(exposure.row_px[x])) {
+      stripe(x, exposure.row_px[x], exposure.width_px[x], exposure.intensity[x]);
+    }
+    // Specular ghosts (laser_renderer.hpp), when the exposure has them: a second, weaker peak.
+    if (!exposure.reflection_row_px.empty() && !std::isnan(exposure.reflection_row_px[x])) {
+      stripe(x, exposure.reflection_row_px[x], 2.0, exposure.reflection_intensity[x]);
     }
   }
   return Quantize(img, w, h, options.noise_sigma, seed);

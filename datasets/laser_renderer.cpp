@@ -22,13 +22,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
-// One fan sample: the ray's hit and its projection.
-struct FanSample {
-  bool valid = false;  // hit and projected
-  double alpha = 0;
-  RayHit hit;
-  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
-};
+using FanSample = LaserRenderer::FanSampleRef;
 
 }  // namespace
 
@@ -54,6 +48,12 @@ void LaserRenderOptions::Check(const std::string& what) const {
     fail("dropout_probability", "must be in [0, 1)", dropout_probability);
   }
   if (!(occlusion_epsilon_mm > 0)) fail("occlusion_epsilon_mm", "must be positive", occlusion_epsilon_mm);
+  if (!(reflection_probability >= 0 && reflection_probability <= 1)) {
+    fail("reflection_probability", "must be in [0, 1]", reflection_probability);
+  }
+  if (!(reflection_intensity > 0 && reflection_intensity <= 1)) {
+    fail("reflection_intensity", "must be in (0, 1]", reflection_intensity);
+  }
 }
 
 void SweepTiming::Check(const std::string& what) const {
@@ -75,10 +75,21 @@ std::size_t ExposureTruth::ValidCount() const {
   return n;
 }
 
+std::size_t ExposureTruth::ReflectionCount() const {
+  std::size_t n = 0;
+  for (double r : reflection_row_px) n += std::isnan(r) ? 0 : 1;
+  return n;
+}
+
 LaserRenderer::LaserRenderer(const Scene& scene, const SensorModel& sensor,
                              const LaserRenderOptions& options)
     : scene_(scene), sensor_(sensor), options_(options) {
   options_.Check();
+  reflective_.assign(scene_.objects().size(), false);
+  for (const std::string& name : options_.reflective_objects) {
+    const std::int32_t k = scene_.Find(name);
+    if (k >= 0) reflective_[k] = true;
+  }
 }
 
 ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sensor) const {
@@ -228,7 +239,57 @@ ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sen
       out.object[c] = hit->object;
     }
   }
+  if (options_.reflection_probability > 0) AddReflections(fan, emitter, camera_center,
+                                                          sensor_from_scene, out);
   return out;
+}
+
+void LaserRenderer::AddReflections(const std::vector<FanSampleRef>& fan,
+                                   const Eigen::Vector3d& emitter,
+                                   const Eigen::Vector3d& camera_center,
+                                   const Eigen::Isometry3d& sensor_from_scene,
+                                   ExposureTruth& out) const {
+  const CameraModel& camera = sensor_.camera;
+  const int width = camera.intrinsics().width_px;
+  const double cos_view_min = std::cos(options_.max_view_angle_deg * kDegToRad);
+  out.reflection_row_px.assign(width, kNaN);
+  out.reflection_intensity.assign(width, 0.0);
+  out.reflection_point_in_sensor.assign(width, Eigen::Vector3d::Zero());
+  out.reflection_object.assign(width, -1);
+  for (const FanSampleRef& s : fan) {
+    if (!s.valid || !reflective_[s.hit.object]) continue;
+    const Eigen::Vector3d d = (s.hit.point - emitter).normalized();
+    Eigen::Vector3d n = s.hit.normal;
+    if (n.dot(d) > 0) n = -n;
+    const Eigen::Vector3d r = d - 2.0 * d.dot(n) * n;  // mirror direction
+    const auto q = scene_.Intersect(s.hit.point, r, options_.occlusion_epsilon_mm,
+                                    options_.max_range_mm);
+    if (!q || q->object == s.hit.object) continue;
+    Eigen::Vector3d qn = q->normal;
+    if (qn.dot(r) > 0) qn = -qn;
+    const Eigen::Vector3d to_camera = camera_center - q->point;
+    const double camera_distance = to_camera.norm();
+    const Eigen::Vector3d view = to_camera / camera_distance;
+    if (qn.dot(view) <= cos_view_min) continue;
+    const auto pixel = camera.Project(sensor_from_scene * q->point);
+    if (!pixel || !camera.InImage(*pixel)) continue;
+    const int c = static_cast<int>(std::lround(pixel->x()));
+    if (c < 0 || c >= width) continue;
+    const double range = (s.hit.point - emitter).norm() + q->t_mm;
+    const double intensity =
+        std::min(1.0, options_.reflection_intensity * options_.intensity_gain *
+                          scene_.AlbedoAt(q->object, q->point) * (-qn.dot(r)) *
+                          options_.reference_range_mm / range);
+    if (intensity < options_.min_intensity || intensity <= out.reflection_intensity[c]) continue;
+    if (scene_.Occluded(q->point, view, options_.occlusion_epsilon_mm,
+                        camera_distance - options_.occlusion_epsilon_mm)) {
+      continue;
+    }
+    out.reflection_row_px[c] = pixel->y();
+    out.reflection_intensity[c] = intensity;
+    out.reflection_point_in_sensor[c] = sensor_from_scene * q->point;
+    out.reflection_object[c] = q->object;
+  }
 }
 
 triangulation::Profile LaserRenderer::ApplyNoise(const ExposureTruth& truth,
@@ -251,6 +312,26 @@ triangulation::Profile LaserRenderer::ApplyNoise(const ExposureTruth& truth,
     p.row_px[c] = static_cast<float>(row);
     p.intensity[c] = static_cast<float>(intensity);
     p.width_px[c] = static_cast<float>(truth.width_px[c]);
+  }
+  if (options_.reflection_probability > 0 && !truth.reflection_row_px.empty()) {
+    // Ghosts draw from a stream of their own: the true peaks' noise stays as without them.
+    Rng ghost_rng(StreamSeed(seed, 0x6E05u));
+    for (std::uint32_t c = 0; c < columns; ++c) {
+      if (std::isnan(truth.reflection_row_px[c])) continue;
+      const double u = ghost_rng.Uniform();
+      const double row_noise = ghost_rng.Normal();
+      const double intensity_noise = ghost_rng.Normal();
+      if (u >= options_.reflection_probability) continue;
+      const double intensity = std::min(
+          1.0, truth.reflection_intensity[c] * (1.0 + options_.intensity_sigma * intensity_noise));
+      const double row = truth.reflection_row_px[c] + options_.row_sigma_px * row_noise;
+      // The detector reports the brightest peak of the column.
+      if (intensity < options_.min_intensity || intensity <= p.intensity[c]) continue;
+      if (row < 0 || row > rows_max) continue;
+      p.row_px[c] = static_cast<float>(row);
+      p.intensity[c] = static_cast<float>(intensity);
+      p.width_px[c] = static_cast<float>(options_.min_width_px);
+    }
   }
   return p;
 }

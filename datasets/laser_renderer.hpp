@@ -17,6 +17,20 @@
 // a plausibility model: sqrt(min_width^2 + (f * sheet_thickness * cos(view) /
 // (cos(incidence) * depth))^2) px.
 //
+// Reflections (optional, off by default: reflection_probability = 0): a fan ray that meets a
+// glossy surface (the objects named in reflective_objects, e.g. floor and pallet) also bounces
+// specularly (mirror direction about the exact surface normal); where the bounced ray meets
+// another surface the camera sees, that point lights a second, weaker peak of intensity
+// reflection_intensity * (that surface's own diffuse intensity at that range). It is computed
+// at the fan samples (not solved per column): ExposureTruth.reflection_* holds, per column, the
+// brightest such ghost whose projection falls in that column (row at the sample's exact
+// projection; its column is within 0.5 px). ApplyNoise keeps each ghost with
+// reflection_probability (own random stream, so the primary peaks' noise is unchanged) and the
+// on-chip detector reports the brighter of the two peaks: a ghost replaces a dimmer true peak
+// or fills a column without one. A ghost off the laser plane triangulates to a wrong point (an
+// outlier); with the laser plane vertical over a horizontal deck the mirrored fan stays in the
+// plane, so the ghost is a real surface point the direct laser does not light.
+//
 // Units mm, rad, px; poses scene_from_sensor (the sensor frame is the camera frame).
 
 #include <Eigen/Core>
@@ -47,6 +61,12 @@ struct LaserRenderOptions {
   double intensity_sigma = 0.05;      ///< Relative Gaussian intensity noise (speckle), >= 0.
   double dropout_probability = 0.0;   ///< Probability that a valid peak is lost, [0, 1).
   double occlusion_epsilon_mm = 0.05; ///< Occlusion rays start/stop this far from the ends.
+  /// Probability that a specular ghost peak is present (per ghost column), [0, 1]; 0 = off.
+  double reflection_probability = 0.0;
+  /// Ghost intensity relative to the lit surface's diffuse intensity, (0, 1].
+  double reflection_intensity = 0.3;
+  /// Objects with a glossy surface that mirror part of the laser (scene object names).
+  std::vector<std::string> reflective_objects = {"floor", "pallet"};
 
   /// Throws OptionError naming `what` and the field.
   void Check(const std::string& what = "render") const;
@@ -59,9 +79,17 @@ struct ExposureTruth {
   std::vector<double> width_px;                  ///< Peak width, px (0 when none).
   std::vector<Eigen::Vector3d> point_in_sensor;  ///< Lit point, mm (zero when none).
   std::vector<std::int32_t> object;              ///< Scene object index, -1 when none.
+  // Specular ghost peaks (empty unless options.reflection_probability > 0): per column the
+  // brightest ghost, NaN / 0 / zero / -1 when none.
+  std::vector<double> reflection_row_px;                    ///< Ghost row.
+  std::vector<double> reflection_intensity;                 ///< Ghost intensity, 0..1.
+  std::vector<Eigen::Vector3d> reflection_point_in_sensor;  ///< Where the bounce lands, mm.
+  std::vector<std::int32_t> reflection_object;              ///< Object the bounce lands on.
 
   /// Number of columns with a peak.
   std::size_t ValidCount() const;
+  /// Number of columns with a ghost peak.
+  std::size_t ReflectionCount() const;
 };
 
 /// Renders exposures of one sensor in one scene. Thread-safe (const methods).
@@ -79,10 +107,24 @@ class LaserRenderer {
   const LaserRenderOptions& options() const { return options_; }
   const Scene& scene() const { return scene_; }
 
+  /// One fan sample of an exposure: the ray's hit and its projection (internal).
+  struct FanSampleRef {
+    bool valid = false;  ///< Hit and projected.
+    double alpha = 0;    ///< Fan angle, rad.
+    RayHit hit;          ///< First hit.
+    Eigen::Vector2d pixel = Eigen::Vector2d::Zero();  ///< Projection, px.
+  };
+
  private:
+  // Specular ghosts of the fan samples on reflective objects (see the file comment).
+  void AddReflections(const std::vector<FanSampleRef>& fan, const Eigen::Vector3d& emitter,
+                      const Eigen::Vector3d& camera_center,
+                      const Eigen::Isometry3d& sensor_from_scene, ExposureTruth& out) const;
+
   const Scene& scene_;
   SensorModel sensor_;
   LaserRenderOptions options_;
+  std::vector<bool> reflective_;  // per scene object
 };
 
 /// Exposure timing of a sweep.

@@ -170,7 +170,36 @@ void CheckAlbedo(double v, const std::string& field) {
   }
 }
 
+void CheckRange(double v, double lo, double hi, const std::string& field) {
+  if (!(v >= lo && v <= hi)) {
+    throw OptionError(field + " must be in [" + Num(lo) + ", " + Num(hi) + "] (got " + Num(v) +
+                      ")");
+  }
+}
+
 }  // namespace
+
+void TouchOptions::Check(const std::string& what) const {
+  CheckRange(sigma_mm, 0.0, 10.0, what + ".sigma_mm");
+  CheckRange(tool_length_mm, 0.0, 1000.0, what + ".tool_length_mm");
+}
+
+void PoseSweepOptions::Check(const std::string& what) const {
+  if (poses < 1 || poses > 10000) {
+    throw OptionError(what + ".poses must be in [1, 10000] (got " + std::to_string(poses) + ")");
+  }
+  CheckRange(min_tilt_deg, 0.0, 60.0, what + ".min_tilt_deg");
+  CheckRange(max_tilt_deg, min_tilt_deg, 60.0, what + ".max_tilt_deg");
+  CheckRange(max_roll_deg, 0.0, 180.0, what + ".max_roll_deg");
+  if (!(sweep_length_mm > 0 && sweep_length_mm <= 1000)) {
+    throw OptionError(what + ".sweep_length_mm must be in (0, 1000] (got " +
+                      Num(sweep_length_mm) + ")");
+  }
+  if (profiles < 2 || profiles > 100000) {
+    throw OptionError(what + ".profiles must be in [2, 100000] (got " + std::to_string(profiles) +
+                      ")");
+  }
+}
 
 void SimConfig::Check() const {
   sensor.Check("SimConfig.sensor");
@@ -260,6 +289,14 @@ void SimConfig::Check() const {
   if (!(arc_angle_deg > 0 && arc_angle_deg <= 360)) {
     throw OptionError("SimConfig.trajectory.arc_angle_deg must be in (0, 360] (got " +
                       std::to_string(arc_angle_deg) + ")");
+  }
+  touches.Check("SimConfig.touches");
+  eye_in_hand.Check("SimConfig.eye_in_hand");
+  joint_poses.Check("SimConfig.joint_poses");
+  if ((capture_touches || capture_eye_in_hand || capture_joint_poses) &&
+      spheres.stand_heights_mm.empty()) {
+    throw OptionError("SimConfig.spheres.stand_heights_mm must list at least one sphere for "
+                      "captures.touches/eye_in_hand/joint_poses");
   }
   if (arc_waypoints < 2 || arc_waypoints > 1000) {
     throw OptionError("SimConfig.trajectory.waypoints must be in [2, 1000] (got " +
@@ -365,6 +402,8 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     r.Read("intensity_sigma", &c.render.intensity_sigma);
     r.Read("dropout_probability", &c.render.dropout_probability);
     r.Read("occlusion_epsilon_mm", &c.render.occlusion_epsilon_mm);
+    r.Read("reflection_probability", &c.render.reflection_probability);
+    r.Read("reflection_intensity", &c.render.reflection_intensity);
     r.Done();
   }
   {
@@ -482,6 +521,23 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     i.Done();
   }
   {
+    Fields t = top.Sub("touches");
+    t.Read("sigma_mm", &c.touches.sigma_mm);
+    t.Read("tool_length_mm", &c.touches.tool_length_mm);
+    t.Done();
+  }
+  for (auto [key, options] : {std::pair{"eye_in_hand", &c.eye_in_hand},
+                              std::pair{"joint_poses", &c.joint_poses}}) {
+    Fields p = top.Sub(key);
+    p.Read("poses", &options->poses);
+    p.Read("min_tilt_deg", &options->min_tilt_deg);
+    p.Read("max_tilt_deg", &options->max_tilt_deg);
+    p.Read("max_roll_deg", &options->max_roll_deg);
+    p.Read("sweep_length_mm", &options->sweep_length_mm);
+    p.Read("profiles", &options->profiles);
+    p.Done();
+  }
+  {
     Fields k = top.Sub("captures");
     k.Read("planes", &c.capture_planes);
     k.Read("spheres", &c.capture_spheres);
@@ -490,6 +546,9 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     k.Read("chessboard_images", &c.capture_chessboard_images);
     k.Read("laser_line_images", &c.capture_laser_line_images);
     k.Read("meshes", &c.write_meshes);
+    k.Read("touches", &c.capture_touches);
+    k.Read("eye_in_hand", &c.capture_eye_in_hand);
+    k.Read("joint_poses", &c.capture_joint_poses);
     k.Done();
   }
   top.Done();
@@ -522,7 +581,9 @@ std::string SimConfigToYaml(const SimConfig& c) {
     << Num(r.sheet_thickness_mm) << ", min_width_px: " << Num(r.min_width_px)
     << ", row_sigma_px: " << Num(r.row_sigma_px) << ", intensity_sigma: "
     << Num(r.intensity_sigma) << ", dropout_probability: " << Num(r.dropout_probability)
-    << ", occlusion_epsilon_mm: " << Num(r.occlusion_epsilon_mm) << "}\n";
+    << ", occlusion_epsilon_mm: " << Num(r.occlusion_epsilon_mm)
+    << ", reflection_probability: " << Num(r.reflection_probability)
+    << ", reflection_intensity: " << Num(r.reflection_intensity) << "}\n";
   o << "timing: {profiles: " << c.timing.profiles << ", rate_hz: " << Num(c.timing.rate_hz)
     << ", jitter_s: " << Num(c.timing.jitter_s) << ", timestamp_noise_s: "
     << Num(c.timing.timestamp_noise_s) << ", start_ns: " << c.timing.start_ns << "}\n";
@@ -571,11 +632,22 @@ std::string SimConfigToYaml(const SimConfig& c) {
     << Num(c.images.blur_sigma_px) << ", noise_sigma: " << Num(c.images.noise_sigma)
     << ", vignetting: " << b(c.images.vignetting) << ", edge_samples: " << c.images.edge_samples
     << "}\n";
+  o << "touches: {sigma_mm: " << Num(c.touches.sigma_mm)
+    << ", tool_length_mm: " << Num(c.touches.tool_length_mm) << "}\n";
+  for (auto [key, p] : {std::pair{"eye_in_hand", &c.eye_in_hand},
+                        std::pair{"joint_poses", &c.joint_poses}}) {
+    o << key << ": {poses: " << p->poses << ", min_tilt_deg: " << Num(p->min_tilt_deg)
+      << ", max_tilt_deg: " << Num(p->max_tilt_deg) << ", max_roll_deg: " << Num(p->max_roll_deg)
+      << ", sweep_length_mm: " << Num(p->sweep_length_mm) << ", profiles: " << p->profiles
+      << "}\n";
+  }
   o << "captures: {planes: " << b(c.capture_planes) << ", spheres: " << b(c.capture_spheres)
     << ", seats: " << b(c.capture_seats) << ", trajectory: " << b(c.capture_trajectory)
     << ", chessboard_images: " << b(c.capture_chessboard_images)
     << ", laser_line_images: " << b(c.capture_laser_line_images)
-    << ", meshes: " << b(c.write_meshes) << "}\n";
+    << ", meshes: " << b(c.write_meshes) << ", touches: " << b(c.capture_touches)
+    << ", eye_in_hand: " << b(c.capture_eye_in_hand)
+    << ", joint_poses: " << b(c.capture_joint_poses) << "}\n";
   return o.str();
 }
 

@@ -14,7 +14,8 @@
 //            mount_translation_mm: [x, y, z], mount_rotation_deg: [rx, ry, rz]}
 //   render: {fan_rays, max_range_mm, intensity_gain, reference_range_mm, min_intensity,
 //            max_view_angle_deg, sheet_thickness_mm, min_width_px, row_sigma_px,
-//            intensity_sigma, dropout_probability, occlusion_epsilon_mm}
+//            intensity_sigma, dropout_probability, occlusion_epsilon_mm,
+//            reflection_probability, reflection_intensity}
 //   timing: {profiles, rate_hz, jitter_s, timestamp_noise_s, start_ns}
 //   cell: {vision_base_mm: [x, y, z], vision_base_yaw_deg, handling_base_mm: [x, y, z],
 //          handling_base_yaw_deg, floor_size_mm,
@@ -29,8 +30,11 @@
 //   chessboard: {images, squares: [x, y], square_mm, border_mm}
 //   images: {exposure, ambient, background_albedo, blur_sigma_px, noise_sigma, vignetting,
 //            edge_samples}
+//   touches: {sigma_mm, tool_length_mm}
+//   eye_in_hand: {poses, min_tilt_deg, max_tilt_deg, max_roll_deg, sweep_length_mm, profiles}
+//   joint_poses: {poses, min_tilt_deg, max_tilt_deg, max_roll_deg, sweep_length_mm, profiles}
 //   captures: {planes, spheres, seats, trajectory, chessboard_images, laser_line_images,
-//              meshes}   (booleans)
+//              meshes, touches, eye_in_hand, joint_poses}   (booleans)
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -48,6 +52,33 @@ namespace lasercell::datasets {
 
 /// Current simulator configuration format version.
 inline constexpr int kSimConfigVersion = 1;
+
+/// Pointing-tool touches of the sphere tops by the handling robot (calibration step 3).
+struct TouchOptions {
+  double sigma_mm = 0.05;         ///< Gaussian error of a touched point, per axis, mm (>= 0).
+  double tool_length_mm = 200.0;  ///< Pointing tool: tip on the handling flange's z axis, mm.
+
+  /// Throws OptionError naming `what` and the field.
+  void Check(const std::string& what = "touches") const;
+};
+
+/// A set of short sphere sweeps by the vision robot from distinct poses (eye-in-hand, joint
+/// offsets). Pose i aims at sphere i % count: the sensor's optical axis is tilted from the
+/// vertical by U(min_tilt, max_tilt) towards an azimuth (stratified over 360 deg) and rolled
+/// about the vertical by U(-max_roll, max_roll); it then moves sweep_length_mm along the laser
+/// plane normal (joint-space motion between IK waypoints of the NOMINAL robot) over `profiles`
+/// exposures at timing.rate_hz.
+struct PoseSweepOptions {
+  int poses = 12;                 ///< Number of robot poses (sweeps).
+  double min_tilt_deg = 5.0;      ///< Smallest tilt of the optical axis from the vertical, deg.
+  double max_tilt_deg = 25.0;     ///< Largest tilt, deg.
+  double max_roll_deg = 60.0;     ///< Roll about the vertical, +- deg.
+  double sweep_length_mm = 80.0;  ///< Travel of each sweep, mm.
+  int profiles = 40;              ///< Exposures per sweep.
+
+  /// Throws OptionError naming `what` and the field.
+  void Check(const std::string& what) const;
+};
 
 /// Everything the simulator needs; defaults give the standard cell.
 struct SimConfig {
@@ -102,6 +133,13 @@ struct SimConfig {
   int chessboard_images = 20;     ///< Chessboard views in a cell capture set.
   ImageRenderOptions images;      ///< Photometry, blur, noise of the images.
 
+  // Robot-side calibration captures (issue 7).
+  TouchOptions touches;  ///< Handling-robot pointing-tool touches of the sphere tops.
+  /// Multi-pose sphere sweeps for eye-in-hand calibration (rotations about several axes).
+  PoseSweepOptions eye_in_hand;
+  /// >= 50 robot poses, each with a short sphere sweep, for joint-offset identification.
+  PoseSweepOptions joint_poses{50, 5.0, 35.0, 180.0, 60.0, 30};
+
   // What a cell capture set contains.
   bool capture_planes = true;
   bool capture_spheres = true;
@@ -109,7 +147,10 @@ struct SimConfig {
   bool capture_trajectory = true;
   bool capture_chessboard_images = true;  ///< images/chessboard_NNN.png + truth/chessboard.yaml.
   bool capture_laser_line_images = true;  ///< images/laser_line_*.png + truth/laser_lines.yaml.
-  bool write_meshes = true;
+  bool write_meshes = true;                ///< models/*.ply and models/*.stl.
+  bool capture_touches = true;      ///< records/touches.yaml + truth/touches.yaml.
+  bool capture_eye_in_hand = true;  ///< profiles/eye_in_hand_NN.lcp.
+  bool capture_joint_poses = true;  ///< profiles/joint_pose_NNN.lcp.
 
   /// Throws OptionError naming the field ("SimConfig.<path>") when a value is out of range or a
   /// target lies outside the sensor's measuring range at the configured sweep height.

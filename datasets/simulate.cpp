@@ -14,10 +14,12 @@
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/se3.hpp"
+#include "datasets/calibration_captures.hpp"
 #include "datasets/camera_images.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/rng.hpp"
 #include "datasets/robots.hpp"
+#include "datasets/stl.hpp"
 #include "triangulation/profile_io.hpp"
 
 namespace lasercell::datasets {
@@ -34,7 +36,12 @@ constexpr std::uint64_t kSphereStream = 0x2000;
 constexpr std::uint64_t kTrajectoryStream = 0x3000;
 constexpr std::uint64_t kChessboardStream = 0x4000;
 constexpr std::uint64_t kLaserImageStream = 0x5000;
+constexpr std::uint64_t kTouchStream = 0x6000;
+constexpr std::uint64_t kEyeInHandPlanStream = 0x7000;
+constexpr std::uint64_t kJointPosePlanStream = 0x8000;
 constexpr std::uint64_t kSeatStream = 0x10000;
+constexpr std::uint64_t kEyeInHandStream = 0x1000000;   // + pose index
+constexpr std::uint64_t kJointPoseStream = 0x2000000;   // + pose index
 
 const char* const kTool = "lasercell simulator " LASERCELL_VERSION;
 
@@ -83,7 +90,7 @@ class Output {
  public:
   explicit Output(const std::string& dir) : dir_(dir) {
     std::error_code ec;
-    for (const char* sub : {"", "profiles", "truth", "models", "images"}) {
+    for (const char* sub : {"", "profiles", "truth", "models", "images", "records"}) {
       std::filesystem::create_directories(std::filesystem::path(dir) / sub, ec);
       if (ec) throw FileError(dir, "cannot create the output folder: " + ec.message());
     }
@@ -92,9 +99,12 @@ class Output {
     io::WriteFileAtomically(Path(relative), bytes);
     files_.push_back(relative);
   }
-  void WriteMesh(const std::string& relative, const TriangleMesh& mesh) {
-    io::WritePlyMesh(Path(relative), mesh);
-    files_.push_back(relative);
+  // models/<name>.ply and models/<name>.stl.
+  void WriteMesh(const std::string& name, const TriangleMesh& mesh) {
+    io::WritePlyMesh(Path("models/" + name + ".ply"), mesh);
+    files_.push_back("models/" + name + ".ply");
+    WriteStlMesh(Path("models/" + name + ".stl"), mesh);
+    files_.push_back("models/" + name + ".stl");
   }
   std::string Path(const std::string& relative) const {
     return (std::filesystem::path(dir_) / relative).string();
@@ -389,6 +399,42 @@ void RunLaserLineImages(const SimConfig& config, const CellTruth& truth, const L
   out.Write("truth/laser_lines.yaml", o.str());
 }
 
+// Pointing-tool touches: records/touches.yaml (what the cell records) and truth/touches.yaml.
+void RunTouches(const SimConfig& config, const CellTruth& truth, Output& out) {
+  const std::vector<Touch> touches =
+      SimulateTouches(config, truth, StreamSeed(config.seed, kTouchStream));
+  out.Write("records/touches.yaml", TouchesRecordYaml(config, touches));
+  out.Write("truth/touches.yaml", TouchesTruthYaml(config, truth, touches));
+}
+
+// One set of pose sweeps (eye_in_hand or joint_poses): profiles, captures.yaml entries, and
+// the set's list in records/sphere_sweeps.yaml.
+void RunPoseSweeps(const SimConfig& config, const CellTruth& truth,
+                   const PoseSweepOptions& options, const std::vector<PoseSweep>& plans,
+                   const std::string& set, const char* name_format, std::uint64_t render_stream,
+                   Output& out, SimulationReport& report, std::string& captures_yaml,
+                   std::string& records_yaml, const ProgressCallback& progress, int threads) {
+  const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+  const LaserRenderer renderer(scene, truth.sensor, config.render);
+  const SweepTiming timing = PoseSweepTiming(config, options);
+  records_yaml += set + ":\n";
+  for (std::size_t i = 0; i < plans.size(); ++i) {
+    char name[48];
+    std::snprintf(name, sizeof(name), name_format, static_cast<int>(i));
+    const SweepResult result = RenderPoseSweep(renderer, truth, plans[i], timing,
+                                               StreamSeed(config.seed, render_stream + i), threads);
+    const CaptureReport r = WriteSweep(
+        {name, set + "_sphere", "SimConfig." + set + ".* and SimConfig.spheres.*"}, result,
+        config, out);
+    report.captures.push_back(r);
+    records_yaml += "  - {profiles_file: " + r.profiles_file +
+                    ", aimed_at_sphere: " + std::to_string(plans[i].sphere) + "}\n";
+    captures_yaml += CaptureHeader(r) + PoseSweepTruthYaml(config, truth, plans[i]) +
+                     ExposureTimesTruth(result, config);
+    ReportProgress(progress, set, static_cast<double>(i + 1) / plans.size());
+  }
+}
+
 void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
                       const std::vector<SeatCapture>& seats, Output& out) {
   FrameGraph graph = truth.Graph();
@@ -403,9 +449,9 @@ void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
   out.Write("truth/robots.yaml", RobotsTruth(truth));
   out.Write("truth/sim_config.yaml", SimConfigToYaml(config));
   if (config.write_meshes) {
-    out.WriteMesh("models/seat.ply", truth.seat.part.mesh);
-    out.WriteMesh("models/pallet.ply", MakePallet().mesh);
-    out.WriteMesh("models/sphere_targets.ply", SphereTargetsMesh(truth, config));
+    out.WriteMesh("seat", truth.seat.part.mesh);
+    out.WriteMesh("pallet", MakePallet().mesh);
+    out.WriteMesh("sphere_targets", SphereTargetsMesh(truth, config));
   }
 }
 
@@ -579,6 +625,18 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
   // Solve the robot trajectory first: an unreachable arc is a config error worth failing early.
   JointTrajectory trajectory;
   if (config.capture_trajectory) trajectory = MakeArcTrajectory(config, truth);
+  // Likewise the pose sweeps' robot poses (IK and visibility).
+  std::vector<PoseSweep> eye_in_hand, joint_poses;
+  if (config.capture_eye_in_hand) {
+    eye_in_hand = PlanPoseSweeps(config, truth, config.eye_in_hand,
+                                 StreamSeed(config.seed, kEyeInHandPlanStream),
+                                 "SimConfig.eye_in_hand");
+  }
+  if (config.capture_joint_poses) {
+    joint_poses = PlanPoseSweeps(config, truth, config.joint_poses,
+                                 StreamSeed(config.seed, kJointPosePlanStream),
+                                 "SimConfig.joint_poses");
+  }
 
   if (config.capture_planes) {
     for (std::size_t i = 0; i < config.plane_heights_mm.size(); ++i) {
@@ -669,6 +727,22 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
                      SeatTruth({seat.name, seat.placement}, truth, hb_from_cell);
     ReportProgress(progress, "robot trajectory", 1.0);
   }
+  if (config.capture_touches) RunTouches(config, truth, out);
+  if (config.capture_eye_in_hand || config.capture_joint_poses) {
+    std::string records = "format: lasercell.sphere_sweeps\nversion: 1\n"
+                          "# Pose-sweep sets of the vision robot (joints in each profile).\n";
+    if (config.capture_eye_in_hand) {
+      RunPoseSweeps(config, truth, config.eye_in_hand, eye_in_hand, "eye_in_hand",
+                    "eye_in_hand_%02d", kEyeInHandStream, out, report, captures_yaml, records,
+                    progress, threads);
+    }
+    if (config.capture_joint_poses) {
+      RunPoseSweeps(config, truth, config.joint_poses, joint_poses, "joint_poses",
+                    "joint_pose_%03d", kJointPoseStream, out, report, captures_yaml, records,
+                    progress, threads);
+    }
+    out.Write("records/sphere_sweeps.yaml", records);
+  }
   if (config.capture_chessboard_images) {
     RunChessboardImages(config, truth, out, threads);
     ReportProgress(progress, "chessboard images", 1.0);
@@ -699,6 +773,7 @@ SimulationReport SimulateSeats(const SimConfig& config_in, int placements,
   config.capture_seats = true;
   config.capture_planes = config.capture_spheres = config.capture_trajectory = false;
   config.capture_chessboard_images = config.capture_laser_line_images = false;
+  config.capture_touches = config.capture_eye_in_hand = config.capture_joint_poses = false;
   return SimulateCell(config, out_dir, progress, threads);
 }
 

@@ -22,7 +22,15 @@
 //   images/chessboard_NNN.png     chessboard views through the true lens (truth/chessboard.yaml:
 //                                 camera_from_board and true inner-corner pixels per image)
 //   images/laser_line_*.png       raw laser-line images (truth/laser_lines.yaml: exact rows)
-//   models/seat.ply, models/pallet.ply, models/sphere_targets.ply   meshes (PLY, mm)
+//   models/seat.ply, models/pallet.ply, models/sphere_targets.ply   meshes (PLY, mm), and the
+//                                 same as .stl (binary STL, datasets/stl.hpp)
+//   profiles/eye_in_hand_NN.lcp, profiles/joint_pose_NNN.lcp   short sphere sweeps of the vision
+//                                 robot from many poses, commanded joints in every profile
+//                                 (datasets/calibration_captures.hpp)
+//   records/touches.yaml          handling-robot pointing-tool touches of the sphere tops as the
+//                                 cell records them (noisy points + joints; no truth)
+//   records/sphere_sweeps.yaml    the eye_in_hand and joint_poses sweep sets (no truth)
+//   truth/touches.yaml            true sphere centres/tops of the touches
 
 #include <Eigen/Geometry>
 #include <cstddef>
@@ -90,7 +98,8 @@ JointTrajectory MakeArcTrajectory(const SimConfig& config, const CellTruth& trut
 /// What was written for one capture.
 struct CaptureReport {
   std::string name;           ///< e.g. "seat_002".
-  std::string kind;           ///< white_plane, spheres, seat, seat_trajectory.
+  std::string kind;           ///< white_plane, spheres, seat, seat_trajectory,
+                              ///< eye_in_hand_sphere, joint_poses_sphere.
   std::string profiles_file;  ///< Relative to the output folder.
   std::size_t profiles = 0;
   std::size_t valid_peaks = 0;
@@ -106,8 +115,9 @@ struct SimulationReport {
 };
 
 /// Writes a complete capture set to `out_dir` (created if missing): white plane at every
-/// planes.heights_mm, the sphere targets, seats.count part scenes, one robot-trajectory sweep
-/// (all as enabled in config.captures*), truth and meshes. Throws OptionError for a bad config
+/// planes.heights_mm, the sphere targets, seats.count part scenes, one robot-trajectory sweep,
+/// the sphere touches, the eye-in-hand and joint-offset pose sweeps (all as enabled in
+/// config.captures*), truth and meshes. Throws OptionError for a bad config
 /// (naming the field), including a capture in which the sensor sees nothing; FileError when a
 /// file cannot be written. `threads` <= 0 uses all cores; output is identical for any value.
 SimulationReport SimulateCell(const SimConfig& config, const std::string& out_dir,

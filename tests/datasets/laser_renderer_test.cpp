@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 
 #include "core/error.hpp"
@@ -240,6 +241,79 @@ TEST(LaserRenderer, SweepsAreIdenticalForAnyThreadCount) {
                 6 * timing.jitter_s * 1e9 + 1);
     EXPECT_EQ(one.profiles.profiles[i].sequence, static_cast<std::uint64_t>(i));
   }
+}
+
+}  // namespace
+}  // namespace lasercell::datasets
+
+namespace lasercell::datasets {
+namespace {
+
+TEST(LaserRenderer, SpecularReflectionsGiveWeakerGhostPeaksOnlyWhenEnabled) {
+  Fixture f;
+  SphereTargets spheres;
+  const Scene scene = MakeSphereScene(f.layout, spheres);
+  const LaserRenderer off(scene, f.sensor, f.render);  // default: reflections off
+  EXPECT_EQ(f.render.reflection_probability, 0.0);
+  LaserRenderOptions with = f.render;
+  with.reflection_probability = 1.0;
+  with.reflection_intensity = 0.3;
+  const LaserRenderer on(scene, f.sensor, with);
+  const Eigen::Vector4d laser_plane = f.sensor.laser.Coefficients();
+  std::size_t ghosts = 0, ghosts_reported = 0, off_plane = 0;
+  double worst_projection_px = 0;
+  // Sweep the line across the stands: rays hitting the deck next to a stand bounce onto it.
+  for (const Eigen::Vector3d& center : spheres.CentersInCell()) {
+    for (double dx = -60; dx <= 60; dx += 4) {
+      const Eigen::Vector3d crossing(center.x() + dx, center.y(), 244.0);
+      const Eigen::Isometry3d pose = LookDownPose(f.sensor, crossing, f.sensor_options.standoff_mm);
+      const ExposureTruth a = off.RenderExact(pose);
+      const ExposureTruth b = on.RenderExact(pose);
+      EXPECT_TRUE(a.reflection_row_px.empty());
+      // The true peaks are the same with or without ghosts.
+      for (int c = 0; c < 1024; ++c) {
+        EXPECT_TRUE(a.row_px[c] == b.row_px[c] || (std::isnan(a.row_px[c]) && std::isnan(b.row_px[c])));
+      }
+      for (int c = 0; c < 1024; ++c) {
+        if (std::isnan(b.reflection_row_px[c])) continue;
+        ++ghosts;
+        const Eigen::Vector3d& q = b.reflection_point_in_sensor[c];
+        // A ghost lies on the surface the camera sees first along its pixel's ray.
+        const Eigen::Vector3d q_cell = pose * q;
+        const auto seen = scene.Intersect(pose.translation(), q_cell - pose.translation());
+        ASSERT_TRUE(seen.has_value());
+        EXPECT_LT((seen->point - q_cell).norm(), 1e-6) << c;
+        EXPECT_EQ(seen->object, b.reflection_object[c]);
+        if (std::abs(laser_plane.head<3>().dot(q) + laser_plane[3]) > 0.5) ++off_plane;
+        const Eigen::Vector2d px = *f.sensor.camera.Project(q);
+        worst_projection_px = std::max(
+            {worst_projection_px, std::abs(px.y() - b.reflection_row_px[c]), std::abs(px.x() - c) - 0.5});
+        // Weaker than a direct hit of that surface: at most reflection_intensity * gain * albedo.
+        const double albedo = scene.AlbedoAt(b.reflection_object[c], pose * q);
+        EXPECT_LE(b.reflection_intensity[c], with.reflection_intensity * with.intensity_gain * albedo);
+      }
+      // The detector reports a ghost only where it outshines the true peak.
+      const triangulation::Profile p = on.ApplyNoise(b, 99);
+      const triangulation::Profile p_off = off.ApplyNoise(a, 99);
+      for (int c = 0; c < 1024; ++c) {
+        const bool same = p.row_px[c] == p_off.row_px[c] ||
+                          (std::isnan(p.row_px[c]) && std::isnan(p_off.row_px[c]));
+        if (same) continue;
+        ++ghosts_reported;
+        ASSERT_FALSE(std::isnan(b.reflection_row_px[c])) << c;
+        EXPECT_NEAR(p.row_px[c], b.reflection_row_px[c], 1.0) << c;
+        EXPECT_GT(p.intensity[c], std::isnan(p_off.row_px[c]) ? 0.0f : p_off.intensity[c]);
+      }
+    }
+  }
+  EXPECT_GT(ghosts, 20u);
+  EXPECT_GT(ghosts_reported, 0u);
+  EXPECT_LE(worst_projection_px, 1e-6);
+  std::printf("reflections: %zu ghost columns (%zu off the laser plane), %zu reported as the "
+              "column's peak\n", ghosts, off_plane, ghosts_reported);
+  // Probability 0 means off, and the option is checked.
+  with.reflection_probability = 1.5;
+  EXPECT_THROW(LaserRenderer(scene, f.sensor, with), OptionError);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -14,6 +15,7 @@
 #include "core/io/point_cloud_io.hpp"
 #include "datasets/robots.hpp"
 #include "datasets/sim_config.hpp"
+#include "datasets/stl.hpp"
 #include "triangulation/profile_io.hpp"
 
 namespace lasercell::datasets {
@@ -55,6 +57,10 @@ SimConfig SmallConfig() {
   c.plane_heights_mm = {150, 300};
   c.seat_count = 2;
   c.chessboard_images = 2;
+  c.eye_in_hand.poses = 3;
+  c.eye_in_hand.profiles = 8;
+  c.joint_poses.poses = 4;
+  c.joint_poses.profiles = 8;
   return c;
 }
 
@@ -64,10 +70,17 @@ TEST(SimConfig, DefaultsAreValidAndYamlRoundTrips) {
   c.joint_offsets_deg = std::vector<double>{0.1, -0.2, 0.05, 0, 0.3, -0.01};
   c.render.row_sigma_px = 0.1234567890123;
   c.spheres.positions_xy_mm[2] = {111.5, -3.25};
+  c.touches.sigma_mm = 0.03;
+  c.joint_poses.poses = 60;
+  c.eye_in_hand.max_roll_deg = 45.5;
+  c.capture_joint_poses = false;
   const std::string text = SimConfigToYaml(c);
   const SimConfig back = SimConfigFromYaml(text, "roundtrip.yaml");
   EXPECT_EQ(SimConfigToYaml(back), text);
   EXPECT_EQ(back.render.row_sigma_px, c.render.row_sigma_px);
+  EXPECT_EQ(back.joint_poses.poses, 60);
+  EXPECT_EQ(back.eye_in_hand.max_roll_deg, 45.5);
+  EXPECT_FALSE(back.capture_joint_poses);
   ASSERT_TRUE(back.joint_offsets_deg.has_value());
   EXPECT_EQ(*back.joint_offsets_deg, *c.joint_offsets_deg);
   // An empty file is the default config.
@@ -113,6 +126,23 @@ TEST(SimConfig, ErrorsNameTheField) {
   EXPECT_NE(e.find("SimConfig.timing.profiles"), std::string::npos) << e;
   e = ConfigError("vision_robot: {joint_offsets_deg: [1, 2, 3]}\n");
   EXPECT_NE(e.find("SimConfig.vision_robot.joint_offsets_deg"), std::string::npos) << e;
+  // Robot-side calibration captures.
+  e = ConfigError("touches: {sigma_mm: -0.1}\n");
+  EXPECT_NE(e.find("SimConfig.touches.sigma_mm"), std::string::npos) << e;
+  e = ConfigError("touches: {sigma: 0.1}\n");
+  EXPECT_NE(e.find("unknown field 'touches.sigma'"), std::string::npos) << e;
+  e = ConfigError("eye_in_hand: {poses: 0}\n");
+  EXPECT_NE(e.find("SimConfig.eye_in_hand.poses"), std::string::npos) << e;
+  e = ConfigError("joint_poses: {min_tilt_deg: 30, max_tilt_deg: 10}\n");
+  EXPECT_NE(e.find("SimConfig.joint_poses.max_tilt_deg"), std::string::npos) << e;
+  e = ConfigError("joint_poses: {sweep_length_mm: -80}\n");
+  EXPECT_NE(e.find("SimConfig.joint_poses.sweep_length_mm"), std::string::npos) << e;
+  e = ConfigError("eye_in_hand: {profile: 8}\n");
+  EXPECT_NE(e.find("unknown field 'eye_in_hand.profile'"), std::string::npos) << e;
+  e = ConfigError("render: {reflection_probability: 2}\n");
+  EXPECT_NE(e.find("SimConfig.render.reflection_probability"), std::string::npos) << e;
+  e = ConfigError("captures: {joint_pose: true}\n");
+  EXPECT_NE(e.find("unknown field 'captures.joint_pose'"), std::string::npos) << e;
   // A sensor that sees nothing of the target.
   e = ConfigError("planes: {heights_mm: [150, 2000]}\n");
   EXPECT_NE(e.find("SimConfig.planes.heights_mm[1]"), std::string::npos) << e;
@@ -211,10 +241,17 @@ TEST(CellTruth, RobotTrajectoryIsReachableAndTheTrueRobotMissesIt) {
 
 TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   SimConfig config = SmallConfig();
+  config.render.reflection_probability = 0.5;  // ghosts draw random numbers too
   const std::string a = TempDir("a"), b = TempDir("b"), c = TempDir("c");
   const SimulationReport ra = SimulateCell(config, a, {}, 1);
   const SimulationReport rb = SimulateCell(config, b, {}, 2);
   ASSERT_EQ(ra.files, rb.files);
+  // The robot-side calibration captures are part of the comparison.
+  for (const char* f : {"records/touches.yaml", "records/sphere_sweeps.yaml", "truth/touches.yaml",
+                        "profiles/eye_in_hand_02.lcp", "profiles/joint_pose_003.lcp",
+                        "models/seat.stl"}) {
+    EXPECT_NE(std::find(ra.files.begin(), ra.files.end(), f), ra.files.end()) << f;
+  }
   for (const std::string& f : ra.files) {
     EXPECT_EQ(io::ReadFileBytes(a + "/" + f), io::ReadFileBytes(b + "/" + f)) << f;
   }
@@ -231,16 +268,18 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   std::vector<std::string> stages;
   const SimulationReport report =
       SimulateCell(config, dir, [&](std::string_view stage, double) { stages.emplace_back(stage); });
-  // 2 planes, spheres, 2 seats, 1 trajectory sweep.
-  ASSERT_EQ(report.captures.size(), 6u);
+  // 2 planes, spheres, 2 seats, 1 trajectory sweep, 3 eye-in-hand and 4 joint-pose sweeps.
+  ASSERT_EQ(report.captures.size(), 13u);
   EXPECT_FALSE(stages.empty());
   for (const CaptureReport& c : report.captures) {
     const triangulation::ProfileSet set = triangulation::ReadProfiles(dir + "/" + c.profiles_file);
-    EXPECT_EQ(set.profiles.size(), 12u) << c.name;
+    const bool pose_sweep = c.kind == "eye_in_hand_sphere" || c.kind == "joint_poses_sphere";
+    const std::size_t profiles = pose_sweep ? 8u : 12u;
+    EXPECT_EQ(set.profiles.size(), profiles) << c.name;
     EXPECT_EQ(set.header.columns, 1024u);
-    EXPECT_GT(c.valid_peaks, 12u * 100u) << c.name;
+    EXPECT_GT(c.valid_peaks, profiles * 100u) << c.name;
     EXPECT_NE(set.header.metadata.find("capture: " + c.name), std::string::npos);
-    if (c.kind == "seat_trajectory") {
+    if (c.kind == "seat_trajectory" || pose_sweep) {
       EXPECT_EQ(set.header.joint_count, 6u);
       EXPECT_EQ(set.header.robot, "vision_robot");
     } else {
@@ -273,7 +312,8 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   }
   EXPECT_NE(captures.find("hole_center_in_handling_base"), std::string::npos);
   // Images and their truth.
-  for (const char* f : {"images/chessboard_000.png", "images/chessboard_001.png",
+  for (const char* f : {"records/touches.yaml", "records/sphere_sweeps.yaml",
+                        "truth/touches.yaml", "images/chessboard_000.png", "images/chessboard_001.png",
                         "images/laser_line_plane.png", "images/laser_line_chessboard.png",
                         "truth/chessboard.yaml", "truth/laser_lines.yaml"}) {
     EXPECT_TRUE(fs::exists(dir + "/" + f)) << f;
@@ -282,6 +322,8 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   // The seat model is a readable PLY mesh with the seat's triangles.
   const TriangleMesh seat = io::ReadPlyMesh(dir + "/models/seat.ply");
   EXPECT_EQ(seat.faces.size(), truth.seat.part.mesh.faces.size());
+  // ... and the same mesh as binary STL.
+  EXPECT_EQ(ReadStlMesh(dir + "/models/seat.stl").faces.size(), truth.seat.part.mesh.faces.size());
   // The config written back reproduces the same config.
   EXPECT_EQ(SimConfigToYaml(LoadSimConfig(dir + "/truth/sim_config.yaml")), SimConfigToYaml(config));
   fs::remove_all(dir);
@@ -291,6 +333,7 @@ TEST(Simulate, ASensorThatSeesNothingIsAnErrorNotAnEmptySet) {
   SimConfig config = SmallConfig();
   config.sweep_center_xy_mm = {1900, 1900};  // sweeping over the floor's corner: plates missed
   config.capture_spheres = config.capture_seats = config.capture_trajectory = false;
+  config.capture_eye_in_hand = config.capture_joint_poses = false;
   config.albedo.floor = 0.0;  // and the floor is black
   const std::string dir = TempDir("nothing");
   const std::string e = OptionErrorMessage([&] { SimulateCell(config, dir); });
@@ -306,6 +349,8 @@ TEST(Simulate, SeatScenesMatchTheCellSetForTheSameSeed) {
   SimConfig only_seats = config;
   only_seats.capture_planes = only_seats.capture_spheres = only_seats.capture_trajectory = false;
   only_seats.capture_chessboard_images = only_seats.capture_laser_line_images = false;
+  only_seats.capture_touches = only_seats.capture_eye_in_hand = false;
+  only_seats.capture_joint_poses = false;
   SimulateCell(only_seats, cell, {}, 2);
   const SimulationReport r = SimulateSeats(config, 3, seats, {}, 2);
   ASSERT_EQ(r.captures.size(), 3u);
@@ -324,6 +369,7 @@ TEST(Simulate, NoiseFreeProfilesTriangulateOntoTheTruth) {
   config.render.row_sigma_px = 0;
   config.render.intensity_sigma = 0;
   config.capture_spheres = config.capture_seats = config.capture_trajectory = false;
+  config.capture_eye_in_hand = config.capture_joint_poses = false;
   config.timing.jitter_s = 1e-3;  // irregular exposures: poses must follow the timestamps
   const std::string dir = TempDir("chain");
   SimulateCell(config, dir, {}, 2);

@@ -1,0 +1,294 @@
+#include "datasets/calibration_captures.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "core/error.hpp"
+#include "core/frame_graph.hpp"
+#include "datasets/rng.hpp"
+#include "datasets/robots.hpp"
+
+namespace lasercell::datasets {
+
+namespace {
+
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+constexpr double kHalfPi = std::numbers::pi / 2;
+// Fewest noise-free columns on the aimed-at sphere in the middle exposure of a pose sweep.
+constexpr std::size_t kMinSphereColumns = 30;
+// Draws per requested pose before giving up.
+constexpr int kAttemptsPerPose = 60;
+
+std::string Num(double v) { return FormatDouble(v); }
+
+std::string List(const std::vector<double>& q) {
+  std::string s = "[";
+  for (std::size_t j = 0; j < q.size(); ++j) {
+    if (j > 0) s += ", ";
+    s += Num(q[j]);
+  }
+  s += "]";
+  return s;
+}
+
+std::string Vec(const Eigen::Vector3d& v) { return List({v.x(), v.y(), v.z()}); }
+
+void WrapJoints(std::vector<double>& q) {
+  for (double& v : q) v = std::remainder(v, 2 * std::numbers::pi);
+}
+
+// UR5 postures to start the IK from (shoulder, elbow, wrist choices), as in MakeArcTrajectory.
+std::vector<std::vector<double>> Ur5Seeds() {
+  std::vector<std::vector<double>> seeds;
+  for (double q1 : {0.0, kHalfPi, -kHalfPi, 2 * kHalfPi}) {
+    for (double q3 : {kHalfPi, -kHalfPi}) {
+      for (double q5 : {-kHalfPi, kHalfPi}) seeds.push_back({q1, -kHalfPi, q3, -kHalfPi, q5, 0.0});
+    }
+  }
+  return seeds;
+}
+
+}  // namespace
+
+Eigen::Isometry3d PointingTool(const TouchOptions& options) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.translation() = Eigen::Vector3d(0, 0, options.tool_length_mm);
+  return t;
+}
+
+Eigen::Isometry3d TrueCellFromSensor(const CellTruth& truth, const std::vector<double>& q) {
+  return truth.layout.cell_from_vision_base * truth.true_vision_robot.BaseFromFlange(q) *
+         truth.vision_flange_from_sensor;
+}
+
+std::vector<Touch> SimulateTouches(const SimConfig& config, const CellTruth& truth,
+                                   std::uint64_t seed) {
+  const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();
+  const Eigen::Isometry3d tip_from_flange = PointingTool(config.touches).inverse();
+  const Eigen::Vector3d hb_in_cell = truth.layout.cell_from_handling_base.translation();
+  Rng rng(seed);
+  std::vector<Touch> touches;
+  const std::vector<Eigen::Vector3d> centers = config.spheres.CentersInCell();
+  for (std::size_t i = 0; i < centers.size(); ++i) {
+    Touch t;
+    t.sphere = static_cast<int>(i);
+    const Eigen::Vector3d top_cell = centers[i] + Eigen::Vector3d(0, 0, config.spheres.radius_mm);
+    t.true_top_in_handling_base = hb_from_cell * top_cell;
+    Eigen::Vector3d noise;
+    for (int k = 0; k < 3; ++k) noise[k] = rng.Normal(0.0, config.touches.sigma_mm);
+    t.measured_in_handling_base = t.true_top_in_handling_base + noise;
+    // The controller reports the joints of the touched (measured) point: IK with the tool
+    // pointing down, tilted towards the robot as far as needed to reach.
+    Eigen::Vector2d u = (hb_in_cell - top_cell).head<2>();
+    u = u.norm() > 1e-9 ? Eigen::Vector2d(u.normalized()) : Eigen::Vector2d(1, 0);
+    const Eigen::Vector3d axis(-u.y(), u.x(), 0.0);  // tilts the tool axis away from the robot
+    const Eigen::Matrix3d down = Eigen::Vector3d(1, -1, -1).asDiagonal();
+    const Eigen::Vector3d measured_cell =
+        truth.layout.cell_from_handling_base * t.measured_in_handling_base;
+    for (double tilt_deg : {0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0}) {
+      Eigen::Isometry3d cell_from_tip = Eigen::Isometry3d::Identity();
+      cell_from_tip.linear() =
+          Eigen::AngleAxisd(tilt_deg * kDegToRad, axis).toRotationMatrix() * down;
+      cell_from_tip.translation() = measured_cell;
+      const Eigen::Isometry3d hb_from_flange = hb_from_cell * cell_from_tip * tip_from_flange;
+      const Eigen::Vector3d p = hb_from_flange.translation();
+      const double q1 = std::atan2(p.y(), p.x());
+      for (const std::vector<double>& s : {std::vector<double>{q1, 0.0, 0.0, 0.0, -kHalfPi, 0.0},
+                                           std::vector<double>{q1, 0.5, -0.3, 0.0, -1.0, 0.0},
+                                           std::vector<double>{q1, 0.0, 0.0, 0.0, kHalfPi, 0.0},
+                                           std::vector<double>{q1, 0.8, 0.3, 0.0, -1.2, 0.0},
+                                           std::vector<double>{q1, 1.2, -0.2, 0.0, -0.5, 0.0},
+                                           std::vector<double>{q1, 1.0, 0.0, 0.0, 0.0, 0.0}}) {
+        auto q = SolveIk(truth.handling_robot, hb_from_flange, s);
+        if (q) {
+          WrapJoints(*q);
+          t.joints_rad = *q;
+          t.tool_tilt_deg = tilt_deg;
+          break;
+        }
+      }
+      if (t.joints_rad) break;
+    }
+    touches.push_back(t);
+  }
+  return touches;
+}
+
+SweepTiming PoseSweepTiming(const SimConfig& config, const PoseSweepOptions& options) {
+  SweepTiming timing = config.timing;
+  timing.profiles = options.profiles;
+  return timing;
+}
+
+std::vector<PoseSweep> PlanPoseSweeps(const SimConfig& config, const CellTruth& truth,
+                                      const PoseSweepOptions& options, std::uint64_t seed,
+                                      const std::string& what) {
+  const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+  LaserRenderOptions exact = config.render;
+  exact.row_sigma_px = exact.intensity_sigma = exact.dropout_probability = 0;
+  const LaserRenderer renderer(scene, truth.sensor, exact);
+  const std::vector<Eigen::Vector3d> centers = config.spheres.CentersInCell();
+  const Eigen::Isometry3d base_from_cell = truth.layout.cell_from_vision_base.inverse();
+  const Eigen::Isometry3d sensor_from_flange = truth.vision_flange_from_sensor.inverse();
+  const Eigen::Matrix3d looking_down =
+      SensorLookingDown(truth.sensor.laser, Eigen::Vector3d::UnitX());
+  const SweepTiming timing = PoseSweepTiming(config, options);
+  const double duration = (timing.profiles - 1) / timing.rate_hz;
+  const std::vector<std::vector<double>> seeds = Ur5Seeds();
+  const double standoff = config.sensor.standoff_mm;
+  Rng rng(seed);
+  std::vector<PoseSweep> plans;
+  for (int i = 0; i < options.poses; ++i) {
+    const int sphere = i % static_cast<int>(centers.size());
+    const std::int32_t sphere_object = scene.Find("sphere_" + std::to_string(sphere));
+    bool found = false;
+    for (int attempt = 0; attempt < kAttemptsPerPose && !found; ++attempt) {
+      PoseSweep p;
+      p.sphere = sphere;
+      // Azimuths stratified over the circle so the tilt axes spread; tilt and roll uniform.
+      p.azimuth_deg = 360.0 * (i + rng.Uniform()) / options.poses - 180.0;
+      p.tilt_deg = rng.Uniform(options.min_tilt_deg, options.max_tilt_deg);
+      p.roll_deg = rng.Uniform(-options.max_roll_deg, options.max_roll_deg);
+      const double az = p.azimuth_deg * kDegToRad;
+      const Eigen::Vector3d tilt_axis(std::cos(az), std::sin(az), 0.0);
+      const Eigen::Matrix3d r_cell_sensor =
+          (Eigen::AngleAxisd(p.tilt_deg * kDegToRad, tilt_axis) *
+           Eigen::AngleAxisd(p.roll_deg * kDegToRad, Eigen::Vector3d::UnitZ()))
+              .toRotationMatrix() *
+          looking_down;
+      const Eigen::Vector3d optical_axis = r_cell_sensor.col(2);
+      // The laser crosses the optical axis half a radius in front of the sphere centre.
+      const Eigen::Vector3d crossing =
+          centers[sphere] - 0.5 * config.spheres.radius_mm * optical_axis;
+      const Eigen::Vector3d direction = r_cell_sensor * truth.sensor.laser.normal_in_sensor;
+      std::vector<Eigen::Isometry3d> waypoints;
+      for (double s : {-0.5, 0.0, 0.5}) {
+        Eigen::Isometry3d cell_from_sensor = Eigen::Isometry3d::Identity();
+        cell_from_sensor.linear() = r_cell_sensor;
+        cell_from_sensor.translation() =
+            crossing - standoff * optical_axis + s * options.sweep_length_mm * direction;
+        waypoints.push_back(cell_from_sensor);
+      }
+      // Middle waypoint first, from the postures in an order that varies with the pose (so the
+      // joint-offset set visits several arm configurations), then the ends from the middle.
+      std::optional<std::vector<double>> mid;
+      for (std::size_t k = 0; k < seeds.size() && !mid; ++k) {
+        mid =
+            SolveIk(truth.nominal_vision_robot, base_from_cell * waypoints[1] * sensor_from_flange,
+                    seeds[(k + static_cast<std::size_t>(i)) % seeds.size()]);
+      }
+      if (!mid) continue;
+      WrapJoints(*mid);
+      const auto start = SolveIk(truth.nominal_vision_robot,
+                                 base_from_cell * waypoints[0] * sensor_from_flange, *mid);
+      const auto end = SolveIk(truth.nominal_vision_robot,
+                               base_from_cell * waypoints[2] * sensor_from_flange, *mid);
+      if (!start || !end) continue;
+      bool continuous = true;
+      for (int j = 0; j < 6; ++j) {
+        continuous = continuous && std::abs((*start)[j] - (*mid)[j]) < 0.5 &&
+                     std::abs((*end)[j] - (*mid)[j]) < 0.5;
+      }
+      if (!continuous) continue;
+      p.trajectory.times_s = {0.0, 0.5 * duration, duration};
+      p.trajectory.joints_rad = {*start, *mid, *end};
+      p.commanded_cell_from_sensor = waypoints;
+      const ExposureTruth seen = renderer.RenderExact(TrueCellFromSensor(truth, *mid));
+      for (std::int32_t o : seen.object) p.sphere_columns_at_middle += (o == sphere_object);
+      if (p.sphere_columns_at_middle < kMinSphereColumns) continue;
+      plans.push_back(std::move(p));
+      found = true;
+    }
+    if (!found) {
+      throw OptionError(what + ": pose " + std::to_string(i) + " of " +
+                        std::to_string(options.poses) + " (sphere " + std::to_string(sphere) +
+                        "): no drawn pose is reachable by the vision robot and sees the sphere; "
+                        "change " +
+                        what +
+                        ".max_tilt_deg/max_roll_deg/sweep_length_mm, "
+                        "SimConfig.spheres.* or SimConfig.cell.vision_base_mm");
+    }
+  }
+  return plans;
+}
+
+SweepResult RenderPoseSweep(const LaserRenderer& renderer, const CellTruth& truth,
+                            const PoseSweep& sweep, const SweepTiming& timing, std::uint64_t seed,
+                            int threads) {
+  return RenderSweep(
+      renderer,
+      [&](double t) {
+        SensorState s;
+        s.joints_rad = sweep.trajectory.At(t);
+        s.scene_from_sensor = TrueCellFromSensor(truth, s.joints_rad);
+        return s;
+      },
+      timing, seed, 6, "vision_robot", threads);
+}
+
+std::string TouchesRecordYaml(const SimConfig& config, const std::vector<Touch>& touches) {
+  std::ostringstream o;
+  o << "format: lasercell.touches\nversion: 1\n"
+    << "# Pointing-tool touches of the sphere tops by the handling robot, as its controller\n"
+    << "# reports them: tool-tip position in handling_base (mm) and the joints (rad) of the\n"
+    << "# touch (null when not recorded). tool_tip = FK(joints) * handling_flange_from_tool_tip.\n"
+    << "robot: handling_robot\nframe: handling_base\n"
+    << "handling_flange_from_tool_tip: " << PoseToFileNotation(PointingTool(config.touches))
+    << "\nstated_sigma_mm: " << Num(config.touches.sigma_mm)
+    << "\nsphere_radius_mm: " << Num(config.spheres.radius_mm) << "\ntouches:\n";
+  for (const Touch& t : touches) {
+    o << "  - sphere: " << t.sphere
+      << "\n    point_in_handling_base: " << Vec(t.measured_in_handling_base)
+      << "\n    joints_rad: " << (t.joints_rad ? List(*t.joints_rad) : std::string("null")) << "\n";
+  }
+  return o.str();
+}
+
+std::string TouchesTruthYaml(const SimConfig& config, const CellTruth& truth,
+                             const std::vector<Touch>& touches) {
+  const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();
+  const std::vector<Eigen::Vector3d> centers = config.spheres.CentersInCell();
+  std::ostringstream o;
+  o << "format: lasercell.sim_touches_truth\nversion: 1\n"
+    << "# True sphere centres and tops for records/touches.yaml (same order), mm.\n"
+    << "sphere_radius_mm: " << Num(config.spheres.radius_mm)
+    << "\ntouch_sigma_mm: " << Num(config.touches.sigma_mm) << "\ntouches:\n";
+  for (const Touch& t : touches) {
+    o << "  - sphere: " << t.sphere
+      << "\n    sphere_center_in_handling_base: " << Vec(hb_from_cell * centers[t.sphere])
+      << "\n    sphere_center_in_cell: " << Vec(centers[t.sphere])
+      << "\n    true_top_in_handling_base: " << Vec(t.true_top_in_handling_base)
+      << "\n    touch_error_mm: " << Vec(t.measured_in_handling_base - t.true_top_in_handling_base)
+      << "\n    tool_tilt_deg: " << Num(t.tool_tilt_deg) << "\n";
+  }
+  return o.str();
+}
+
+std::string PoseSweepTruthYaml(const SimConfig& config, const CellTruth& truth,
+                               const PoseSweep& p) {
+  const Eigen::Vector3d center = config.spheres.CentersInCell()[p.sphere];
+  std::ostringstream o;
+  o << "    sweep:\n      type: joints\n      robot: vision_robot\n"
+    << "      interpolation: linear in joint space between waypoints (nominal IK)\n"
+    << "      t0_ns: " << config.timing.start_ns
+    << "\n      waypoint_times_s: " << List(p.trajectory.times_s) << "\n      waypoints_rad:\n";
+  for (const auto& q : p.trajectory.joints_rad) o << "        - " << List(q) << "\n";
+  o << "      commanded_cell_from_sensor:\n";
+  for (const auto& pose : p.commanded_cell_from_sensor) {
+    o << "        - " << PoseToFileNotation(pose) << "\n";
+  }
+  o << "      true_cell_from_sensor:\n";
+  for (const auto& q : p.trajectory.joints_rad) {
+    o << "        - " << PoseToFileNotation(TrueCellFromSensor(truth, q)) << "\n";
+  }
+  o << "      tilt_deg: " << Num(p.tilt_deg) << "\n      azimuth_deg: " << Num(p.azimuth_deg)
+    << "\n      roll_deg: " << Num(p.roll_deg) << "\n    sphere: " << p.sphere
+    << "\n    sphere_radius_mm: " << Num(config.spheres.radius_mm)
+    << "\n    sphere_center_in_cell: " << Vec(center) << "\n    sphere_center_in_vision_base: "
+    << Vec(truth.layout.cell_from_vision_base.inverse() * center)
+    << "\n    sphere_columns_at_middle: " << p.sphere_columns_at_middle << "\n";
+  return o.str();
+}
+
+}  // namespace lasercell::datasets

@@ -1,0 +1,252 @@
+#include "datasets/calibration_captures.hpp"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <numbers>
+#include <sstream>
+#include <string>
+
+#include "core/error.hpp"
+#include "core/io/file_util.hpp"
+#include "datasets/rng.hpp"
+#include "triangulation/profile_io.hpp"
+
+namespace lasercell::datasets {
+namespace {
+
+namespace fs = std::filesystem;
+constexpr double kRadToDeg = 180.0 / std::numbers::pi;
+
+std::string TempDir(const std::string& name) {
+  const fs::path p =
+      fs::temp_directory_path() / ("lasercell_calcap_" + std::to_string(::getpid()) + "_" + name);
+  fs::remove_all(p);
+  return p.string();
+}
+
+TEST(Touches, AreWithinNoiseOfTheTrueSphereTopsAndTheirJointsReachThem) {
+  SimConfig config;
+  config.touches.sigma_mm = 0.05;
+  const CellTruth truth = MakeCellTruth(config);
+  const std::vector<Touch> touches = SimulateTouches(config, truth, 77);
+  const std::vector<Eigen::Vector3d> centers = config.spheres.CentersInCell();
+  ASSERT_EQ(touches.size(), centers.size());
+  const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();
+  const Eigen::Isometry3d tool = PointingTool(config.touches);
+  double sum_sq = 0;
+  for (const Touch& t : touches) {
+    const Eigen::Vector3d top =
+        hb_from_cell * (centers[t.sphere] + Eigen::Vector3d(0, 0, config.spheres.radius_mm));
+    EXPECT_LT((t.true_top_in_handling_base - top).norm(), 1e-9);
+    const Eigen::Vector3d err = t.measured_in_handling_base - top;
+    // 5 sigma per axis.
+    EXPECT_LT(err.cwiseAbs().maxCoeff(), 5 * config.touches.sigma_mm) << t.sphere;
+    sum_sq += err.squaredNorm();
+    // The recorded joints put the tool tip at the recorded point (handling robot IK).
+    ASSERT_TRUE(t.joints_rad.has_value()) << "sphere " << t.sphere << " unreachable";
+    std::printf("touch %d: tool tilt %.0f deg, error %.3f mm\n", t.sphere, t.tool_tilt_deg,
+                err.norm());
+    const Eigen::Vector3d tip =
+        (truth.handling_robot.BaseFromFlange(*t.joints_rad) * tool).translation();
+    EXPECT_LT((tip - t.measured_in_handling_base).norm(), 1e-3) << t.sphere;
+  }
+  // Not noise-free: the touches scatter with about the configured sigma.
+  EXPECT_GT(std::sqrt(sum_sq / (3.0 * touches.size())), 0.1 * config.touches.sigma_mm);
+  // Without noise the touch is the true top.
+  config.touches.sigma_mm = 0;
+  for (const Touch& t : SimulateTouches(config, truth, 77)) {
+    EXPECT_LT((t.measured_in_handling_base - t.true_top_in_handling_base).norm(), 1e-12);
+  }
+}
+
+// Rotation axes (unit, flange frame) of the relative flange motions between all pose pairs.
+std::vector<Eigen::Vector3d> RelativeAxes(const std::vector<Eigen::Isometry3d>& flanges,
+                                          double* smallest_angle_deg) {
+  std::vector<Eigen::Vector3d> axes;
+  *smallest_angle_deg = 1e9;
+  for (std::size_t i = 0; i < flanges.size(); ++i) {
+    for (std::size_t j = i + 1; j < flanges.size(); ++j) {
+      const Eigen::AngleAxisd aa(flanges[i].linear().transpose() * flanges[j].linear());
+      *smallest_angle_deg = std::min(*smallest_angle_deg, aa.angle() * kRadToDeg);
+      if (aa.angle() > 1e-3) axes.push_back(aa.axis());
+    }
+  }
+  return axes;
+}
+
+// Eigenvalues (ascending) of the axes' scatter matrix sum a a^T / n.
+Eigen::Vector3d AxisSpread(const std::vector<Eigen::Vector3d>& axes) {
+  Eigen::Matrix3d s = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& a : axes) s += a * a.transpose();
+  s /= static_cast<double>(axes.size());
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(s).eigenvalues();
+}
+
+TEST(PoseSweeps, EyeInHandPosesAreDistinctAndRotateAboutSeveralAxes) {
+  const SimConfig config;
+  const CellTruth truth = MakeCellTruth(config);
+  const std::vector<PoseSweep> plans =
+      PlanPoseSweeps(config, truth, config.eye_in_hand, 1234, "SimConfig.eye_in_hand");
+  ASSERT_EQ(plans.size(), 12u);
+  std::vector<Eigen::Isometry3d> flanges;
+  std::vector<int> per_sphere(config.spheres.stand_heights_mm.size(), 0);
+  for (const PoseSweep& p : plans) {
+    flanges.push_back(truth.nominal_vision_robot.BaseFromFlange(p.trajectory.joints_rad[1]));
+    ++per_sphere[p.sphere];
+    EXPECT_GE(p.sphere_columns_at_middle, 30u);
+  }
+  for (int n : per_sphere) EXPECT_EQ(n, 3);
+  double smallest_deg = 0;
+  const Eigen::Vector3d spread = AxisSpread(RelativeAxes(flanges, &smallest_deg));
+  EXPECT_GT(smallest_deg, 2.0);  // every pair of poses differs in orientation
+  // Rotation axes span more than one direction: the second-largest eigenvalue of the axis
+  // scatter is far from zero (all rotations about one axis would give ~0).
+  EXPECT_GT(spread[1], 0.1) << spread.transpose();
+  std::printf(
+      "eye-in-hand: smallest relative rotation %.1f deg, axis scatter eigenvalues %.3f "
+      "%.3f %.3f\n",
+      smallest_deg, spread[0], spread[1], spread[2]);
+
+  // The check fails on a degenerate set: rotations only about the vertical.
+  PoseSweepOptions one_axis = config.eye_in_hand;
+  one_axis.min_tilt_deg = one_axis.max_tilt_deg = 0;
+  const std::vector<PoseSweep> flat =
+      PlanPoseSweeps(config, truth, one_axis, 1234, "SimConfig.eye_in_hand");
+  std::vector<Eigen::Isometry3d> flat_flanges;
+  for (const PoseSweep& p : flat) {
+    flat_flanges.push_back(truth.nominal_vision_robot.BaseFromFlange(p.trajectory.joints_rad[1]));
+  }
+  EXPECT_LT(AxisSpread(RelativeAxes(flat_flanges, &smallest_deg))[1], 0.01);
+}
+
+TEST(PoseSweeps, ImpossiblePosesAreAnErrorNamingTheField) {
+  SimConfig config;
+  config.eye_in_hand.sweep_length_mm = 1000;  // far beyond the UR5's reach at the ends
+  config.eye_in_hand.max_tilt_deg = 60;
+  config.eye_in_hand.min_tilt_deg = 59;
+  const CellTruth truth = MakeCellTruth(config);
+  try {
+    PlanPoseSweeps(config, truth, config.eye_in_hand, 1, "SimConfig.eye_in_hand");
+    ADD_FAILURE() << "no exception";
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("SimConfig.eye_in_hand"), std::string::npos) << e.what();
+  }
+}
+
+struct SweepCheck {
+  std::size_t on_sphere = 0;      // points within 1e-3 mm of the aimed sphere (true robot)
+  double worst_near_true = 0;     // worst |distance - r| of points within 1 mm (true robot)
+  double worst_near_nominal = 0;  // same points, posed by the nominal robot
+};
+
+// Triangulates noise-free profiles with the recorded joints through the true (and nominal)
+// robot and compares with the aimed sphere.
+SweepCheck CheckSweep(const triangulation::ProfileSet& set, const CellTruth& truth,
+                      const Eigen::Vector3d& center, double radius) {
+  SweepCheck r;
+  const Eigen::Vector4d plane = truth.sensor.laser.Coefficients();
+  for (const triangulation::Profile& p : set.profiles) {
+    const Eigen::Isometry3d true_pose = TrueCellFromSensor(truth, p.joints_rad);
+    const Eigen::Isometry3d nominal_pose = truth.layout.cell_from_vision_base *
+                                           truth.nominal_vision_robot.BaseFromFlange(p.joints_rad) *
+                                           truth.vision_flange_from_sensor;
+    for (std::uint32_t c = 0; c < set.header.columns; ++c) {
+      if (std::isnan(p.row_px[c])) continue;
+      const Eigen::Vector3d ray = truth.sensor.camera.Unproject({c, p.row_px[c]});
+      const Eigen::Vector3d p_sensor = (-plane[3] / plane.head<3>().dot(ray)) * ray;
+      const Eigen::Vector3d p_cell = true_pose * p_sensor;
+      const double d = std::abs((p_cell - center).norm() - radius);
+      // Near the half sphere (upper hemisphere; the stand below has the sphere's radius).
+      if (d > 1.0 || p_cell.z() < center.z() + 1e-6) continue;
+      r.worst_near_true = std::max(r.worst_near_true, d);
+      r.on_sphere += d < 1e-3;
+      r.worst_near_nominal = std::max(
+          r.worst_near_nominal, std::abs(((nominal_pose * p_sensor) - center).norm() - radius));
+    }
+  }
+  return r;
+}
+
+TEST(PoseSweeps, JointPoseSetIsLargeVariedAndEverySweepSeesItsSphereOnTheTruth) {
+  SimConfig config;
+  config.seed = 3;
+  config.render.row_sigma_px = 0;  // noise-free rows: truth consistency to float precision
+  config.render.intensity_sigma = 0;
+  config.timing.jitter_s = 1e-3;  // the joints must follow the true exposure times
+  config.joint_poses.profiles = 12;
+  config.eye_in_hand.profiles = 12;
+  config.capture_planes = config.capture_spheres = config.capture_seats = false;
+  config.capture_trajectory = config.capture_chessboard_images = false;
+  config.capture_laser_line_images = config.write_meshes = false;
+  const std::string dir = TempDir("joints");
+  const SimulationReport report = SimulateCell(config, dir, {}, 2);
+  const CellTruth truth = MakeCellTruth(config);
+  const std::vector<Eigen::Vector3d> centers = config.spheres.CentersInCell();
+  // The sets as recorded: records/sphere_sweeps.yaml lists every sweep and its sphere.
+  const std::string records = io::ReadFileBytes(dir + "/records/sphere_sweeps.yaml");
+  std::size_t joint_sweeps = 0, eye_sweeps = 0;
+  Eigen::Matrix<double, 6, 1> lo = Eigen::Matrix<double, 6, 1>::Constant(1e9);
+  Eigen::Matrix<double, 6, 1> hi = -lo;
+  double worst_true = 0, worst_nominal = 0;
+  std::size_t fewest_on_sphere = SIZE_MAX;
+  for (const CaptureReport& c : report.captures) {
+    ASSERT_TRUE(c.kind == "joint_poses_sphere" || c.kind == "eye_in_hand_sphere") << c.kind;
+    (c.kind == "joint_poses_sphere" ? joint_sweeps : eye_sweeps)++;
+    const std::string entry = "profiles_file: " + c.profiles_file + ", aimed_at_sphere: ";
+    const std::size_t at = records.find(entry);
+    ASSERT_NE(at, std::string::npos) << c.profiles_file;
+    const int sphere = std::stoi(records.substr(at + entry.size()));
+    const triangulation::ProfileSet set = triangulation::ReadProfiles(dir + "/" + c.profiles_file);
+    ASSERT_EQ(set.header.joint_count, 6u);
+    EXPECT_EQ(set.header.robot, "vision_robot");
+    EXPECT_GT(c.valid_peaks, 0u);
+    const SweepCheck check = CheckSweep(set, truth, centers[sphere], config.spheres.radius_mm);
+    EXPECT_GT(check.on_sphere, 100u) << c.name << " does not see sphere " << sphere;
+    fewest_on_sphere = std::min(fewest_on_sphere, check.on_sphere);
+    worst_true = std::max(worst_true, check.worst_near_true);
+    worst_nominal = std::max(worst_nominal, check.worst_near_nominal);
+    if (c.kind == "joint_poses_sphere") {
+      for (int j = 0; j < 6; ++j) {
+        lo[j] = std::min(lo[j], set.profiles.front().joints_rad[j]);
+        hi[j] = std::max(hi[j], set.profiles.front().joints_rad[j]);
+      }
+    }
+  }
+  EXPECT_EQ(joint_sweeps, 50u);
+  EXPECT_EQ(eye_sweeps, 12u);
+  // Points from noise-free rows posed by the TRUE robot at the recorded joints lie on the true
+  // sphere to the float32 precision of the rows; the nominal robot misses by its joint offsets.
+  EXPECT_LT(worst_true, 1e-3);
+  EXPECT_GT(worst_nominal, 0.05);
+  // The poses spread over the workspace: every joint moves through a wide range.
+  const Eigen::Matrix<double, 6, 1> range_deg = (hi - lo) * kRadToDeg;
+  for (int j = 0; j < 6; ++j) EXPECT_GT(range_deg[j], 20.0) << "joint " << j + 1;
+  std::printf(
+      "joint poses: %zu sweeps, joint ranges (deg) %s, fewest sphere points %zu, worst "
+      "true %.2e mm, worst nominal %.3f mm\n",
+      joint_sweeps,
+      [&] {
+        std::ostringstream o;
+        o.precision(3);
+        o << range_deg.transpose();
+        return o.str();
+      }()
+          .c_str(),
+      fewest_on_sphere, worst_true, worst_nominal);
+  // The touches were recorded without truth; the truth file has the centres.
+  const std::string touches = io::ReadFileBytes(dir + "/records/touches.yaml");
+  EXPECT_NE(touches.find("point_in_handling_base"), std::string::npos);
+  EXPECT_EQ(touches.find("center"), std::string::npos);
+  EXPECT_EQ(touches.find("true"), std::string::npos);
+  EXPECT_NE(io::ReadFileBytes(dir + "/truth/touches.yaml").find("sphere_center_in_handling_base"),
+            std::string::npos);
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace lasercell::datasets
