@@ -101,12 +101,11 @@ void ApplyOptionsFile(const std::string& path, LocalizeOptions& o, PpfModelOptio
   r.Done();
 }
 
+// 4x4 homogeneous matrix as an array of 4 rows (row-major), mm.
 nlohmann::json PoseJson(const Eigen::Isometry3d& pose) {
   nlohmann::json rows = nlohmann::json::array();
   const Eigen::Matrix4d m = pose.matrix();
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) rows.push_back(m(r, c));
-  }
+  for (int r = 0; r < 4; ++r) rows.push_back({m(r, 0), m(r, 1), m(r, 2), m(r, 3)});
   return rows;
 }
 
