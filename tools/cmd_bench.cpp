@@ -17,6 +17,7 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "datasets/synthetic_scan.hpp"
 #include "registration/localize_in_cloud.hpp"
 #include "registration/ppf_model.hpp"
 #include "tools/bench.hpp"
@@ -44,23 +45,6 @@ struct RegistrationBenchArgs {
 
 double MsSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-// The reference file: '#' comment lines, then 16 numbers (scene_from_model, row-major).
-Eigen::Isometry3d ReadReferencePose(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw FileError(path, "cannot open the reference pose file (see --reference)");
-  std::string line, numbers;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line[0] != '#') numbers += line + " ";
-  }
-  std::istringstream s(numbers);
-  Eigen::Isometry3d pose;
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) s >> pose.matrix()(r, c);
-  }
-  if (!s) throw InputError(path + ": expected 16 numbers (a 4x4 scene_from_model matrix)");
-  return pose;
 }
 
 // The target for a refined pose is <= 2 mm RMS; a coarse pose within 0.1 x diameter
@@ -124,7 +108,7 @@ void RunRegistrationBench(const RegistrationBenchArgs& args) {
   if (model_cloud.normals.empty() || scene.normals.empty()) {
     throw InputError("--model and --scene must carry normals (the peers do not estimate them)");
   }
-  const Eigen::Isometry3d reference = ReadReferencePose(args.reference);
+  const Eigen::Isometry3d reference = datasets::ReadPoseFile(args.reference);
   const PoseEvaluator evaluate(model_cloud, scene, reference);
 
   PpfModel model;
