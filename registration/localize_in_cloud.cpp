@@ -1,9 +1,13 @@
 #include "registration/localize_in_cloud.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
+#include <iomanip>
 #include <sstream>
+#include <unordered_set>
 
 #include "core/error.hpp"
 #include "core/se3.hpp"
@@ -56,6 +60,30 @@ std::vector<Eigen::Vector3d> ThinnedPoints(const std::vector<Eigen::Vector3d>& p
   const std::size_t m = std::min(n, limit);
   out.reserve(m);
   for (std::size_t k = 0; k < m; ++k) out.push_back(points[indices[k * n / m]]);
+  return out;
+}
+
+// One point per occupied cubic cell of edge `cell_mm`: the first in input order (deterministic).
+// Every input point then has a kept point within sqrt(3) x cell_mm, wherever the cells fall.
+std::vector<Eigen::Vector3d> SpatiallyThinned(const std::vector<Eigen::Vector3d>& points, double cell_mm) {
+  struct KeyHash {
+    std::size_t operator()(const std::array<std::int64_t, 3>& k) const {
+      return static_cast<std::size_t>((static_cast<std::uint64_t>(k[0]) * 73856093ULL) ^
+                                      (static_cast<std::uint64_t>(k[1]) * 19349663ULL) ^
+                                      (static_cast<std::uint64_t>(k[2]) * 83492791ULL));
+    }
+  };
+  std::unordered_set<std::array<std::int64_t, 3>, KeyHash> seen;
+  seen.reserve(points.size());
+  std::vector<Eigen::Vector3d> out;
+  out.reserve(points.size());
+  const double inv = 1.0 / cell_mm;
+  for (const Eigen::Vector3d& p : points) {
+    const std::array<std::int64_t, 3> key{static_cast<std::int64_t>(std::floor(p.x() * inv)),
+                                          static_cast<std::int64_t>(std::floor(p.y() * inv)),
+                                          static_cast<std::int64_t>(std::floor(p.z() * inv))};
+    if (seen.insert(key).second) out.push_back(p);
+  }
   return out;
 }
 
@@ -132,6 +160,7 @@ void LocalizeOptions::Check() const {
   non_negative(cluster_radius_relative, "cluster_radius_relative");
   non_negative(support_distance_relative, "support_distance_relative");
   non_negative(icp_max_distance_relative, "icp_max_distance_relative");
+  non_negative(verification_cell_relative, "verification_cell_relative");
   if (!(refined_support_distance_relative > 0.0) || !std::isfinite(refined_support_distance_relative)) {
     throw OptionError("LocalizeOptions.refined_support_distance_relative = " + std::to_string(refined_support_distance_relative) +
                       ": must be > 0 (fraction of the model diameter)");
@@ -252,12 +281,11 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
   // orientations it suppressed at the same place with nearly its score (symmetric or ambiguous
   // views: ICP and the final support decide between them, and the result says so).
   t = Clock::now();
+  const double refined_support_mm = options.refined_support_distance_relative * diameter;
   std::vector<Eigen::Vector3d> thinned;
   const std::vector<Eigen::Vector3d>* check_points = &scene.positions;
-  if (options.verification_max_points > 0 && scene.size() > options.verification_max_points) {
-    const std::size_t stride = (scene.size() + options.verification_max_points - 1) / options.verification_max_points;
-    thinned.reserve(scene.size() / stride + 1);
-    for (std::size_t i = 0; i < scene.size(); i += stride) thinned.push_back(scene.positions[i]);
+  if (options.verification_cell_relative > 0.0) {
+    thinned = SpatiallyThinned(scene.positions, options.verification_cell_relative * refined_support_mm);
     check_points = &thinned;
   }
   struct Pending {
@@ -286,7 +314,7 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
   // their coarse support is close to the best seen. Another batch follows while fewer than
   // max_instances candidates pass the final check (up to max_verified_clusters clusters).
   RefineContext ctx{model, options, *check_points, options.verification, &result.timings};
-  ctx.refined.support_distance_mm = options.refined_support_distance_relative * diameter;
+  ctx.refined.support_distance_mm = refined_support_mm;
   ctx.refined.min_support = options.refined_min_support;
   const std::size_t batch_size = options.max_instances + options.extra_refined_candidates;
   std::vector<LocalizationCandidate> refined;
@@ -388,14 +416,32 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
   }
   result.found = !result.candidates.empty();
   if (!result.found) {
-    const auto best = std::max_element(result.rejected.begin(), result.rejected.end(), [](const auto& a, const auto& b) {
-      return a.verification.support < b.verification.support;
-    });
-    result.message = clustering.clusters.empty() ? "no pose hypotheses: no scene pair matched the model's features"
-                     : best == result.rejected.end()
-                         ? "no cluster could be examined"
-                         : "no candidate passed verification (" + std::to_string(result.rejected.size()) +
-                               " rejected; the best: " + best->rejection_reason + ")";
+    // The strongest candidate is the one with the highest cluster score, whatever stage rejected
+    // it: supports before and after ICP use different distances and cannot be compared.
+    const LocalizationCandidate* strongest = nullptr;
+    double runner_up = 0.0;
+    for (const LocalizationCandidate& c : result.rejected) {
+      if (strongest == nullptr || c.score > strongest->score || (c.score == strongest->score && c.cluster < strongest->cluster)) {
+        if (strongest != nullptr) runner_up = std::max(runner_up, strongest->score);
+        strongest = &c;
+      } else {
+        runner_up = std::max(runner_up, c.score);
+      }
+    }
+    if (clustering.clusters.empty()) {
+      result.message = "no pose hypotheses: no scene pair matched the model's features";
+    } else if (strongest == nullptr) {
+      result.message = "no cluster could be examined";
+    } else {
+      std::ostringstream m;
+      m << "no candidate passed verification (" << result.rejected.size() << " rejected); the strongest, cluster "
+        << strongest->cluster << " (score " << strongest->score;
+      if (runner_up > 0.0) m << ", " << std::setprecision(2) << std::fixed << strongest->score / runner_up << "x the next";
+      m << std::setprecision(3) << std::fixed << ", coarse support " << strongest->coarse_verification.support;
+      if (strongest->icp_run) m << ", support after ICP " << strongest->verification.support << ", ICP rmse " << strongest->icp.rmse_mm << " mm";
+      m << "), was rejected: " << strongest->rejection_reason;
+      result.message = m.str();
+    }
   }
 
   result.timings.total_ms = MillisecondsSince(start);

@@ -5,7 +5,8 @@
 //   3. voxel-grid subsampling at the model's sampling step (filters.hpp),
 //   4. Drost PPF voting (ppf_matcher.hpp),
 //   5. pose clustering (clustering.hpp),
-//   6. verification: pose constraints + projection grid (verification.hpp),
+//   6. verification: pose constraints + projection grid (verification.hpp), against the scene
+//      thinned to one point per cell of half the refined support distance,
 //   7. ICP, scene as source and model as target, on the grid-selected scene points (icp.hpp).
 // Frames: the scene's frame is `scene`, the model's `model`; poses are scene_from_model.
 // Units: mm, rad; timings in milliseconds (names end in _ms).
@@ -68,9 +69,13 @@ struct LocalizeOptions {
   double refined_support_distance_relative = 0.008; ///< Support distance after ICP (> 0).
   double refined_min_support = 0.4;                 ///< Minimum support after ICP, fraction.
   std::size_t max_verified_clusters = 12;           ///< Kept clusters examined at most, best score first.
-  /// The scene used for verification and as ICP source is thinned by a stride to at most this
-  /// many points (0 = every point). Dense scans carry far more points than the support test needs.
-  std::size_t verification_max_points = 30000;
+  /// The scene used for verification and as ICP source keeps one point per cubic cell whose edge
+  /// is this fraction of the refined support distance (0 = every point). Dense scans carry far
+  /// more points than the support test needs; thinning in space (not by index, which leaves
+  /// gaps along the rows of an organized scan) keeps a point within sqrt(3) x this fraction of
+  /// the support distance of every dropped one (0.87 x at 0.5), so a model cell lying on the scan
+  /// stays supported wherever the cells fall. >= 0.
+  double verification_cell_relative = 0.5;
 
   // Step 7: ICP.
   bool run_icp = true;

@@ -76,7 +76,9 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
   }
   PpfMatchResult result;
   const std::vector<Eigen::Vector3d>& scene = scene_tree.points();
-  const std::size_t refs = (scene.size() + options.reference_stride - 1) / options.reference_stride;
+  std::size_t stride = options.reference_stride;
+  if (options.max_reference_points > 0) stride = std::max(stride, (scene.size() + options.max_reference_points - 1) / options.max_reference_points);
+  const std::size_t refs = (scene.size() + stride - 1) / stride;
   result.reference_points = refs;
   if (refs == 0 || model.points().empty()) return result;
 
@@ -97,7 +99,7 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
     std::uint32_t* acc = voter.accumulator.data();
     const std::size_t cells = voter.accumulator.size();
     for (std::size_t ref = begin; ref < end; ++ref) {
-      const std::size_t r = ref * options.reference_stride;
+      const std::size_t r = ref * stride;
       const Eigen::Vector3d& s_r = scene[r];
       const Eigen::Vector3d& n_r = scene_normals[r];
       const Eigen::Matrix3d rot_s = RotationNormalToX(n_r);

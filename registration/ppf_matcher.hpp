@@ -24,6 +24,12 @@ namespace lasercell::registration {
 struct PpfMatchOptions {
   /// Every n-th sampled scene point is used as a reference point (Drost: 1/5 of the points).
   std::size_t reference_stride = 5;
+  /// At most this many reference points (0 = no cap): the stride becomes
+  /// max(reference_stride, ceil(points / max_reference_points)). Voting costs reference points x neighbours within the
+  /// model diameter x model pairs per feature, so a scene much larger than the model (a room-size
+  /// Kinect view around a carton) would otherwise take seconds while adding few references on
+  /// the part. Deterministic: the stride depends only on the scene size.
+  std::size_t max_reference_points = 1000;
   /// Accumulator maxima kept per reference point (several peaks, as in Drost Sec. 3.4), 1..16.
   std::size_t peaks_per_reference = 3;
   /// Secondary peaks are kept only with at least this fraction of the reference's best votes.

@@ -43,6 +43,25 @@ class PpfMatcherTest : public ::testing::Test {
   SampledScene scene_;
 };
 
+// A scene with more than max_reference_points sampled points gets a larger stride: the count is
+// capped, the references stay evenly spread (every ceil(n / cap)-th point), and the cap (not the
+// stride) decides only when it is the tighter limit.
+TEST_F(PpfMatcherTest, ReferencePointsAreCapped) {
+  const std::size_t n = scene_.tree.size();
+  ASSERT_GT(n, 100U);
+  PpfMatchOptions options;
+  options.threads = 1;
+  options.max_reference_points = n / 10;
+  const std::size_t stride = (n + options.max_reference_points - 1) / options.max_reference_points;
+  const PpfMatchResult capped = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  EXPECT_EQ(capped.reference_points, (n + stride - 1) / stride);
+  EXPECT_LE(capped.reference_points, options.max_reference_points);
+  options.max_reference_points = 0;  // no cap: Drost's 1/5
+  EXPECT_EQ(MatchPpf(scene_.tree, scene_.normals, model_, options).reference_points, (n + 4) / 5);
+  options.max_reference_points = n;  // looser than the stride: no effect
+  EXPECT_EQ(MatchPpf(scene_.tree, scene_.normals, model_, options).reference_points, (n + 4) / 5);
+}
+
 TEST_F(PpfMatcherTest, VotesAndClustersFindASyntheticPoseInRealClutter) {
   const PpfMatchResult match = MatchPpf(scene_.tree, scene_.normals, model_);
   EXPECT_EQ(match.reference_points, (scene_.tree.size() + 4) / 5);
