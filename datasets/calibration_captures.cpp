@@ -291,4 +291,135 @@ std::string PoseSweepTruthYaml(const SimConfig& config, const CellTruth& truth,
   return o.str();
 }
 
+HandEyeImageSet PlanHandEyeImages(const SimConfig& config, const CellTruth& truth,
+                                  const ChessboardTarget& board, std::uint64_t seed) {
+  const HandEyeImageOptions& options = config.hand_eye_images;
+  const std::string what = "SimConfig.hand_eye_images";
+  options.Check(what);
+  board.Check();
+  HandEyeImageSet set;
+  const Eigen::Vector3d board_center(0.5 * board.squares_x * board.square_mm,
+                                     0.5 * board.squares_y * board.square_mm, 0.0);
+  set.cell_from_board.linear() =
+      Eigen::AngleAxisd(options.board_yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ())
+          .toRotationMatrix();
+  set.cell_from_board.translation() =
+      Eigen::Vector3d(config.sweep_center_xy_mm.x(), config.sweep_center_xy_mm.y(),
+                      options.board_height_mm) -
+      set.cell_from_board.linear() * board_center;
+  const Eigen::Vector3d center_in_cell = set.cell_from_board * board_center;
+  const Eigen::Isometry3d base_from_cell = truth.layout.cell_from_vision_base.inverse();
+  const Eigen::Isometry3d sensor_from_flange = truth.vision_flange_from_sensor.inverse();
+  const Eigen::Matrix3d looking_down =
+      SensorLookingDown(truth.sensor.laser, Eigen::Vector3d::UnitX());
+  const std::vector<std::vector<double>> seeds = Ur5Seeds();
+  const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
+  const CameraModel& camera = truth.sensor.camera;
+  const double margin_px = 25.0;
+  Rng rng(seed);
+  for (int i = 0; i < options.images; ++i) {
+    bool found = false;
+    for (int attempt = 0; attempt < kAttemptsPerPose && !found; ++attempt) {
+      HandEyeImage im;
+      im.azimuth_deg = 360.0 * (i + rng.Uniform()) / options.images - 180.0;
+      im.tilt_deg = rng.Uniform(options.min_tilt_deg, options.max_tilt_deg);
+      im.roll_deg = rng.Uniform(-options.max_roll_deg, options.max_roll_deg);
+      const double az = im.azimuth_deg * kDegToRad;
+      const Eigen::Vector3d tilt_axis(std::cos(az), std::sin(az), 0.0);
+      im.commanded_cell_from_camera.linear() =
+          (Eigen::AngleAxisd(im.tilt_deg * kDegToRad, tilt_axis) *
+           Eigen::AngleAxisd(im.roll_deg * kDegToRad, Eigen::Vector3d::UnitZ()))
+              .toRotationMatrix() *
+          looking_down;
+      im.commanded_cell_from_camera.translation() =
+          center_in_cell - options.distance_mm * im.commanded_cell_from_camera.linear().col(2);
+      const Eigen::Isometry3d base_from_flange =
+          base_from_cell * im.commanded_cell_from_camera * sensor_from_flange;
+      std::optional<std::vector<double>> q;
+      for (std::size_t k = 0; k < seeds.size() && !q; ++k) {
+        q = SolveIk(truth.nominal_vision_robot, base_from_flange,
+                    seeds[(k + static_cast<std::size_t>(i)) % seeds.size()]);
+      }
+      if (!q) continue;
+      WrapJoints(*q);
+      im.joints_rad = *q;
+      im.true_cell_from_camera = TrueCellFromSensor(truth, *q);
+      im.camera_from_board = im.true_cell_from_camera.inverse() * set.cell_from_board;
+      bool inside = true;
+      for (const Eigen::Vector3d& p : corners) {
+        const Eigen::Vector3d pc = im.camera_from_board * p;
+        const auto px = pc.z() > 0 ? camera.Project(pc) : std::nullopt;
+        if (!px || px->x() < margin_px || px->y() < margin_px ||
+            px->x() > camera.intrinsics().width_px - 1 - margin_px ||
+            px->y() > camera.intrinsics().height_px - 1 - margin_px) {
+          inside = false;
+          break;
+        }
+        im.corners_px.push_back(*px);
+      }
+      if (!inside) continue;
+      set.images.push_back(std::move(im));
+      found = true;
+    }
+    if (!found) {
+      throw OptionError(what + ": image " + std::to_string(i) + " of " +
+                        std::to_string(options.images) +
+                        ": no drawn pose is reachable by the vision robot and shows the whole "
+                        "board; change " + what + ".distance_mm/max_tilt_deg/board_height_mm or "
+                        "SimConfig.sweep.center_xy_mm");
+    }
+  }
+  return set;
+}
+
+std::string HandEyeImageFile(std::size_t i) {
+  char name[48];
+  std::snprintf(name, sizeof(name), "images/hand_eye_%03zu.png", i);
+  return name;
+}
+
+std::string HandEyeImagesRecordYaml(const ChessboardTarget& board, const HandEyeImageSet& set) {
+  std::ostringstream o;
+  o << "format: lasercell.hand_eye_images\nversion: 1\n"
+    << "# Chessboard images taken by the sensor camera on the vision robot, with the joints (rad)\n"
+    << "# the controller reports for each. The board lies still in the cell. Board frame and\n"
+    << "# corner order as truth/chessboard.yaml.\nrobot: vision_robot\n"
+    << "board: {squares: [" << board.squares_x << ", " << board.squares_y
+    << "], inner_corners: [" << board.squares_x - 1 << ", " << board.squares_y - 1
+    << "], square_mm: " << Num(board.square_mm) << "}\nimages:\n";
+  for (std::size_t i = 0; i < set.images.size(); ++i) {
+    o << "  - file: " << HandEyeImageFile(i)
+      << "\n    joints_rad: " << List(set.images[i].joints_rad) << "\n";
+  }
+  return o.str();
+}
+
+std::string HandEyeImagesTruthYaml(const CellTruth& truth, const HandEyeImageSet& set) {
+  std::ostringstream o;
+  o << "format: lasercell.sim_hand_eye_images_truth\nversion: 1\n"
+    << "# Truth of records/hand_eye_images.yaml (same order). Camera = sensor frame; pixel\n"
+    << "# centre of the top-left pixel at (0, 0). true_cell_from_camera = cell_from_vision_base *\n"
+    << "# TRUE robot FK(joints) * vision_flange_from_sensor; commanded = what the nominal model\n"
+    << "# promises at the same joints.\n"
+    << "cell_from_board: " << PoseToFileNotation(set.cell_from_board)
+    << "\nvision_base_from_board: "
+    << PoseToFileNotation(truth.layout.cell_from_vision_base.inverse() * set.cell_from_board)
+    << "\nimages:\n";
+  for (std::size_t i = 0; i < set.images.size(); ++i) {
+    const HandEyeImage& im = set.images[i];
+    o << "  - file: " << HandEyeImageFile(i)
+      << "\n    true_cell_from_camera: " << PoseToFileNotation(im.true_cell_from_camera)
+      << "\n    commanded_cell_from_camera: " << PoseToFileNotation(im.commanded_cell_from_camera)
+      << "\n    camera_from_board: " << PoseToFileNotation(im.camera_from_board)
+      << "\n    tilt_deg: " << Num(im.tilt_deg) << "\n    azimuth_deg: " << Num(im.azimuth_deg)
+      << "\n    roll_deg: " << Num(im.roll_deg) << "\n    corners_px: [";
+    for (std::size_t k = 0; k < im.corners_px.size(); ++k) {
+      o << (k ? ", " : "") << "[" << Num(im.corners_px[k].x()) << ", "
+        << Num(im.corners_px[k].y()) << "]";
+    }
+    o << "]\n";
+  }
+  return o.str();
+}
+
 }  // namespace lasercell::datasets

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "datasets/camera_images.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/simulate.hpp"
 
@@ -76,6 +77,38 @@ std::string TouchesTruthYaml(const SimConfig& config, const CellTruth& truth,
 /// waypoints, commanded and true sensor poses at them, drawn angles, the sphere.
 std::string PoseSweepTruthYaml(const SimConfig& config, const CellTruth& truth,
                                const PoseSweep& sweep);
+
+/// One eye-in-hand chessboard image: commanded joints (recorded) and its truth.
+struct HandEyeImage {
+  std::vector<double> joints_rad;  ///< Commanded joints: nominal IK of the planned camera pose.
+  Eigen::Isometry3d commanded_cell_from_camera = Eigen::Isometry3d::Identity();  ///< Planned.
+  /// True camera pose: the TRUE robot at joints_rad (cell frame; camera = sensor frame).
+  Eigen::Isometry3d true_cell_from_camera = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d camera_from_board = Eigen::Isometry3d::Identity();  ///< True.
+  std::vector<Eigen::Vector2d> corners_px;  ///< True projections of the inner corners.
+  double tilt_deg = 0, azimuth_deg = 0, roll_deg = 0;  ///< Drawn angles.
+};
+
+/// Eye-in-hand chessboard images (planned, not rendered).
+struct HandEyeImageSet {
+  Eigen::Isometry3d cell_from_board = Eigen::Isometry3d::Identity();  ///< Board lying flat.
+  std::vector<HandEyeImage> images;
+};
+
+/// Plans config.hand_eye_images.images poses of the vision robot whose camera sees the whole
+/// board of `board` (every inner corner >= 25 px inside the image) from the TRUE robot, the
+/// joints solved by IK on the NOMINAL robot. Throws OptionError naming
+/// SimConfig.hand_eye_images when a pose cannot be found.
+HandEyeImageSet PlanHandEyeImages(const SimConfig& config, const CellTruth& truth,
+                                  const ChessboardTarget& board, std::uint64_t seed);
+
+/// records/hand_eye_images.yaml: image files and commanded joints; no truth.
+std::string HandEyeImagesRecordYaml(const ChessboardTarget& board, const HandEyeImageSet& set);
+/// truth/hand_eye_images.yaml: board in cell and vision_base, true and commanded camera poses,
+/// camera_from_board and true corner pixels per image.
+std::string HandEyeImagesTruthYaml(const CellTruth& truth, const HandEyeImageSet& set);
+/// File name of hand-eye image i: images/hand_eye_NNN.png.
+std::string HandEyeImageFile(std::size_t i);
 
 /// Sensor pose of the TRUE robot at joints q (cell frame).
 Eigen::Isometry3d TrueCellFromSensor(const CellTruth& truth, const std::vector<double>& q);

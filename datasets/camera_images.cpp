@@ -187,14 +187,19 @@ GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& board,
         }
       }
       if (albedo < 0) {
-        // An edge crosses the pixel: box-filter over ns x ns sub-samples.
+        // An edge crosses the pixel: box-filter over ns x ns sub-samples on an n-rooks
+        // ("multi-jittered", Chiu, Shirley, Wang 1994, without the jitter) pattern: sample (i, j)
+        // at ((i + (j + 0.5) / ns) / ns, (j + (i + 0.5) / ns) / ns), so the ns^2 samples take
+        // ns^2 distinct x and ns^2 distinct y offsets. An axis-aligned edge's covered area is
+        // then resolved to 1 / ns^2 of a pixel instead of the 1 / ns of a regular grid (0.002 vs
+        // 0.031 px position error at ns = 16; EdgePixelsHoldTheExactCoveredArea).
         double sum = 0;
         for (int j = 0; j < ns; ++j) {
-          const double fy = (j + 0.5) / ns;
-          const Eigen::Vector2d left = (1 - fy) * c00 + fy * c01;
-          const Eigen::Vector2d right = (1 - fy) * c10 + fy * c11;
           for (int i = 0; i < ns; ++i) {
-            const double fx = (i + 0.5) / ns;
+            const double fx = (i + (j + 0.5) / ns) / ns;
+            const double fy = (j + (i + 0.5) / ns) / ns;
+            const Eigen::Vector2d left = (1 - fy) * c00 + fy * c01;
+            const Eigen::Vector2d right = (1 - fy) * c10 + fy * c11;
             sum += albedo_at((1 - fx) * left + fx * right);
           }
         }

@@ -6,7 +6,8 @@
 // ray (mrcal unprojection of the pixel corners, cached once per camera and interpolated
 // bilinearly inside a pixel) meets it through a homography. A pixel wholly inside one square
 // takes that square's albedo; a pixel an edge crosses is averaged over edge_samples^2
-// sub-samples (box filter = the pixel's area). Then: cos^4 vignetting, Gaussian optical blur,
+// sub-samples (box filter = the pixel's area) on an n-rooks pattern (edge_samples^2 distinct x
+// and y offsets: an axis-aligned edge is resolved to 1 / edge_samples^2 px). Then: cos^4 vignetting, Gaussian optical blur,
 // Gaussian read noise, 8-bit quantization. Gray = ambient + exposure * albedo * vignetting.
 //
 // Frames: camera as in sensor.hpp; board frame: pattern in its xy plane (z = 0, +z out of the

@@ -47,6 +47,15 @@ void LaserRenderOptions::Check(const std::string& what) const {
   if (!(dropout_probability >= 0 && dropout_probability < 1)) {
     fail("dropout_probability", "must be in [0, 1)", dropout_probability);
   }
+  if (!(speckle_sigma_px >= 0) || !std::isfinite(speckle_sigma_px)) {
+    fail("speckle_sigma_px", "must be >= 0", speckle_sigma_px);
+  }
+  if (!(speckle_correlation_px >= 0 && speckle_correlation_px <= 100)) {
+    fail("speckle_correlation_px", "must be in [0, 100]", speckle_correlation_px);
+  }
+  if (!(speckle_intensity_sigma >= 0) || !std::isfinite(speckle_intensity_sigma)) {
+    fail("speckle_intensity_sigma", "must be >= 0", speckle_intensity_sigma);
+  }
   if (!(occlusion_epsilon_mm > 0)) fail("occlusion_epsilon_mm", "must be positive", occlusion_epsilon_mm);
   if (!(reflection_probability >= 0 && reflection_probability <= 1)) {
     fail("reflection_probability", "must be in [0, 1]", reflection_probability);
@@ -292,22 +301,56 @@ void LaserRenderer::AddReflections(const std::vector<FanSampleRef>& fan,
   }
 }
 
+std::vector<double> SpeckleSequence(Rng& rng, std::size_t n, double correlation_px) {
+  const int half = correlation_px > 0 ? static_cast<int>(std::ceil(4.0 * correlation_px)) : 0;
+  std::vector<double> kernel(2 * half + 1);
+  double norm = 0;
+  for (int j = -half; j <= half; ++j) {
+    const double k = half == 0 ? 1.0 : std::exp(-0.5 * j * j / (correlation_px * correlation_px));
+    kernel[j + half] = k;
+    norm += k * k;
+  }
+  // sum k^2 = 1: the filtered sum of independent N(0, 1) draws is again N(0, 1).
+  for (double& k : kernel) k /= std::sqrt(norm);
+  std::vector<double> white(n + 2 * half);
+  for (double& w : white) w = rng.Normal();
+  std::vector<double> out(n, 0.0);
+  for (std::size_t c = 0; c < n; ++c) {
+    double s = 0;
+    for (std::size_t j = 0; j < kernel.size(); ++j) s += kernel[j] * white[c + j];
+    out[c] = s;
+  }
+  return out;
+}
+
 triangulation::Profile LaserRenderer::ApplyNoise(const ExposureTruth& truth,
                                                  std::uint64_t seed) const {
   const auto columns = static_cast<std::uint32_t>(truth.row_px.size());
   triangulation::Profile p = triangulation::Profile::Empty(columns);
   Rng rng(seed);
   const double rows_max = sensor_.camera.intrinsics().height_px - 1;
+  // Speckle is a property of the whole lit line of one exposure: drawn for every column (lit or
+  // not) from its own stream, so it neither shifts nor depends on the white noise draws.
+  std::vector<double> speckle_row, speckle_intensity;
+  if (options_.speckle_sigma_px > 0 || options_.speckle_intensity_sigma > 0) {
+    Rng speckle_rng(StreamSeed(seed, 0x5BECu));
+    speckle_row = SpeckleSequence(speckle_rng, columns, options_.speckle_correlation_px);
+    speckle_intensity = SpeckleSequence(speckle_rng, columns, options_.speckle_correlation_px);
+  }
   for (std::uint32_t c = 0; c < columns; ++c) {
     if (std::isnan(truth.row_px[c])) continue;
     // Draw all numbers of a column first so a dropout does not shift later columns' noise.
     const double row_noise = rng.Normal();
     const double intensity_noise = rng.Normal();
     const double u = rng.Uniform();
-    const double intensity =
-        std::min(1.0, truth.intensity[c] * (1.0 + options_.intensity_sigma * intensity_noise));
+    double intensity = truth.intensity[c] * (1.0 + options_.intensity_sigma * intensity_noise);
+    double row = truth.row_px[c] + options_.row_sigma_px * row_noise;
+    if (!speckle_row.empty()) {
+      intensity *= std::max(0.0, 1.0 + options_.speckle_intensity_sigma * speckle_intensity[c]);
+      row += options_.speckle_sigma_px * speckle_row[c];
+    }
+    intensity = std::min(1.0, intensity);
     if (intensity < options_.min_intensity || u < options_.dropout_probability) continue;
-    const double row = truth.row_px[c] + options_.row_sigma_px * row_noise;
     if (row < 0 || row > rows_max) continue;
     p.row_px[c] = static_cast<float>(row);
     p.intensity[c] = static_cast<float>(intensity);

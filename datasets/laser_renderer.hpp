@@ -13,7 +13,12 @@
 // the scene surface to ~1e-10 mm (scene.hpp).
 //
 // Noise (ApplyNoise): row + N(0, row_sigma_px); intensity * (1 + N(0, intensity_sigma)); peaks
-// below min_intensity after noise are lost; random dropouts with dropout_probability. Width is
+// below min_intensity after noise are lost; random dropouts with dropout_probability. Laser
+// speckle (off by default): the row also moves by speckle_sigma_px * s_row[c] and the intensity
+// is multiplied by (1 + speckle_intensity_sigma * s_int[c]), where s_row, s_int are unit-variance
+// sequences correlated along the line over the speckle grain (SpeckleSequence: white noise
+// filtered with a Gaussian kernel of sigma speckle_correlation_px, normalized so that sum k^2 =
+// 1), drawn from a stream of their own so the white noise above is unchanged. Width is
 // a plausibility model: sqrt(min_width^2 + (f * sheet_thickness * cos(view) /
 // (cos(incidence) * depth))^2) px.
 //
@@ -41,6 +46,7 @@
 #include <vector>
 
 #include "core/progress.hpp"
+#include "datasets/rng.hpp"
 #include "datasets/scene.hpp"
 #include "datasets/sensor.hpp"
 #include "triangulation/profile_io.hpp"
@@ -58,8 +64,21 @@ struct LaserRenderOptions {
   double sheet_thickness_mm = 0.5;    ///< Laser sheet thickness, for the peak width.
   double min_width_px = 2.0;          ///< Peak width on a perfect surface, px.
   double row_sigma_px = 0.05;         ///< Gaussian noise of the peak row, px (>= 0).
-  double intensity_sigma = 0.05;      ///< Relative Gaussian intensity noise (speckle), >= 0.
+  double intensity_sigma = 0.05;      ///< Relative white intensity noise per column, >= 0.
   double dropout_probability = 0.0;   ///< Probability that a valid peak is lost, [0, 1).
+  /// Laser speckle: std of the correlated peak-row shift, px (>= 0). Default 0 (off) because
+  /// the calibration tests' tolerances are derived from row_sigma_px alone; speckle is the
+  /// fundamental limit of laser triangulation on rough surfaces (Dorsch, Haeusler, Herrmann,
+  /// Appl. Opt. 1994) and a sensor of the seed's class on matt metal or plastic shows ~0.05-0.1
+  /// px: set it there to simulate such a surface.
+  double speckle_sigma_px = 0.0;
+  /// Speckle grain along the line: sigma of the Gaussian correlation kernel, columns ([0, 100];
+  /// 0 = independent columns). The grain on the sensor is ~ lambda * F# (under a pixel) but
+  /// the detector's peak averages over the ~2-4 px wide stripe, so the row shift stays
+  /// correlated over a few columns; 3 is typical.
+  double speckle_correlation_px = 3.0;
+  /// Relative std of the multiplicative intensity speckle, same grain (>= 0; 0 = off).
+  double speckle_intensity_sigma = 0.0;
   double occlusion_epsilon_mm = 0.05; ///< Occlusion rays start/stop this far from the ends.
   /// Probability that a specular ghost peak is present (per ghost column), [0, 1]; 0 = off.
   double reflection_probability = 0.0;
@@ -126,6 +145,12 @@ class LaserRenderer {
   LaserRenderOptions options_;
   std::vector<bool> reflective_;  // per scene object
 };
+
+/// Unit-variance laser-speckle sequence of length n, correlated over `correlation_px` columns:
+/// white N(0, 1) noise filtered with the Gaussian kernel k_j ~ exp(-j^2 / (2 c^2)), |j| <=
+/// ceil(4 c), normalized to sum k_j^2 = 1 so each value is N(0, 1) and the lag-d
+/// autocorrelation is ~ exp(-d^2 / (4 c^2)); c = 0 gives white noise. Deterministic in `rng`.
+std::vector<double> SpeckleSequence(Rng& rng, std::size_t n, double correlation_px);
 
 /// Exposure timing of a sweep.
 struct SweepTiming {

@@ -201,6 +201,20 @@ void PoseSweepOptions::Check(const std::string& what) const {
   }
 }
 
+void HandEyeImageOptions::Check(const std::string& what) const {
+  if (images < 1 || images > 1000) {
+    throw OptionError(what + ".images must be in [1, 1000] (got " + std::to_string(images) + ")");
+  }
+  if (!(distance_mm >= 100 && distance_mm <= 3000)) {
+    throw OptionError(what + ".distance_mm must be in [100, 3000] (got " + Num(distance_mm) + ")");
+  }
+  CheckRange(min_tilt_deg, 0.0, 60.0, what + ".min_tilt_deg");
+  CheckRange(max_tilt_deg, min_tilt_deg, 60.0, what + ".max_tilt_deg");
+  CheckRange(max_roll_deg, 0.0, 180.0, what + ".max_roll_deg");
+  CheckRange(board_height_mm, 0.0, 2000.0, what + ".board_height_mm");
+  CheckRange(board_yaw_deg, -180.0, 180.0, what + ".board_yaw_deg");
+}
+
 void SimConfig::Check() const {
   sensor.Check("SimConfig.sensor");
   render.Check("SimConfig.render");
@@ -293,6 +307,7 @@ void SimConfig::Check() const {
   touches.Check("SimConfig.touches");
   eye_in_hand.Check("SimConfig.eye_in_hand");
   joint_poses.Check("SimConfig.joint_poses");
+  hand_eye_images.Check("SimConfig.hand_eye_images");
   if ((capture_touches || capture_eye_in_hand || capture_joint_poses) &&
       spheres.stand_heights_mm.empty()) {
     throw OptionError("SimConfig.spheres.stand_heights_mm must list at least one sphere for "
@@ -401,6 +416,9 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     r.Read("row_sigma_px", &c.render.row_sigma_px);
     r.Read("intensity_sigma", &c.render.intensity_sigma);
     r.Read("dropout_probability", &c.render.dropout_probability);
+    r.Read("speckle_sigma_px", &c.render.speckle_sigma_px);
+    r.Read("speckle_correlation_px", &c.render.speckle_correlation_px);
+    r.Read("speckle_intensity_sigma", &c.render.speckle_intensity_sigma);
     r.Read("occlusion_epsilon_mm", &c.render.occlusion_epsilon_mm);
     r.Read("reflection_probability", &c.render.reflection_probability);
     r.Read("reflection_intensity", &c.render.reflection_intensity);
@@ -538,6 +556,17 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     p.Done();
   }
   {
+    Fields h = top.Sub("hand_eye_images");
+    h.Read("images", &c.hand_eye_images.images);
+    h.Read("distance_mm", &c.hand_eye_images.distance_mm);
+    h.Read("min_tilt_deg", &c.hand_eye_images.min_tilt_deg);
+    h.Read("max_tilt_deg", &c.hand_eye_images.max_tilt_deg);
+    h.Read("max_roll_deg", &c.hand_eye_images.max_roll_deg);
+    h.Read("board_height_mm", &c.hand_eye_images.board_height_mm);
+    h.Read("board_yaw_deg", &c.hand_eye_images.board_yaw_deg);
+    h.Done();
+  }
+  {
     Fields k = top.Sub("captures");
     k.Read("planes", &c.capture_planes);
     k.Read("spheres", &c.capture_spheres);
@@ -549,6 +578,7 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     k.Read("touches", &c.capture_touches);
     k.Read("eye_in_hand", &c.capture_eye_in_hand);
     k.Read("joint_poses", &c.capture_joint_poses);
+    k.Read("hand_eye_images", &c.capture_hand_eye_images);
     k.Done();
   }
   top.Done();
@@ -581,6 +611,9 @@ std::string SimConfigToYaml(const SimConfig& c) {
     << Num(r.sheet_thickness_mm) << ", min_width_px: " << Num(r.min_width_px)
     << ", row_sigma_px: " << Num(r.row_sigma_px) << ", intensity_sigma: "
     << Num(r.intensity_sigma) << ", dropout_probability: " << Num(r.dropout_probability)
+    << ", speckle_sigma_px: " << Num(r.speckle_sigma_px) << ", speckle_correlation_px: "
+    << Num(r.speckle_correlation_px) << ", speckle_intensity_sigma: "
+    << Num(r.speckle_intensity_sigma)
     << ", occlusion_epsilon_mm: " << Num(r.occlusion_epsilon_mm)
     << ", reflection_probability: " << Num(r.reflection_probability)
     << ", reflection_intensity: " << Num(r.reflection_intensity) << "}\n";
@@ -641,13 +674,19 @@ std::string SimConfigToYaml(const SimConfig& c) {
       << ", sweep_length_mm: " << Num(p->sweep_length_mm) << ", profiles: " << p->profiles
       << "}\n";
   }
+  const HandEyeImageOptions& h = c.hand_eye_images;
+  o << "hand_eye_images: {images: " << h.images << ", distance_mm: " << Num(h.distance_mm)
+    << ", min_tilt_deg: " << Num(h.min_tilt_deg) << ", max_tilt_deg: " << Num(h.max_tilt_deg)
+    << ", max_roll_deg: " << Num(h.max_roll_deg) << ", board_height_mm: "
+    << Num(h.board_height_mm) << ", board_yaw_deg: " << Num(h.board_yaw_deg) << "}\n";
   o << "captures: {planes: " << b(c.capture_planes) << ", spheres: " << b(c.capture_spheres)
     << ", seats: " << b(c.capture_seats) << ", trajectory: " << b(c.capture_trajectory)
     << ", chessboard_images: " << b(c.capture_chessboard_images)
     << ", laser_line_images: " << b(c.capture_laser_line_images)
     << ", meshes: " << b(c.write_meshes) << ", touches: " << b(c.capture_touches)
     << ", eye_in_hand: " << b(c.capture_eye_in_hand)
-    << ", joint_poses: " << b(c.capture_joint_poses) << "}\n";
+    << ", joint_poses: " << b(c.capture_joint_poses)
+    << ", hand_eye_images: " << b(c.capture_hand_eye_images) << "}\n";
   return o.str();
 }
 

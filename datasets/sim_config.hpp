@@ -14,7 +14,8 @@
 //            mount_translation_mm: [x, y, z], mount_rotation_deg: [rx, ry, rz]}
 //   render: {fan_rays, max_range_mm, intensity_gain, reference_range_mm, min_intensity,
 //            max_view_angle_deg, sheet_thickness_mm, min_width_px, row_sigma_px,
-//            intensity_sigma, dropout_probability, occlusion_epsilon_mm,
+//            intensity_sigma, dropout_probability, speckle_sigma_px,
+//            speckle_correlation_px, speckle_intensity_sigma, occlusion_epsilon_mm,
 //            reflection_probability, reflection_intensity}
 //   timing: {profiles, rate_hz, jitter_s, timestamp_noise_s, start_ns}
 //   cell: {vision_base_mm: [x, y, z], vision_base_yaw_deg, handling_base_mm: [x, y, z],
@@ -33,6 +34,8 @@
 //   touches: {sigma_mm, tool_length_mm}
 //   eye_in_hand: {poses, min_tilt_deg, max_tilt_deg, max_roll_deg, sweep_length_mm, profiles}
 //   joint_poses: {poses, min_tilt_deg, max_tilt_deg, max_roll_deg, sweep_length_mm, profiles}
+//   hand_eye_images: {images, distance_mm, min_tilt_deg, max_tilt_deg, max_roll_deg,
+//                     board_height_mm, board_yaw_deg}
 //   captures: {planes, spheres, seats, trajectory, chessboard_images, laser_line_images,
 //              meshes, touches, eye_in_hand, joint_poses}   (booleans)
 
@@ -75,6 +78,24 @@ struct PoseSweepOptions {
   double max_roll_deg = 60.0;     ///< Roll about the vertical, +- deg.
   double sweep_length_mm = 80.0;  ///< Travel of each sweep, mm.
   int profiles = 40;              ///< Exposures per sweep.
+
+  /// Throws OptionError naming `what` and the field.
+  void Check(const std::string& what) const;
+};
+
+/// Eye-in-hand camera calibration images: the sensor camera on the vision robot photographs a
+/// chessboard lying flat in the cell (pattern up, centred on the sweep centre) from `images`
+/// robot poses: optical axis through the board centre, tilted from the vertical by a uniform
+/// angle in [min_tilt_deg, max_tilt_deg] about a horizontal axis whose azimuth is stratified
+/// over the circle, rolled about it by +- max_roll_deg.
+struct HandEyeImageOptions {
+  int images = 15;               ///< Number of robot poses / images.
+  double distance_mm = 700.0;    ///< Camera centre to board centre along the optical axis, mm.
+  double min_tilt_deg = 10.0;    ///< Smallest tilt of the optical axis from the vertical, deg.
+  double max_tilt_deg = 35.0;    ///< Largest tilt, deg.
+  double max_roll_deg = 60.0;    ///< Roll about the optical axis, +- deg.
+  double board_height_mm = 150.0;  ///< Height of the printed face above the floor, mm.
+  double board_yaw_deg = 15.0;   ///< Rotation of the board about the vertical, deg.
 
   /// Throws OptionError naming `what` and the field.
   void Check(const std::string& what) const;
@@ -139,6 +160,8 @@ struct SimConfig {
   PoseSweepOptions eye_in_hand;
   /// >= 50 robot poses, each with a short sphere sweep, for joint-offset identification.
   PoseSweepOptions joint_poses{50, 5.0, 35.0, 180.0, 60.0, 30};
+  /// Chessboard images from the sensor camera on the vision robot (eye-in-hand, issue 7 3a).
+  HandEyeImageOptions hand_eye_images;
 
   // What a cell capture set contains.
   bool capture_planes = true;
@@ -151,6 +174,9 @@ struct SimConfig {
   bool capture_touches = true;      ///< records/touches.yaml + truth/touches.yaml.
   bool capture_eye_in_hand = true;  ///< profiles/eye_in_hand_NN.lcp.
   bool capture_joint_poses = true;  ///< profiles/joint_pose_NNN.lcp.
+  /// images/hand_eye_NNN.png + records/hand_eye_images.yaml + truth/hand_eye_images.yaml. Off
+  /// by default: 15 more 1024 x 1024 renders (~3 s, minutes under ASan).
+  bool capture_hand_eye_images = false;
 
   /// Throws OptionError naming the field ("SimConfig.<path>") when a value is out of range or a
   /// target lies outside the sensor's measuring range at the configured sweep height.

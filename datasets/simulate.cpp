@@ -39,6 +39,7 @@ constexpr std::uint64_t kLaserImageStream = 0x5000;
 constexpr std::uint64_t kTouchStream = 0x6000;
 constexpr std::uint64_t kEyeInHandPlanStream = 0x7000;
 constexpr std::uint64_t kJointPosePlanStream = 0x8000;
+constexpr std::uint64_t kHandEyeImageStream = 0x9000;  // plan; + 1 + i: image noise
 constexpr std::uint64_t kSeatStream = 0x10000;
 constexpr std::uint64_t kEyeInHandStream = 0x1000000;   // + pose index
 constexpr std::uint64_t kJointPoseStream = 0x2000000;   // + pose index
@@ -231,7 +232,10 @@ std::string SensorTruth(const CellTruth& t, const SimConfig& c) {
   o << "]\n  pixel_pitch_um: 10.6\n  focal_length_mm: " << Num(cam.fx_px * 10.6e-3) << "\n";
   o << "noise:\n  row_sigma_px: " << Num(c.render.row_sigma_px) << "\n  intensity_sigma: "
     << Num(c.render.intensity_sigma) << "\n  dropout_probability: "
-    << Num(c.render.dropout_probability) << "\n  min_intensity: " << Num(c.render.min_intensity)
+    << Num(c.render.dropout_probability) << "\n  speckle_sigma_px: "
+    << Num(c.render.speckle_sigma_px) << "\n  speckle_correlation_px: "
+    << Num(c.render.speckle_correlation_px) << "\n  speckle_intensity_sigma: "
+    << Num(c.render.speckle_intensity_sigma) << "\n  min_intensity: " << Num(c.render.min_intensity)
     << "\n  timing_jitter_s: " << Num(c.timing.jitter_s) << "\n  timestamp_noise_s: "
     << Num(c.timing.timestamp_noise_s) << "\n";
   return o.str();
@@ -346,6 +350,22 @@ void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output
     o << "]\n";
   }
   out.Write("truth/chessboard.yaml", o.str());
+}
+
+void RunHandEyeImages(const SimConfig& config, const CellTruth& truth, Output& out, int threads) {
+  const ChessboardTarget board = BoardOf(config);
+  const HandEyeImageSet set =
+      PlanHandEyeImages(config, truth, board, StreamSeed(config.seed, kHandEyeImageStream));
+  const ImageRenderer renderer(truth.sensor.camera);
+  std::vector<std::string> pngs(set.images.size());
+  ParallelFor(static_cast<int>(set.images.size()), threads, [&](int i) {
+    pngs[i] = EncodePng(renderer.RenderChessboard(
+        board, set.images[i].camera_from_board, config.images,
+        StreamSeed(config.seed, kHandEyeImageStream + 1 + static_cast<std::uint64_t>(i))));
+  });
+  for (std::size_t i = 0; i < pngs.size(); ++i) out.Write(HandEyeImageFile(i), pngs[i]);
+  out.Write("records/hand_eye_images.yaml", HandEyeImagesRecordYaml(board, set));
+  out.Write("truth/hand_eye_images.yaml", HandEyeImagesTruthYaml(truth, set));
 }
 
 std::string RowList(const std::vector<double>& v) {
@@ -747,6 +767,10 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
     RunChessboardImages(config, truth, out, threads);
     ReportProgress(progress, "chessboard images", 1.0);
   }
+  if (config.capture_hand_eye_images) {
+    RunHandEyeImages(config, truth, out, threads);
+    ReportProgress(progress, "hand-eye images", 1.0);
+  }
   if (config.capture_laser_line_images) {
     RunLaserLineImages(config, truth, sweep, out);
     ReportProgress(progress, "laser-line images", 1.0);
@@ -774,6 +798,7 @@ SimulationReport SimulateSeats(const SimConfig& config_in, int placements,
   config.capture_planes = config.capture_spheres = config.capture_trajectory = false;
   config.capture_chessboard_images = config.capture_laser_line_images = false;
   config.capture_touches = config.capture_eye_in_hand = config.capture_joint_poses = false;
+  config.capture_hand_eye_images = false;
   return SimulateCell(config, out_dir, progress, threads);
 }
 

@@ -31,6 +31,11 @@
 //                                 cell records them (noisy points + joints; no truth)
 //   records/sphere_sweeps.yaml    the eye_in_hand and joint_poses sweep sets (no truth)
 //   truth/touches.yaml            true sphere centres/tops of the touches
+//   images/hand_eye_NNN.png       (captures.hand_eye_images, off by default) chessboard images
+//                                 by the sensor camera on the vision robot; records/
+//                                 hand_eye_images.yaml: commanded joints per image (no truth);
+//                                 truth/hand_eye_images.yaml: board in cell/vision_base,
+//                                 camera poses, camera_from_board, true corner pixels
 
 #include <Eigen/Geometry>
 #include <cstddef>

@@ -16,6 +16,9 @@
 #include "datasets/rng.hpp"
 #include "triangulation/profile_io.hpp"
 
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 namespace lasercell::datasets {
 namespace {
 
@@ -245,6 +248,96 @@ TEST(PoseSweeps, JointPoseSetIsLargeVariedAndEverySweepSeesItsSphereOnTheTruth) 
   EXPECT_EQ(touches.find("true"), std::string::npos);
   EXPECT_NE(io::ReadFileBytes(dir + "/truth/touches.yaml").find("sphere_center_in_handling_base"),
             std::string::npos);
+  fs::remove_all(dir);
+}
+
+// Eye-in-hand chessboard images: the recorded joints, posed by the TRUE robot chain, put the
+// camera where the truth says, and the true corner pixels are the board's projection through it.
+TEST(HandEyeImages, TruthIsTheTrueChainAndPosesRotateAboutSeveralAxes) {
+  const SimConfig config;
+  const CellTruth truth = MakeCellTruth(config);
+  ChessboardTarget board = config.chessboard;
+  const HandEyeImageSet set = PlanHandEyeImages(config, truth, board, 99);
+  ASSERT_EQ(set.images.size(), 15u);
+  const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
+  std::vector<Eigen::Isometry3d> flanges;
+  double worst_px = 0, worst_commanded_mm = 0, largest_offset_effect_px = 0;
+  for (const HandEyeImage& im : set.images) {
+    ASSERT_EQ(im.joints_rad.size(), 6u);
+    const Eigen::Isometry3d base_from_flange = truth.true_vision_robot.BaseFromFlange(im.joints_rad);
+    flanges.push_back(base_from_flange);
+    const Eigen::Isometry3d cell_from_camera =
+        truth.layout.cell_from_vision_base * base_from_flange * truth.vision_flange_from_sensor;
+    const Eigen::Isometry3d nominal_cell_from_camera =
+        truth.layout.cell_from_vision_base *
+        truth.nominal_vision_robot.BaseFromFlange(im.joints_rad) * truth.vision_flange_from_sensor;
+    // The joints are the nominal IK of the planned pose.
+    worst_commanded_mm = std::max(
+        worst_commanded_mm,
+        (nominal_cell_from_camera.matrix() - im.commanded_cell_from_camera.matrix()).norm());
+    ASSERT_EQ(im.corners_px.size(), corners.size());
+    for (std::size_t k = 0; k < corners.size(); ++k) {
+      const Eigen::Vector3d p_in_cell = set.cell_from_board * corners[k];
+      const auto q = truth.sensor.camera.Project(cell_from_camera.inverse() * p_in_cell);
+      const auto q_nominal =
+          truth.sensor.camera.Project(nominal_cell_from_camera.inverse() * p_in_cell);
+      ASSERT_TRUE(q && q_nominal);
+      worst_px = std::max(worst_px, (*q - im.corners_px[k]).norm());
+      largest_offset_effect_px =
+          std::max(largest_offset_effect_px, (*q_nominal - im.corners_px[k]).norm());
+      EXPECT_GT(q->x(), 25.0);
+      EXPECT_LT(q->y(), truth.sensor.camera.intrinsics().height_px - 26.0);
+    }
+    const Eigen::Isometry3d camera_from_board = cell_from_camera.inverse() * set.cell_from_board;
+    EXPECT_LT((camera_from_board.matrix() - im.camera_from_board.matrix()).norm(), 1e-9);
+  }
+  EXPECT_LT(worst_px, 1e-6);
+  EXPECT_LT(worst_commanded_mm, 1e-6);
+  // The joint offsets move the camera: the nominal chain misses the true corners.
+  EXPECT_GT(largest_offset_effect_px, 1.0);
+  double smallest_deg = 0;
+  const Eigen::Vector3d spread = AxisSpread(RelativeAxes(flanges, &smallest_deg));
+  EXPECT_GT(smallest_deg, 2.0);
+  EXPECT_GT(spread[1], 0.1) << spread.transpose();
+  std::printf(
+      "hand-eye images: truth chain %.1e px, commanded %.1e, nominal chain off by up to %.1f px, "
+      "smallest relative rotation %.1f deg, axis scatter eigenvalues %.3f %.3f %.3f\n",
+      worst_px, worst_commanded_mm, largest_offset_effect_px, smallest_deg, spread[0], spread[1],
+      spread[2]);
+}
+
+// The capture set: images, records (joints, no truth), truth; OpenCV finds the board.
+TEST(HandEyeImages, CaptureWritesRecordsAndTruth) {
+  SimConfig config;
+  config.capture_planes = config.capture_spheres = config.capture_seats = false;
+  config.capture_trajectory = config.capture_chessboard_images = false;
+  config.capture_laser_line_images = config.write_meshes = false;
+  config.capture_touches = config.capture_eye_in_hand = config.capture_joint_poses = false;
+  config.capture_hand_eye_images = true;
+  config.hand_eye_images.images = 3;  // small: the renderer is slow under ASan
+  const std::string dir = TempDir("hand_eye");
+  SimulateCell(config, dir, {}, 2);
+  const std::string records = io::ReadFileBytes(dir + "/records/hand_eye_images.yaml");
+  const std::string truth = io::ReadFileBytes(dir + "/truth/hand_eye_images.yaml");
+  std::size_t joints = 0;
+  for (std::size_t at = records.find("joints_rad: ["); at != std::string::npos;
+       at = records.find("joints_rad: [", at + 1)) {
+    ++joints;
+  }
+  EXPECT_EQ(joints, 3u);
+  EXPECT_EQ(records.find("true"), std::string::npos);
+  EXPECT_EQ(records.find("camera_from_board"), std::string::npos);
+  EXPECT_NE(truth.find("vision_base_from_board"), std::string::npos);
+  EXPECT_NE(truth.find("camera_from_board"), std::string::npos);
+  EXPECT_NE(truth.find("corners_px"), std::string::npos);
+  const std::string png = io::ReadFileBytes(dir + "/images/hand_eye_000.png");
+  const cv::Mat image = cv::imdecode(cv::Mat(1, static_cast<int>(png.size()), CV_8UC1,
+                                             const_cast<char*>(png.data())),
+                                     cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(image.empty());
+  std::vector<cv::Point2f> found;
+  EXPECT_TRUE(cv::findChessboardCornersSB(
+      image, cv::Size(config.chessboard.squares_x - 1, config.chessboard.squares_y - 1), found));
   fs::remove_all(dir);
 }
 

@@ -4,9 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <numbers>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "datasets/cell.hpp"
 #include "datasets/laser_renderer.hpp"
@@ -72,7 +75,89 @@ double MaxCornerError(const std::vector<cv::Point2f>& found, const std::vector<c
   return worst;
 }
 
+// The renderer itself: on a fronto-parallel board through a distortion-free camera, without
+// blur or vignetting, a pixel an edge crosses holds ambient + exposure * (area-weighted albedo),
+// so the edge's subpixel position follows from that one pixel's gray level. It must agree with
+// the true projection (pixel centres at integer coordinates, as OpenCV and mrcal) to half the
+// n-rooks supersampling step, 1 / (2 edge_samples^2), plus the 8-bit quantization 0.5 /
+// contrast (a regular ns x ns grid would only reach 1 / (2 ns): 0.031 px at 16 samples).
+TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
+  CameraIntrinsics intrinsics;
+  intrinsics.distortion.fill(0.0);
+  const CameraModel camera{intrinsics};
+  const ImageRenderer renderer(camera);
+  const ChessboardTarget board;
+  Eigen::Isometry3d camera_from_board = Eigen::Isometry3d::Identity();
+  camera_from_board.translation() = Eigen::Vector3d(-183.3, -121.7, 700.0);
+  // The default 16 samples (64 gives 0.0024 px, bound 0.0026, but takes 25 s under ASan).
+  for (int samples : {16}) {
+    ImageRenderOptions options;
+    options.noise_sigma = 0;
+    options.blur_sigma_px = 0;
+    options.vignetting = false;
+    options.edge_samples = samples;
+    const GrayImage image = renderer.RenderChessboard(board, camera_from_board, options, 1);
+    const double contrast = options.exposure * (board.light_albedo - board.dark_albedo);
+    const double bound = 0.5 / (samples * samples) + 0.5 / contrast + 1e-9;
+    double worst = 0;
+    int edges = 0;
+    const auto project = [&](double bx, double by) {
+      return *camera.Project(camera_from_board * Eigen::Vector3d(bx, by, 0));
+    };
+    // Vertical edges (board x = i s) crossed by the middle row of each square row, and
+    // horizontal edges (board y = j s) crossed by the middle column of each square column.
+    for (int axis = 0; axis < 2; ++axis) {
+      const int n_edges = axis == 0 ? board.squares_x : board.squares_y;
+      const int n_cells = axis == 0 ? board.squares_y : board.squares_x;
+      for (int i = 1; i < n_edges; ++i) {
+        for (int j = 0; j < n_cells; ++j) {
+          const double along = i * board.square_mm, across = (j + 0.5) * board.square_mm;
+          const Eigen::Vector2d e = axis == 0 ? project(along, across) : project(across, along);
+          const double edge = axis == 0 ? e.x() : e.y();
+          const int px = static_cast<int>(std::lround(axis == 0 ? e.x() : e.y()));
+          const int other = static_cast<int>(std::lround(axis == 0 ? e.y() : e.x()));
+          const double gray = axis == 0 ? image.at(px, other) : image.at(other, px);
+          // Cell before the edge is (i - 1, j), after it (i, j); dark when the sum is even.
+          const bool before_dark = (i - 1 + j) % 2 == 0;
+          const double a_before = before_dark ? board.dark_albedo : board.light_albedo;
+          const double a_after = before_dark ? board.light_albedo : board.dark_albedo;
+          // gray = ambient + exposure * (a_before * f + a_after * (1 - f)), f = covered part.
+          const double f = (gray - options.ambient - options.exposure * a_after) /
+                           (options.exposure * (a_before - a_after));
+          const double recovered = px - 0.5 + f;
+          worst = std::max(worst, std::abs(recovered - edge));
+          ++edges;
+        }
+      }
+    }
+    EXPECT_EQ(edges, 9 * 7 + 6 * 10);
+    EXPECT_LT(worst, bound) << samples << " samples";
+    std::printf("edge samples %d: worst edge-position error %.4f px (bound %.4f)\n", samples,
+                worst, bound);
+  }
+}
+
+// Tilt of a board view: angle between the board normal and the optical axis, deg.
+double TiltDeg(const Eigen::Isometry3d& camera_from_board) {
+  return std::acos(std::min(1.0, std::abs(camera_from_board.linear()(2, 2)))) * 180.0 /
+         std::numbers::pi;
+}
+
+// findChessboardCornersSB vs cornerSubPix on noise-free renders. Measured (8 views of seed 17,
+// RMS per view, px): SB 0.038-0.046 on the views tilted <= 26 deg, 0.032-0.034 on two views at
+// 30-36 deg, 0.078 (29 deg) and 0.100 (35.5 deg) on two others; cornerSubPix (5 x 5 window,
+// started at SB's corners) 0.023-0.046 on every view. The SB excess is the detector's bias, not
+// the renderer's: 64 instead of 16 edge samples per axis changes SB's error by < 0.005 px (0.100
+// -> 0.095 on the 35.5 deg view; the n-rooks pattern that made axis-aligned edges exact to
+// 0.004 px left it at 0.100), blur 0 or 1.2 px changes it by < 0.003, a distortion-free
+// camera leaves the 35.5 deg view at 0.078, and the edge pixels hold the exact covered area
+// (EdgePixelsHoldTheExactCoveredArea). Without cos^4 vignetting SB improves to 0.012-0.026 on
+// the mild views (0.081 on the 35.5 deg one): its model of the corner assumes constant
+// contrast, which a real lens's falloff also breaks. Even a fronto-parallel board gets 0.025-0.036
+// px from SB, not 0.01. So: SB within the 0.05 px on every view tilted <= 26 deg,
+// cornerSubPix within 0.05 px on every view, SB bounded on all.
 TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
+  constexpr double kSbExactTiltDeg = 26.0;
   const CameraModel camera{CameraIntrinsics{}};
   const ImageRenderer renderer(camera);
   const ChessboardTarget board;
@@ -80,11 +165,12 @@ TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
   options.noise_sigma = 0;
   const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(board, camera, 8, 17);
   std::vector<double> view_rms;
+  int mild_views = 0;
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const GrayImage image = renderer.RenderChessboard(board, poses[k], options, 1);
+    const cv::Mat mat = ToMat(image);
     std::vector<cv::Point2f> found;
-    ASSERT_TRUE(cv::findChessboardCornersSB(ToMat(image),
-                                            cv::Size(board.squares_x - 1, board.squares_y - 1),
+    ASSERT_TRUE(cv::findChessboardCornersSB(mat, cv::Size(board.squares_x - 1, board.squares_y - 1),
                                             found, cv::CALIB_CB_ACCURACY))
         << "view " << k;
     const auto truth = TrueCorners(board, camera, poses[k]);
@@ -93,11 +179,23 @@ TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
     double rms = 0;
     const double worst = MaxCornerError(found, truth, &rms);
     view_rms.push_back(rms);
-    // findChessboardCornersSB's own bias grows with perspective (0.10 px RMS on the 35 deg view
-    // 3 here, where cv::cornerSubPix gets 0.05): bound every view loosely, the typical tightly.
+    const double tilt = TiltDeg(poses[k]);
+    if (tilt <= kSbExactTiltDeg) {
+      ++mild_views;
+      EXPECT_LT(rms, 0.05) << "view " << k << " tilt " << tilt;
+    }
     EXPECT_LT(rms, 0.12) << "view " << k;
     EXPECT_LT(worst, 0.3) << "view " << k;
+    std::vector<cv::Point2f> refined = found;
+    cv::cornerSubPix(mat, refined, cv::Size(5, 5), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+    double refined_rms = 0;
+    MaxCornerError(refined, truth, &refined_rms);
+    EXPECT_LT(refined_rms, 0.05) << "cornerSubPix, view " << k << " tilt " << tilt;
+    std::printf("view %zu tilt %.1f deg: SB rms %.4f max %.4f, cornerSubPix rms %.4f px\n", k, tilt,
+                rms, worst, refined_rms);
   }
+  EXPECT_GE(mild_views, 3);
   std::sort(view_rms.begin(), view_rms.end());
   EXPECT_LT(view_rms[view_rms.size() / 2], 0.05);  // median view
 }

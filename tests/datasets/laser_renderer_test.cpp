@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <numbers>
 #include <numeric>
 
 #include "core/error.hpp"
@@ -211,6 +213,110 @@ TEST(LaserRenderer, RowNoiseHasTheConfiguredSigma) {
   const auto a = renderer.ApplyNoise(truth, 3);
   const auto b = renderer.ApplyNoise(truth, 3);
   EXPECT_EQ(triangulation::EncodeProfiles({{}, {a}}), triangulation::EncodeProfiles({{}, {b}}));
+}
+
+// Speckle: the row shift of each exposure is N(0, speckle_sigma_px) per column and correlated
+// over the grain: lag-1 autocorrelation exp(-1 / (4 c^2)) = 0.984 for c = 4 columns, 0 for c = 0.
+TEST(LaserRenderer, SpeckleHasTheConfiguredSigmaAndGrain) {
+  Fixture f;
+  f.render.row_sigma_px = 0.0;
+  f.render.intensity_sigma = 0.0;
+  f.render.speckle_sigma_px = 0.08;
+  const Scene scene = MakePlaneScene(f.layout, 150.0, {1500, 1500});
+  const Eigen::Isometry3d pose = LookDownPose(f.sensor, {0, 0, 200}, f.sensor_options.standoff_mm);
+  struct Stats {
+    double n = 0, mean = 0, sigma = 0, lag1 = 0;
+  };
+  const auto measure = [&](double grain_px) {
+    f.render.speckle_correlation_px = grain_px;
+    const LaserRenderer renderer(scene, f.sensor, f.render);
+    const ExposureTruth truth = renderer.RenderExact(pose);
+    std::vector<std::vector<double>> lines;
+    Stats s;
+    for (std::uint64_t seed = 0; seed < 20; ++seed) {
+      const triangulation::Profile p = renderer.ApplyNoise(truth, 500 + seed);
+      std::vector<double> line(1024, std::numeric_limits<double>::quiet_NaN());
+      for (int c = 0; c < 1024; ++c) {
+        if (std::isnan(truth.row_px[c])) continue;
+        EXPECT_FALSE(std::isnan(p.row_px[c]));
+        line[c] = static_cast<double>(p.row_px[c]) - truth.row_px[c];
+        s.mean += line[c];
+        s.n += 1;
+      }
+      lines.push_back(line);
+    }
+    s.mean /= s.n;
+    double ss = 0, cross = 0, pairs = 0;
+    for (const auto& line : lines) {
+      for (int c = 0; c < 1024; ++c) {
+        if (std::isnan(line[c])) continue;
+        ss += (line[c] - s.mean) * (line[c] - s.mean);
+        if (c + 1 < 1024 && !std::isnan(line[c + 1])) {
+          cross += (line[c] - s.mean) * (line[c + 1] - s.mean);
+          pairs += 1;
+        }
+      }
+    }
+    s.sigma = std::sqrt(ss / (s.n - 1));
+    s.lag1 = (cross / pairs) / (ss / s.n);
+    return s;
+  };
+  for (double grain : {0.0, 4.0}) {
+    SCOPED_TRACE("grain " + std::to_string(grain));
+    const Stats s = measure(grain);
+    ASSERT_GT(s.n, 18000);
+    // Correlated samples: the effective count is n / sum_d rho(d)^2 = n / (c sqrt(2 pi)) (~10
+    // for c = 4); the sample sigma's standard error is sigma / sqrt(2 n_eff), 5 of them allowed
+    // (plus 3e-5 px float rounding of the rows).
+    const double n_eff = s.n / std::max(1.0, grain * std::sqrt(2 * std::numbers::pi));
+    EXPECT_NEAR(s.sigma, 0.08, 5 * 0.08 / std::sqrt(2 * n_eff) + 3e-5);
+    EXPECT_NEAR(s.mean, 0.0, 5 * 0.08 / std::sqrt(n_eff));
+    if (grain == 0) {
+      EXPECT_NEAR(s.lag1, 0.0, 5 / std::sqrt(s.n));
+    } else {
+      EXPECT_NEAR(s.lag1, std::exp(-1.0 / (4 * grain * grain)), 0.02);
+    }
+  }
+  // Speckle draws from its own stream: the white row noise of a seed is unchanged by it.
+  f.render.row_sigma_px = 0.25;
+  f.render.speckle_correlation_px = 3.0;
+  const LaserRenderer with(scene, f.sensor, f.render);
+  const ExposureTruth truth = with.RenderExact(pose);
+  f.render.speckle_sigma_px = 0.0;
+  const LaserRenderer without(scene, f.sensor, f.render);
+  f.render.row_sigma_px = 0.0;
+  f.render.speckle_sigma_px = 0.08;
+  const LaserRenderer only_speckle(scene, f.sensor, f.render);
+  const auto a = with.ApplyNoise(truth, 77), b = without.ApplyNoise(truth, 77),
+             c = only_speckle.ApplyNoise(truth, 77);
+  int compared = 0;
+  for (int col = 0; col < 1024; ++col) {
+    if (std::isnan(truth.row_px[col])) continue;
+    const double white = b.row_px[col] - truth.row_px[col];
+    const double speckle = c.row_px[col] - truth.row_px[col];
+    EXPECT_NEAR(a.row_px[col] - truth.row_px[col], white + speckle, 2e-4);
+    ++compared;
+  }
+  EXPECT_GT(compared, 900);
+  // Intensity speckle: on a dim surface (no saturation) the relative intensity varies.
+  f.render.speckle_sigma_px = 0.0;
+  f.render.speckle_intensity_sigma = 0.2;
+  f.render.intensity_gain = 0.5;
+  const LaserRenderer dim(scene, f.sensor, f.render);
+  const ExposureTruth dim_truth = dim.RenderExact(pose);
+  const auto d = dim.ApplyNoise(dim_truth, 5);
+  double ss = 0;
+  int n = 0;
+  for (int col = 0; col < 1024; ++col) {
+    if (std::isnan(d.row_px[col])) continue;
+    EXPECT_EQ(d.row_px[col], static_cast<float>(dim_truth.row_px[col]));
+    const double rel = d.intensity[col] / dim_truth.intensity[col] - 1.0;
+    ss += rel * rel;
+    ++n;
+  }
+  ASSERT_GT(n, 500);
+  // One exposure of grain 3: n_eff ~ n / 7.5; 5 standard errors.
+  EXPECT_NEAR(std::sqrt(ss / n), 0.2, 5 * 0.2 / std::sqrt(2.0 * n / 7.5));
 }
 
 TEST(LaserRenderer, SweepsAreIdenticalForAnyThreadCount) {

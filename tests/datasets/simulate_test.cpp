@@ -69,6 +69,11 @@ TEST(SimConfig, DefaultsAreValidAndYamlRoundTrips) {
   EXPECT_NO_THROW(c.Check());
   c.joint_offsets_deg = std::vector<double>{0.1, -0.2, 0.05, 0, 0.3, -0.01};
   c.render.row_sigma_px = 0.1234567890123;
+  c.render.speckle_sigma_px = 0.075;
+  c.render.speckle_correlation_px = 2.5;
+  c.render.speckle_intensity_sigma = 0.3;
+  c.hand_eye_images.distance_mm = 812.5;
+  c.capture_hand_eye_images = true;
   c.spheres.positions_xy_mm[2] = {111.5, -3.25};
   c.touches.sigma_mm = 0.03;
   c.joint_poses.poses = 60;
@@ -78,6 +83,11 @@ TEST(SimConfig, DefaultsAreValidAndYamlRoundTrips) {
   const SimConfig back = SimConfigFromYaml(text, "roundtrip.yaml");
   EXPECT_EQ(SimConfigToYaml(back), text);
   EXPECT_EQ(back.render.row_sigma_px, c.render.row_sigma_px);
+  EXPECT_EQ(back.render.speckle_sigma_px, 0.075);
+  EXPECT_EQ(back.render.speckle_correlation_px, 2.5);
+  EXPECT_EQ(back.render.speckle_intensity_sigma, 0.3);
+  EXPECT_EQ(back.hand_eye_images.distance_mm, 812.5);
+  EXPECT_TRUE(back.capture_hand_eye_images);
   EXPECT_EQ(back.joint_poses.poses, 60);
   EXPECT_EQ(back.eye_in_hand.max_roll_deg, 45.5);
   EXPECT_FALSE(back.capture_joint_poses);
@@ -139,6 +149,20 @@ TEST(SimConfig, ErrorsNameTheField) {
   EXPECT_NE(e.find("SimConfig.joint_poses.sweep_length_mm"), std::string::npos) << e;
   e = ConfigError("eye_in_hand: {profile: 8}\n");
   EXPECT_NE(e.find("unknown field 'eye_in_hand.profile'"), std::string::npos) << e;
+  e = ConfigError("hand_eye_images: {images: 0}\n");
+  EXPECT_NE(e.find("SimConfig.hand_eye_images.images"), std::string::npos) << e;
+  e = ConfigError("hand_eye_images: {min_tilt_deg: 30, max_tilt_deg: 20}\n");
+  EXPECT_NE(e.find("SimConfig.hand_eye_images.max_tilt_deg"), std::string::npos) << e;
+  e = ConfigError("hand_eye_images: {distance: 500}\n");
+  EXPECT_NE(e.find("unknown field 'hand_eye_images.distance'"), std::string::npos) << e;
+  e = ConfigError("render: {speckle_sigma_px: -0.1}\n");
+  EXPECT_NE(e.find("SimConfig.render.speckle_sigma_px"), std::string::npos) << e;
+  e = ConfigError("render: {speckle_correlation_px: -1}\n");
+  EXPECT_NE(e.find("SimConfig.render.speckle_correlation_px"), std::string::npos) << e;
+  e = ConfigError("render: {speckle_intensity_sigma: -0.5}\n");
+  EXPECT_NE(e.find("SimConfig.render.speckle_intensity_sigma"), std::string::npos) << e;
+  e = ConfigError("render: {speckle_px: 0.1}\n");
+  EXPECT_NE(e.find("unknown field 'render.speckle_px'"), std::string::npos) << e;
   e = ConfigError("render: {reflection_probability: 2}\n");
   EXPECT_NE(e.find("SimConfig.render.reflection_probability"), std::string::npos) << e;
   e = ConfigError("captures: {joint_pose: true}\n");
@@ -242,6 +266,8 @@ TEST(CellTruth, RobotTrajectoryIsReachableAndTheTrueRobotMissesIt) {
 TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   SimConfig config = SmallConfig();
   config.render.reflection_probability = 0.5;  // ghosts draw random numbers too
+  config.render.speckle_sigma_px = 0.08;       // and speckle
+  config.render.speckle_intensity_sigma = 0.2;
   const std::string a = TempDir("a"), b = TempDir("b"), c = TempDir("c");
   const SimulationReport ra = SimulateCell(config, a, {}, 1);
   const SimulationReport rb = SimulateCell(config, b, {}, 2);
