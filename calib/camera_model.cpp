@@ -1,0 +1,182 @@
+#include "calib/camera_model.hpp"
+
+extern "C" {
+#include <mrcal/mrcal.h>  // C library without extern "C" guards
+}
+
+#include <cmath>
+#include <memory>
+#include <sstream>
+#include <utility>
+
+#include "core/error.hpp"
+#include "core/frame_graph.hpp"
+#include "core/io/file_util.hpp"
+
+namespace lasercell::calib {
+namespace {
+
+mrcal_lensmodel_t ParseLensmodel(const std::string& name) {
+  mrcal_lensmodel_t lens;
+  if (!mrcal_lensmodel_from_name(&lens, name.c_str()) ||
+      !mrcal_lensmodel_type_is_valid(lens.type)) {
+    throw InputError("lens model '" + name +
+                     "' is not a configured mrcal model name (e.g. LENSMODEL_OPENCV8 or "
+                     "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=12_fov_x_deg=100)");
+  }
+  return lens;
+}
+
+using ModelPtr = std::unique_ptr<mrcal_cameramodel_t, void (*)(mrcal_cameramodel_t*)>;
+
+ModelPtr Guard(mrcal_cameramodel_t* model) {
+  return ModelPtr(model, [](mrcal_cameramodel_t* m) { mrcal_free_cameramodel(&m); });
+}
+
+CameraModel FromMrcal(const mrcal_cameramodel_t& m, const std::string& name) {
+  char buffer[1024];
+  if (!mrcal_lensmodel_name(buffer, sizeof(buffer), &m.lensmodel)) {
+    throw FileError(name, "its lens model has no printable mrcal name");
+  }
+  const int n = mrcal_lensmodel_num_params(&m.lensmodel);
+  try {
+    return CameraModel(buffer, std::vector<double>(m.intrinsics, m.intrinsics + n),
+                       static_cast<int>(m.imagersize[0]), static_cast<int>(m.imagersize[1]));
+  } catch (const InputError& e) {
+    throw FileError(name, e.what());
+  }
+}
+
+}  // namespace
+
+CameraModel::CameraModel(std::string lensmodel, std::vector<double> intrinsics, int width_px,
+                         int height_px)
+    : lensmodel_(std::move(lensmodel)),
+      intrinsics_(std::move(intrinsics)),
+      width_px_(width_px),
+      height_px_(height_px) {
+  lens_ = ParseLensmodel(lensmodel_);
+  const int n = mrcal_lensmodel_num_params(&lens_);
+  if (static_cast<int>(intrinsics_.size()) != n) {
+    throw InputError("lens model " + lensmodel_ + " needs " + std::to_string(n) +
+                     " intrinsics, got " + std::to_string(intrinsics_.size()));
+  }
+  for (std::size_t i = 0; i < intrinsics_.size(); ++i) {
+    if (!std::isfinite(intrinsics_[i])) {
+      throw InputError("intrinsic " + std::to_string(i) + " of the " + lensmodel_ +
+                       " camera is not finite");
+    }
+  }
+  if (width_px_ <= 0 || height_px_ <= 0) {
+    throw InputError("camera imager size " + std::to_string(width_px_) + " x " +
+                     std::to_string(height_px_) + " px must be positive");
+  }
+}
+
+bool CameraModel::HasGradients() const {
+  return mrcal_lensmodel_metadata(&lens_).has_gradients;
+}
+
+Eigen::Vector2d CameraModel::Project(const Eigen::Vector3d& p_in_camera) const {
+  return ProjectWithIntrinsics(intrinsics_.data(), p_in_camera, nullptr, nullptr);
+}
+
+Eigen::Vector2d CameraModel::Project(const Eigen::Vector3d& p_in_camera,
+                                     Eigen::Matrix<double, 2, 3>* dq_dp,
+                                     Eigen::Matrix<double, 2, Eigen::Dynamic>* dq_dintrinsics) const {
+  std::vector<double> dqdi;
+  if (dq_dintrinsics != nullptr) dqdi.resize(2 * intrinsics_.size());
+  const Eigen::Vector2d q = ProjectWithIntrinsics(intrinsics_.data(), p_in_camera, dq_dp,
+                                        dq_dintrinsics != nullptr ? dqdi.data() : nullptr);
+  if (dq_dintrinsics != nullptr) {
+    const int n = NumIntrinsics();
+    dq_dintrinsics->resize(2, n);
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < n; ++c) (*dq_dintrinsics)(r, c) = dqdi[r * n + c];
+    }
+  }
+  return q;
+}
+
+Eigen::Vector2d CameraModel::ProjectWithIntrinsics(const double* intrinsics,
+                                                   const Eigen::Vector3d& p_in_camera,
+                                                   Eigen::Matrix<double, 2, 3>* dq_dp,
+                                                   double* dq_dintrinsics_row_major) const {
+  const mrcal_point3_t p = {{p_in_camera.x(), p_in_camera.y(), p_in_camera.z()}};
+  mrcal_point2_t q;
+  mrcal_point3_t dqdp[2];
+  if (!mrcal_project(&q, dq_dp != nullptr ? dqdp : nullptr, dq_dintrinsics_row_major, &p, 1,
+                     &lens_, intrinsics)) {
+    throw InternalError("mrcal_project failed for lens model " + lensmodel_);
+  }
+  if (dq_dp != nullptr) {
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 3; ++c) (*dq_dp)(r, c) = dqdp[r].xyz[c];
+    }
+  }
+  return {q.x, q.y};
+}
+
+Eigen::Vector3d CameraModel::Unproject(const Eigen::Vector2d& pixel) const {
+  return UnprojectMany({pixel}).front();
+}
+
+std::vector<Eigen::Vector3d> CameraModel::UnprojectMany(
+    const std::vector<Eigen::Vector2d>& pixels) const {
+  std::vector<mrcal_point2_t> q(pixels.size());
+  for (std::size_t i = 0; i < pixels.size(); ++i) q[i] = {{pixels[i].x(), pixels[i].y()}};
+  std::vector<mrcal_point3_t> v(pixels.size());
+  if (!pixels.empty() && !mrcal_unproject(v.data(), q.data(), static_cast<int>(q.size()), &lens_,
+                                          intrinsics_.data())) {
+    throw InternalError("mrcal_unproject failed for lens model " + lensmodel_);
+  }
+  std::vector<Eigen::Vector3d> rays(pixels.size());
+  for (std::size_t i = 0; i < pixels.size(); ++i) {
+    rays[i] = Eigen::Vector3d(v[i].x, v[i].y, v[i].z).normalized();
+  }
+  return rays;
+}
+
+bool CameraModel::InImage(const Eigen::Vector2d& pixel) const {
+  return pixel.x() >= 0.0 && pixel.y() >= 0.0 && pixel.x() <= width_px_ - 1.0 &&
+         pixel.y() <= height_px_ - 1.0;
+}
+
+std::string CameraModelText(const CameraModel& model, const std::string& comment) {
+  std::string out = "# lasercell-cameramodel v1 (mrcal .cameramodel; units mm and px)\n";
+  std::istringstream lines(comment);
+  for (std::string line; std::getline(lines, line);) out += "# " + line + "\n";
+  out += "{\n  'lensmodel':  '" + model.lensmodel() + "',\n  'intrinsics': [ ";
+  for (double v : model.intrinsics()) out += FormatDouble(v) + ", ";
+  out += "],\n  'imagersize': [ " + std::to_string(model.width_px()) + ", " +
+         std::to_string(model.height_px()) + " ],\n  'extrinsics': [ 0, 0, 0, 0, 0, 0 ]\n}\n";
+  return out;
+}
+
+CameraModel ParseCameraModel(const std::string& text, const std::string& name) {
+  mrcal_cameramodel_t* raw =
+      mrcal_read_cameramodel_string(text.data(), static_cast<int>(text.size()));
+  if (raw == nullptr) {
+    throw FileError(name, "mrcal could not parse this .cameramodel (expected a mrcal camera "
+                          "model text with lensmodel, intrinsics, imagersize, extrinsics)");
+  }
+  const ModelPtr model = Guard(raw);
+  return FromMrcal(*model, name);
+}
+
+CameraModel LoadCameraModel(const std::string& path) {
+  const std::string text = io::ReadFileBytes(path);
+  return ParseCameraModel(text, path);
+}
+
+void SaveCameraModel(const std::string& path, const CameraModel& model,
+                     const std::string& comment) {
+  const std::string text = CameraModelText(model, comment);
+  // Never write a file that mrcal itself would not read back identically.
+  const CameraModel check = ParseCameraModel(text, path);
+  LASERCELL_CHECK(check.intrinsics() == model.intrinsics() && check.lensmodel() == model.lensmodel(),
+                  "camera model text does not round-trip through mrcal's reader");
+  io::WriteFileAtomically(path, text);
+}
+
+}  // namespace lasercell::calib

@@ -1,0 +1,88 @@
+#pragma once
+// A calibrated camera: a mrcal lens model (any model mrcal can project with gradients:
+// LENSMODEL_PINHOLE, LENSMODEL_OPENCV4/5/8/12, LENSMODEL_STEREOGRAPHIC,
+// LENSMODEL_SPLINED_STEREOGRAPHIC_..., ...), its intrinsics vector in mrcal's order (fx fy cx cy,
+// then the distortion parameters) and the imager size.
+//
+// Conventions (mrcal/OpenCV): camera frame +x along image columns, +y along rows, +z the optical
+// axis, origin at the projection centre; pixel coordinates put the centre of the top-left pixel
+// at (0, 0). Units: mm for points, px for pixels. In lasercell the `sensor` frame is the camera
+// frame of the laser sensor.
+//
+// Files: mrcal's .cameramodel text (a Python-dict literal that mrcal's tools and
+// mrcal_read_cameramodel_file read), written atomically with every number printed to round-trip
+// exactly, preceded by a `# lasercell-cameramodel v1` comment line.
+
+extern "C" {
+#include <mrcal/mrcal.h>  // C library without extern "C" guards
+}
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace lasercell::calib {
+
+class CameraModel {
+ public:
+  /// Throws InputError when the lens model name is not a configured mrcal model, when the
+  /// intrinsics vector has the wrong length for it, when a value is not finite or when the
+  /// imager size is not positive.
+  CameraModel(std::string lensmodel, std::vector<double> intrinsics, int width_px, int height_px);
+
+  /// mrcal's configured model name, e.g. "LENSMODEL_OPENCV8" or
+  /// "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=16_Ny=12_fov_x_deg=100".
+  const std::string& lensmodel() const { return lensmodel_; }
+  /// fx fy cx cy then distortion, in mrcal's order for the model.
+  const std::vector<double>& intrinsics() const { return intrinsics_; }
+  int width_px() const { return width_px_; }
+  int height_px() const { return height_px_; }
+  /// Number of intrinsics for this model.
+  int NumIntrinsics() const { return static_cast<int>(intrinsics_.size()); }
+  /// True when mrcal provides gradients for the model (everything but CAHVORE).
+  bool HasGradients() const;
+
+  /// Pixel of a point in the camera frame (mrcal_project). Points behind a pinhole-like camera
+  /// give undefined values, as in mrcal; check z > 0 before calling when that matters.
+  Eigen::Vector2d Project(const Eigen::Vector3d& p_in_camera) const;
+  /// Projection with optional gradients: dq_dp is 2x3, dq_dintrinsics is 2 x NumIntrinsics()
+  /// (dense, as mrcal_project reports it). Either pointer may be null.
+  Eigen::Vector2d Project(const Eigen::Vector3d& p_in_camera, Eigen::Matrix<double, 2, 3>* dq_dp,
+                          Eigen::Matrix<double, 2, Eigen::Dynamic>* dq_dintrinsics) const;
+  /// Projection through this lens model evaluated at other intrinsics (NumIntrinsics() values),
+  /// for solvers: dq_dintrinsics is a row-major 2 x NumIntrinsics() array. Pointers may be null.
+  Eigen::Vector2d ProjectWithIntrinsics(const double* intrinsics,
+                                        const Eigen::Vector3d& p_in_camera,
+                                        Eigen::Matrix<double, 2, 3>* dq_dp,
+                                        double* dq_dintrinsics_row_major) const;
+  /// mrcal's parsed lens model, for code that calls mrcal directly.
+  const mrcal_lensmodel_t& mrcal_lensmodel() const { return lens_; }
+  /// Unit ray direction (camera frame) of a pixel (mrcal_unproject). Throws InternalError when
+  /// mrcal's iterative unprojection fails.
+  Eigen::Vector3d Unproject(const Eigen::Vector2d& pixel) const;
+  /// Unit rays of many pixels in one mrcal call (faster than one by one).
+  std::vector<Eigen::Vector3d> UnprojectMany(const std::vector<Eigen::Vector2d>& pixels) const;
+  /// True when 0 <= u <= width-1 and 0 <= v <= height-1.
+  bool InImage(const Eigen::Vector2d& pixel) const;
+
+ private:
+  std::string lensmodel_;
+  mrcal_lensmodel_t lens_{};
+  std::vector<double> intrinsics_;
+  int width_px_ = 0;
+  int height_px_ = 0;
+};
+
+/// The .cameramodel text for a model (extrinsics rt_cam_ref = 0: the camera is its own reference),
+/// with `comment` (may be multi-line; each line is prefixed with "# ") after the version line.
+std::string CameraModelText(const CameraModel& model, const std::string& comment = "");
+/// Parses .cameramodel text with mrcal's reader; throws FileError(name, ...) when mrcal cannot
+/// read it. Extrinsics are ignored (lasercell keeps poses in the frame graph).
+CameraModel ParseCameraModel(const std::string& text, const std::string& name);
+/// Reads a .cameramodel file (any mrcal-written or lasercell-written model).
+CameraModel LoadCameraModel(const std::string& path);
+/// Writes a .cameramodel file atomically (temp file + rename).
+void SaveCameraModel(const std::string& path, const CameraModel& model,
+                     const std::string& comment = "");
+
+}  // namespace lasercell::calib

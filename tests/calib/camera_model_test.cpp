@@ -1,0 +1,98 @@
+#include "calib/camera_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.hpp"
+
+namespace lasercell::calib {
+namespace {
+
+CameraModel Opencv8() {
+  return CameraModel("LENSMODEL_OPENCV8",
+                     {1132.0, 1131.5, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011,
+                      -0.006, 0.002},
+                     1024, 1024);
+}
+
+TEST(CameraModel, ProjectUnprojectRoundTrip) {
+  const CameraModel model = Opencv8();
+  for (double u : {0.0, 200.5, 511.0, 1023.0}) {
+    for (double v : {0.0, 333.3, 1023.0}) {
+      const Eigen::Vector3d ray = model.Unproject({u, v});
+      EXPECT_NEAR(ray.norm(), 1.0, 1e-12);
+      const Eigen::Vector2d q = model.Project(700.0 * ray);
+      EXPECT_NEAR(q.x(), u, 1e-6);
+      EXPECT_NEAR(q.y(), v, 1e-6);
+    }
+  }
+}
+
+TEST(CameraModel, GradientsMatchNumericDifferences) {
+  const CameraModel model = Opencv8();
+  const Eigen::Vector3d p(120.0, -80.0, 650.0);
+  Eigen::Matrix<double, 2, 3> dq_dp;
+  Eigen::Matrix<double, 2, Eigen::Dynamic> dq_di;
+  model.Project(p, &dq_dp, &dq_di);
+  ASSERT_EQ(dq_di.cols(), 12);
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Vector3d d = Eigen::Vector3d::Zero();
+    d[k] = 1e-4;
+    const Eigen::Vector2d num = (model.Project(p + d) - model.Project(p - d)) / 2e-4;
+    EXPECT_NEAR((num - dq_dp.col(k)).norm(), 0.0, 1e-6);
+  }
+  for (int k = 0; k < 12; ++k) {
+    std::vector<double> a = model.intrinsics(), b = model.intrinsics();
+    const double h = 1e-6 * std::max(1.0, std::abs(a[k]));
+    a[k] += h;
+    b[k] -= h;
+    const Eigen::Vector2d num = (model.ProjectWithIntrinsics(a.data(), p, nullptr, nullptr) -
+                                 model.ProjectWithIntrinsics(b.data(), p, nullptr, nullptr)) /
+                                (2 * h);
+    EXPECT_NEAR((num - dq_di.col(k)).norm(), 0.0, 1e-4 * std::max(1.0, num.norm())) << k;
+  }
+}
+
+TEST(CameraModel, FileRoundTripIsExact) {
+  const CameraModel model = Opencv8();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "lasercell_camera_model_test.cameramodel").string();
+  SaveCameraModel(path, model, "test model\nsecond line");
+  const CameraModel back = LoadCameraModel(path);
+  EXPECT_EQ(back.lensmodel(), model.lensmodel());
+  EXPECT_EQ(back.intrinsics(), model.intrinsics());
+  EXPECT_EQ(back.width_px(), 1024);
+  EXPECT_EQ(back.height_px(), 1024);
+  std::filesystem::remove(path);
+}
+
+TEST(CameraModel, SplinedModelNameRoundTrips) {
+  const std::string name = "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=8_Ny=6_fov_x_deg=60";
+  // 4 core + 2 * Nx * Ny control points.
+  std::vector<double> intrinsics(4 + 2 * 8 * 6, 0.0);
+  intrinsics[0] = intrinsics[1] = 900.0;
+  intrinsics[2] = 319.5;
+  intrinsics[3] = 239.5;
+  const CameraModel model(name, intrinsics, 640, 480);
+  const CameraModel back = ParseCameraModel(CameraModelText(model), "mem");
+  EXPECT_EQ(back.lensmodel(), name);
+  EXPECT_EQ(back.intrinsics(), intrinsics);
+}
+
+TEST(CameraModel, BadInputsSayWhatIsWrong) {
+  EXPECT_THROW(CameraModel("LENSMODEL_NOPE", {1, 2, 3, 4}, 10, 10), InputError);
+  try {
+    CameraModel("LENSMODEL_OPENCV8", {1, 2, 3, 4}, 10, 10);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("needs 12 intrinsics, got 4"), std::string::npos);
+  }
+  EXPECT_THROW(CameraModel("LENSMODEL_PINHOLE", {1, 1, 1, 1}, 0, 10), InputError);
+  EXPECT_THROW(ParseCameraModel("{ 'nope': 1 }", "bad.cameramodel"), FileError);
+  EXPECT_THROW(LoadCameraModel("/nonexistent/x.cameramodel"), FileError);
+}
+
+}  // namespace
+}  // namespace lasercell::calib
