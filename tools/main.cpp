@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
+  CLI::App* calibrate = app.add_subcommand("calibrate", "Calibrate the cell: camera, ...");
+  calibrate->require_subcommand(1);
+  lasercell::tools::AddCalibrateCameraCommand(*calibrate);
   lasercell::tools::AddBenchCommands(app);
   try {
     app.parse(argc, argv);
