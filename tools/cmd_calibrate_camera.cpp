@@ -26,7 +26,7 @@ namespace lasercell::tools {
 namespace {
 
 struct CalibrateCameraArgs {
-  std::string images, board, model = "opencv8", out, report, json;
+  std::string images, board, model = "opencv8", out, report, json, corners_out;
   bool fix_aspect = false, warp = false, quiet = false;
   int spline_order = 3, spline_nx = 10, spline_ny = 8;
   double spline_fov_x_deg = 0;
@@ -161,6 +161,30 @@ nlohmann::json ResultJson(const CalibrateCameraArgs& args, const calib::BoardSpe
   return j;
 }
 
+// mrcal's corners cache (vnl: "# filename x y level"), as mrgingham writes it, so that
+// mrcal-calibrate-cameras --corners-cache can run on our detections: a complete chessboard per
+// image in grid order, or "filename - - -" when the board was not found.
+void WriteCornersCache(const std::string& path, const calib::BoardSpec& board,
+                       const std::vector<ImageEntry>& images) {
+  if (board.type != calib::BoardType::kChessboard) {
+    throw OptionError("--corners-out: mrcal's corners cache holds complete chessboards only");
+  }
+  std::string text = "## lasercell calibrate camera detections, board " + board.ToString() +
+                     "\n# filename x y level\n";
+  char line[512];
+  for (const ImageEntry& e : images) {
+    if (!e.detection.found()) {
+      text += e.path + " - - -\n";
+      continue;
+    }
+    for (const Eigen::Vector2d& q : e.detection.corners_px) {
+      std::snprintf(line, sizeof(line), " %.6f %.6f 0\n", q.x(), q.y());
+      text += e.path + line;
+    }
+  }
+  io::WriteFileAtomically(path, text);
+}
+
 void Run(const CalibrateCameraArgs& args) {
   const calib::BoardSpec board = calib::ParseBoardSpec(args.board);
   calib::IntrinsicsOptions options;
@@ -228,6 +252,7 @@ void Run(const CalibrateCameraArgs& args) {
     }
     throw InputError(msg + (views.size() < images.size() ? ")" : ""));
   }
+  if (!args.corners_out.empty()) WriteCornersCache(args.corners_out, board, images);
   const calib::IntrinsicsResult result =
       calib::CalibrateIntrinsics(views, board, width, height, options);
   const nlohmann::json j = ResultJson(args, board, images, view_image, result, width, height);
@@ -269,6 +294,9 @@ void AddCalibrateCameraCommand(CLI::App& calibrate) {
   cmd->add_option("--out", args->out, "Output .cameramodel (mrcal format)")->required();
   cmd->add_option("--json", args->json, "Output JSON summary");
   cmd->add_option("--report", args->report, "Output HTML report");
+  cmd->add_option("--corners-out", args->corners_out,
+                  "Also write the detections as a mrcal corners cache (vnl) for "
+                  "mrcal-calibrate-cameras --corners-cache");
   cmd->add_flag("--quiet", args->quiet, "No per-image lines, no summary");
   cmd->callback([args] { Run(*args); });
 }
