@@ -16,6 +16,7 @@
 
 #include "calib/camera_model.hpp"
 #include "calib/intrinsics.hpp"
+#include "calib/intrinsics_report.hpp"
 #include "calib/target_detection.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
@@ -257,6 +258,12 @@ void Run(const CalibrateCameraArgs& args) {
       calib::CalibrateIntrinsics(views, board, width, height, options);
   const nlohmann::json j = ResultJson(args, board, images, view_image, result, width, height);
   if (!args.json.empty()) io::WriteFileAtomically(args.json, j.dump(2) + "\n");
+  if (!args.report.empty()) {
+    report::WriteHtmlReport(
+        args.report, calib::IntrinsicsReport(result, "lasercell camera calibration",
+                                             "images " + args.images + ", board " +
+                                                 board.ToString() + ", model " + args.model));
+  }
   if (!result.focal_observable || !result.converged) {
     throw InputError("--images '" + args.images + "': calibration rejected, no camera model "
                      "written: " + (result.warnings.empty() ? result.Summary() : result.warnings.front()));

@@ -6,7 +6,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <cmath>
+#include <cstdio>
+#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -95,6 +98,38 @@ TEST_F(CalibrateCameraCli, OpenCvSamplesMatchOpenCvsResultAndJsonReadsBack) {
   EXPECT_EQ(j["projection_uncertainty"]["grid_px"].size(), 12u);
   const std::string model = Slurp(dir_ / "cam.cameramodel");
   EXPECT_THAT(model, HasSubstr("LENSMODEL_OPENCV5"));
+}
+
+// The report: a self-contained page that loads in headless chromium without script errors and
+// holds the plots (2 residual histograms, residual vectors, per-image RMS, coverage,
+// projection uncertainty).
+TEST_F(CalibrateCameraCli, ReportLoadsInHeadlessChromiumWithItsPlots) {
+  CopyImages({1, 3, 4, 5, 6, 7, 8});
+  const fs::path html = dir_ / "cam.html";
+  const Run r = Exec(Images() + " --board chessboard:9x6:25 --report " + html.string() + " " +
+                     Outputs());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string page = Slurp(html);
+  for (const char* plot : {"Residual norm of the inlier corners", "Residual vectors over the image",
+                           "RMS reprojection error per image",
+                           "Coverage of the image by the observed corners",
+                           "Projection uncertainty (1 sigma"}) {
+    EXPECT_THAT(page, HasSubstr(plot));
+  }
+  const std::string command = "chromium --headless --no-sandbox --disable-gpu "
+                              "--disable-dev-shm-usage --dump-dom 'file://" + html.string() +
+                              "' 2>/dev/null";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  ASSERT_TRUE(pipe);
+  std::string dom;
+  std::array<char, 4096> buffer{};
+  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe.get())) {
+    dom.append(buffer.data(), n);
+  }
+  ASSERT_FALSE(dom.empty()) << "chromium did not run (scripts/install-deps installs it)";
+  EXPECT_THAT(dom, HasSubstr("data-report-ready=\"1\""));
+  EXPECT_THAT(dom, HasSubstr("data-plots=\"6\""));
+  EXPECT_EQ(dom.find("data-report-errors"), std::string::npos);
 }
 
 TEST_F(CalibrateCameraCli, UnreadableImageIsRejectedWithItsReason) {
