@@ -4,6 +4,7 @@
 #include <ceres/rotation.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -90,7 +91,8 @@ struct SolveReport {
 // them (marginal over the warp), unscaled. The
 // columns are scaled to unit norm first (fx ~ 1e3 px and k6 ~ 1e-3 differ by orders of
 // magnitude; unscaled, J'J looks rank deficient when it is not), then inverted through the SVD
-// of the scaled J; empty when its condition number (> 1e13) shows a true rank deficiency.
+// of the scaled J; empty when its condition number (> 1e15, rounding level) shows a true rank deficiency;
+// OPENCV8's rational distortion alone reaches 1e13-1e14 on ordinary data.
 Eigen::MatrixXd MarginalCovariance(State& s, ceres::Problem& problem) {
   std::vector<double*> blocks = {s.free.data()};
   for (Pose6& p : s.poses) {
@@ -117,9 +119,15 @@ Eigen::MatrixXd MarginalCovariance(State& s, ceres::Problem& problem) {
   const Eigen::MatrixXd js = j * scale.asDiagonal();
   // SVD of the scaled Jacobian (not of J'J: its squared condition number would lose the weakly
   // determined directions of, e.g., OPENCV8's rational distortion to rounding).
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(js, Eigen::ComputeThinV);
+  // QR first, then a Jacobi SVD of the small triangular factor: accurate down to the smallest
+  // singular values (Eigen's BDCSVD deflates them to exact zeros).
+  if (js.rows() < js.cols()) return {};
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(js);
+  const Eigen::MatrixXd rfac =
+      qr.matrixQR().topRows(js.cols()).triangularView<Eigen::Upper>();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(rfac, Eigen::ComputeFullV);
   const Eigen::VectorXd sv = svd.singularValues();
-  if (sv.size() == 0 || !(sv(sv.size() - 1) > 1e-13 * sv(0))) return {};
+  if (sv.size() == 0 || !(sv(sv.size() - 1) > 1e-15 * sv(0))) return {};
   // Columns of the intrinsics and the poses (a held pose has none; then only the intrinsics).
   int n = s.layout.NumFree();
   if (static_cast<int>(blocks.size()) >= 1 + static_cast<int>(s.poses.size())) {
@@ -157,12 +165,16 @@ SolveReport Solve(State& s, bool hold_poses, Eigen::MatrixXd* covariance) {
     }
   }
   ceres::Solver::Options so;
-  so.linear_solver_type = ceres::DENSE_SCHUR;
+  // Few intrinsics: dense QR of the whole Jacobian, robust to the near-degenerate directions of
+  // OPENCV8's rational distortion (the normal equations of a Schur solver lose them and make
+  // Ceres log Cholesky failures). Splined models (hundreds of knots): Schur elimination of the
+  // poses, the regularisation keeps the reduced system definite.
+  so.linear_solver_type = s.regularization.size() > 0 ? ceres::DENSE_SCHUR : ceres::DENSE_QR;
   so.max_num_iterations = opt.max_iterations;
   so.num_threads = opt.threads;
-  so.function_tolerance = 1e-12;
+  so.function_tolerance = 1e-10;
   so.gradient_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-12;
+  so.parameter_tolerance = 1e-10;
   so.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
@@ -348,6 +360,7 @@ std::string IntrinsicsResult::Summary() const {
     s << ", fx " << Fmt(camera->intrinsics()[0]);
     if (!intrinsics_sigma.empty()) s << " +- " << Fmt(intrinsics_sigma[0]);
   }
+  s << ", " << iterations << " iterations";
   s << (converged ? "" : ", NOT CONVERGED") << (focal_observable ? "" : ", FOCAL UNOBSERVABLE");
   if (!warnings.empty()) s << ", " << warnings.size() << " warning(s)";
   return s.str();
