@@ -13,15 +13,19 @@
 // (5) covariance of the intrinsics, marginal over poses and warp, scaled by the observed
 // residual variance sigma^2 = SSR / (2 N - P); (6) projection uncertainty over a grid.
 //
-// Projection uncertainty, and how it differs from mrcal's: for each grid pixel q the ray is
-// unprojected and the point at `uncertainty_range_mm` on it is held FIXED IN THE CAMERA FRAME;
-// its projection's 2x2 covariance is J Sigma_intrinsics J^T (J = dq/dintrinsics from mrcal),
-// and the figure is the standard deviation along its worst direction, sqrt(max eigenvalue),
-// in px (mrcal's "worst direction" figure). mrcal instead holds the point fixed in a reference
-// frame tied to the boards (its "mean frames"/"cross-reprojection" methods) and so also
-// propagates the uncertainty of the camera-to-board transforms; for central lens models our
-// figure does not depend on the range, and it is smaller than mrcal's where that transform
-// uncertainty dominates (at short range, and near the image centre).
+// Projection uncertainty, and how it differs from mrcal's: for each grid cell the ray of its
+// centre pixel is unprojected and the point p at `uncertainty_range_mm` on it is expressed in
+// every board frame (p_i = board_i_from_camera * p); perturbing the parameters moves the point
+// to mean_i(camera_from_board_i * p_i) and its projection q. The 2x2 covariance of q is
+// G Sigma G^T with G = dq/d(intrinsics, all poses) (mrcal's gradients for the lens, exact
+// rotation derivatives for the poses) and Sigma the joint covariance of intrinsics and poses
+// (marginal over the warp) scaled by sigma^2; the figure is its worst-direction standard
+// deviation sqrt(max eigenvalue), px. This is mrcal's "mean-frames" construction (mrcal <= 2.2);
+// differences: sigma comes from the observed residuals (mrcal uses its
+// observed_pixel_uncertainty), mrcal propagates the board-warp uncertainty too, and mrcal >= 2.3
+// defaults to its cross-reprojection method. Like every linearised figure it is unreliable
+// where no board was seen (tests: it matches the Monte-Carlo spread where boards were and
+// overestimates it 2-3x in uncovered image corners).
 //
 // RMS: rms_px = sqrt(mean over corners of |residual|^2) (OpenCV's definition, the 2-D error per
 // corner). mrcal's "RMS reprojection error" divides by the number of coordinates (2N): it is

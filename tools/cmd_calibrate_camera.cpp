@@ -152,8 +152,10 @@ nlohmann::json ResultJson(const CalibrateCameraArgs& args, const calib::BoardSpe
   }
   j["projection_uncertainty"] = {
       {"definition",
-       "1-sigma worst-direction projection uncertainty (px) of a point fixed in the camera frame "
-       "at range_mm, from the intrinsics covariance; cells row by row over the image"},
+       "1-sigma worst-direction projection uncertainty (px) of the point at range_mm on each "
+       "cell's centre ray, held fixed relative to the mean of the board frames (mrcal's "
+       "mean-frames idea), from the joint intrinsics+poses covariance scaled by the residual "
+       "variance; cells row by row over the image (calib/intrinsics.hpp)"},
       {"range_mm", r.uncertainty_range_mm},
       {"max_px", max_u},
       {"grid_px", grid}};
