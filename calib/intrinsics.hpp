@@ -20,10 +20,10 @@
 // G Sigma G^T with G = dq/d(intrinsics, all poses) (mrcal's gradients for the lens, exact
 // rotation derivatives for the poses) and Sigma the joint covariance of intrinsics and poses
 // (marginal over the warp) scaled by sigma^2; the figure is its worst-direction standard
-// deviation sqrt(max eigenvalue), px. This is mrcal's "mean-frames" construction (mrcal <= 2.2);
-// differences: sigma comes from the observed residuals (mrcal uses its
-// observed_pixel_uncertainty), mrcal propagates the board-warp uncertainty too, and mrcal >= 2.3
-// defaults to its cross-reprojection method. Like every linearised figure it is unreliable
+// deviation sqrt(max eigenvalue), px. This follows mrcal's "mean-frames" construction;
+// differences: sigma comes from the observed residuals of this solve (mrcal from its
+// observed-pixel-uncertainty setting), the warp is marginalised out here, and newer mrcal
+// versions also offer a cross-reprojection method. Like every linearised figure it is unreliable
 // where no board was seen (tests: it matches the Monte-Carlo spread where boards were and
 // overestimates it 2-3x in uncovered image corners).
 //
