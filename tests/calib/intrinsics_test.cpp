@@ -232,6 +232,27 @@ TEST(CalibrateIntrinsics, ProjectionUncertaintyMatchesTheSpreadOverNoiseDraws) {
   }
 }
 
+// ChArUco-like partial views: each view holds a different subset of corner ids.
+TEST(CalibrateIntrinsics, PartialViewsWithCornerIdsCalibrate) {
+  const Synthetic s = MakeSynthetic(10, 13);
+  std::vector<BoardView> views = NoisyViews(s, 0.2, 17);
+  for (std::size_t v = 0; v < views.size(); ++v) {
+    BoardView partial;
+    partial.name = views[v].name;
+    for (std::size_t i = 0; i < views[v].corner_ids.size(); ++i) {
+      if ((views[v].corner_ids[i] + static_cast<int>(v)) % 3 == 0) continue;
+      partial.corners_px.push_back(views[v].corners_px[i]);
+      partial.corner_ids.push_back(views[v].corner_ids[i]);
+    }
+    views[v] = partial;
+  }
+  const IntrinsicsResult r = CalibrateIntrinsics(views, s.board, 1024, 1024);
+  EXPECT_EQ(r.num_corners + r.num_outliers, 10 * 36);
+  ASSERT_EQ(r.intrinsics_sigma.size(), 12u);
+  EXPECT_LT(std::abs(r.camera->intrinsics()[0] - s.truth.fx_px), 3 * r.intrinsics_sigma[0]);
+  EXPECT_LT(std::abs(r.camera->intrinsics()[2] - s.truth.cx_px), 3 * r.intrinsics_sigma[2]);
+}
+
 TEST(CalibrateIntrinsics, OutliersAreRejected) {
   const Synthetic s = MakeSynthetic(8, 5);
   std::vector<BoardView> views = NoisyViews(s, 0.2, 9);
