@@ -8,4 +8,5 @@ void AddCloudCommands(CLI::App& app);   ///< cloud info, cloud convert
 void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
 void AddLocalizeCommand(CLI::App& app);  ///< localize
 void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
+void AddScanCommands(CLI::App& app);  ///< scan triangulate
 }  // namespace lasercell::tools

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
+  lasercell::tools::AddScanCommands(app);
   lasercell::tools::AddBenchCommands(app);
   try {
     app.parse(argc, argv);
