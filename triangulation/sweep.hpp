@@ -11,9 +11,10 @@
 //  - kRobot: the sensor rides a robot whose joints each profile records; the sweep frame is
 //    `target_frame` of a FrameGraph and sweep_from_sensor_i = graph.Transform(target_frame,
 //    "sensor", {robot: joints_i}) (kinematics + hand-eye from cell.yaml).
-// The cloud keeps per point: profile index (file order), image column, timestamp (s, relative to
-// t0 for linear sweeps, sensor clock seconds otherwise) and intensity; it is organized
-// (grid_rows = profiles, grid_cols = profile columns) with rejected cells absent.
+// The cloud keeps per point: profile index (file order), profile column j (the grid column; the
+// image column is header.first_column + j, the same when the profile covers the full width),
+// timestamp (s, relative to t0 for linear sweeps, sensor clock seconds otherwise) and intensity;
+// it is organized (grid_rows = profiles, grid_cols = profile columns) with rejected cells absent.
 // Units mm, s, rad.
 
 #include <Eigen/Core>

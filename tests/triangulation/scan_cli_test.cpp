@@ -158,5 +158,22 @@ TEST_F(ScanCli, BadInputExitsTwoWithOneLine) {
   EXPECT_FALSE(fs::exists(P("x.ply")));
 }
 
+TEST_F(ScanCli, BenchPeaksPrintsOneRowPerEstimatorAndSnr) {
+  const std::string out = P("peaks.txt");
+  const int status = std::system(
+      (std::string(LASERCELL_CLI) + " bench peaks --snr 20,50 --images 1 >" + out).c_str());
+  ASSERT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 0);
+  std::ifstream in(out);
+  std::string line;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("| 20 |", 0) == 0 || line.rfind("| 50 |", 0) == 0) ++rows;
+  }
+  EXPECT_EQ(rows, 6);
+  const CliRun bad = Cli("bench peaks --snr 500");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("saturation"), std::string::npos) << bad.err;
+}
+
 }  // namespace
 }  // namespace lasercell::triangulation
