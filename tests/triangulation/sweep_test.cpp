@@ -93,7 +93,13 @@ TEST(Sweep, LinearSweepOfTheWhitePlaneIsFlatInTheSweepFrame) {
     EXPECT_NEAR(result.cloud.timestamp_s[k],
                 (r.profiles.profiles[i].timestamp_ns - timing.start_ns) * 1e-9, 1e-12);
   }
-  // Without motion, every profile stays in the sensor frame: the same plane is not flat.
+  // Lost profiles show as sequence gaps.
+  datasets::SweepResult gappy = r;
+  gappy.profiles.profiles.erase(gappy.profiles.profiles.begin() + 5,
+                                gappy.profiles.profiles.begin() + 8);
+  EXPECT_EQ(AssembleSweep(gappy.profiles, s.tri, o).sequence_gaps, 3u);
+  EXPECT_EQ(result.sequence_gaps, 0u);
+  // Without motion, every profile stays in the sensor frame.
   o.motion = SweepMotion::kNone;
   const SweepResult still = AssembleSweep(r.profiles, s.tri, o);
   EXPECT_EQ(still.cloud.size(), result.cloud.size());
