@@ -24,9 +24,9 @@ namespace {
 
 struct PeaksBenchArgs {
   std::vector<double> snr = {3, 5, 10, 20, 50, 100, 150};
-  double width_px = 3.0;     // stripe FWHM
-  double noise = 1.5;        // read noise, gray levels
-  int images = 4;            // 1024 columns each
+  double width_px = 3.0;  // stripe FWHM
+  double noise = 1.5;     // read noise, gray levels
+  int images = 4;         // 1024 columns each
   unsigned seed = 1;
 };
 
@@ -43,9 +43,9 @@ void RunPeaksBench(const PeaksBenchArgs& args) {
   const int w = 1024;
   const double s = args.width_px / 2.3548200450309493;
   const double sigma_n = std::sqrt(args.noise * args.noise + 1.0 / 12);  // + quantization
-  const triangulation::PeakEstimator estimators[] = {
-      triangulation::PeakEstimator::kCenterOfGravity, triangulation::PeakEstimator::kGaussian,
-      triangulation::PeakEstimator::kBlaisRioux};
+  const triangulation::PeakEstimator estimators[] = {triangulation::PeakEstimator::kCenterOfGravity,
+                                                     triangulation::PeakEstimator::kGaussian,
+                                                     triangulation::PeakEstimator::kBlaisRioux};
   std::printf(
       "lasercell bench peaks: %d images x %d columns per SNR, stripe FWHM %.2f px, read noise "
       "%.2f gray levels (8-bit, ambient 6), min_height 3 sigma; errors in px vs the exact "
@@ -68,9 +68,9 @@ void RunPeaksBench(const PeaksBenchArgs& args) {
       }
       datasets::ImageRenderOptions io;
       io.noise_sigma = args.noise;
-      const datasets::GrayImage img =
-          renderer.RenderLaserLine(ex, io, args.seed * 1000003ULL + image * 7919ULL +
-                                               static_cast<std::uint64_t>(snr * 1000));
+      const datasets::GrayImage img = renderer.RenderLaserLine(
+          ex, io,
+          args.seed * 1000003ULL + image * 7919ULL + static_cast<std::uint64_t>(snr * 1000));
       for (int e = 0; e < 3; ++e) {
         triangulation::PeakDetectionOptions o;
         o.estimator = estimators[e];
@@ -123,8 +123,9 @@ void RunPeaksBench(const PeaksBenchArgs& args) {
 
 void AddBenchPeaksCommand(CLI::App& bench) {
   CLI::App* cmd = bench.add_subcommand(
-      "peaks", "Laser peak estimators (centre of gravity, Gaussian, Blais-Rioux): bias and sigma "
-               "over SNR on simulated stripe images");
+      "peaks",
+      "Laser peak estimators (centre of gravity, Gaussian, Blais-Rioux): bias and sigma "
+      "over SNR on simulated stripe images");
   auto args = std::make_shared<PeaksBenchArgs>();
   cmd->add_option("--snr", args->snr, "Stripe amplitude / read noise, per table block")
       ->delimiter(',')

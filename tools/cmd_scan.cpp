@@ -41,9 +41,7 @@ struct ScanArgs {
   int threads = 1;
 };
 
-std::string ReadText(const std::string& path) {
-  return io::ReadFileBytes(path);
-}
+std::string ReadText(const std::string& path) { return io::ReadFileBytes(path); }
 
 Eigen::Vector3d Vec3(const YAML::Node& node, const std::string& file, const std::string& what) {
   if (!node || !node.IsSequence() || node.size() != 3) {
@@ -101,7 +99,8 @@ std::optional<Eigen::Vector4d> PlaneFromCell(const YAML::Node& root, const std::
 void RunTriangulate(const ScanArgs& args) {
   if (args.fast && args.exact) throw OptionError("--fast and --exact exclude each other");
   if (!args.velocity.empty() && !args.frame.empty()) {
-    throw OptionError("--velocity-mm-s (linear sweep) and --frame (robot sweep) exclude each other");
+    throw OptionError(
+        "--velocity-mm-s (linear sweep) and --frame (robot sweep) exclude each other");
   }
   if (!args.velocity.empty() && args.velocity.size() != 3) {
     throw OptionError("--velocity-mm-s takes three numbers vx,vy,vz (mm/s, sensor frame at t0)");
@@ -113,7 +112,8 @@ void RunTriangulate(const ScanArgs& args) {
   std::string plane_source;
   if (!args.laser_plane.empty()) {
     if (args.laser_plane.size() != 4) {
-      throw OptionError("--laser-plane takes four numbers nx,ny,nz,d (n . p + d = 0, sensor frame, mm)");
+      throw OptionError(
+          "--laser-plane takes four numbers nx,ny,nz,d (n . p + d = 0, sensor frame, mm)");
     }
     plane = Eigen::Vector4d(args.laser_plane[0], args.laser_plane[1], args.laser_plane[2],
                             args.laser_plane[3]);
@@ -124,14 +124,16 @@ void RunTriangulate(const ScanArgs& args) {
   } else if (!args.cell.empty()) {
     const auto p = PlaneFromCell(cell_root, args.cell, args.laser);
     if (!p) {
-      throw FileError(args.cell, "has no laser_planes section; run `lasercell calibrate laser` "
-                                 "or give --laser-plane nx,ny,nz,d");
+      throw FileError(args.cell,
+                      "has no laser_planes section; run `lasercell calibrate laser` "
+                      "or give --laser-plane nx,ny,nz,d");
     }
     plane = *p;
     plane_source = args.cell;
   } else {
-    throw OptionError("no laser plane: give --cell CELL.yaml (with a calibrated laser plane), "
-                      "--laser-plane nx,ny,nz,d or --sensor-truth truth/sensor.yaml");
+    throw OptionError(
+        "no laser plane: give --cell CELL.yaml (with a calibrated laser plane), "
+        "--laser-plane nx,ny,nz,d or --sensor-truth truth/sensor.yaml");
   }
 
   const calib::CameraModel camera = calib::LoadCameraModel(args.camera);
@@ -159,7 +161,8 @@ void RunTriangulate(const ScanArgs& args) {
   }
   const auto start = std::chrono::steady_clock::now();
   triangulation::SweepResult result = triangulation::AssembleSweep(
-      profiles, tri, options, options.motion == triangulation::SweepMotion::kRobot ? &graph : nullptr);
+      profiles, tri, options,
+      options.motion == triangulation::SweepMotion::kRobot ? &graph : nullptr);
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   io::WritePointCloud(args.out, result.cloud);
@@ -186,8 +189,9 @@ void AddScanCommands(CLI::App& app) {
                   "cell.yaml: frame graph (for --frame) and laser plane (laser_planes section)");
   tri->add_option("--laser", args->laser, "Name of the laser plane in cell.yaml")
       ->capture_default_str();
-  tri->add_option("--laser-plane", args->laser_plane,
-                  "Laser plane nx,ny,nz,d (n . p + d = 0 in the sensor frame, mm); overrides --cell")
+  tri->add_option(
+         "--laser-plane", args->laser_plane,
+         "Laser plane nx,ny,nz,d (n . p + d = 0 in the sensor frame, mm); overrides --cell")
       ->delimiter(',');
   tri->add_option("--sensor-truth", args->sensor_truth,
                   "Laser plane from the simulator's truth/sensor.yaml; overrides --cell");

@@ -130,9 +130,8 @@ PeakDetectionResult Detect(const ImageView<Pixel>& image, const PeakDetectionOpt
     for (int v = extent.left; v <= extent.right; ++v) saturated |= raw[v] >= saturation;
     const float min_second = std::max(static_cast<float>(options.ambiguity_ratio) * height,
                                       static_cast<float>(options.min_height));
-    const bool ambiguous =
-        SecondaryPeak(f.data(), r0, r1, extent.left, -1, min_second) > 0 ||
-        SecondaryPeak(f.data(), r0, r1, extent.right, +1, min_second) > 0;
+    const bool ambiguous = SecondaryPeak(f.data(), r0, r1, extent.left, -1, min_second) > 0 ||
+                           SecondaryPeak(f.data(), r0, r1, extent.right, +1, min_second) > 0;
     PeakStatus status = saturated ? PeakStatus::kSaturated
                                   : (ambiguous ? PeakStatus::kAmbiguous : PeakStatus::kValid);
     if (saturated && ambiguous) status = PeakStatus::kAmbiguous;
@@ -155,8 +154,8 @@ PeakDetectionResult Detect(const ImageView<Pixel>& image, const PeakDetectionOpt
     if (!saturated && top > r0 && top < r1 && f[top - 1] > 0 && f[top + 1] > 0) {
       const double a = std::log(f[top - 1]), b = std::log(f[top]), c = std::log(f[top + 1]);
       const double den = a - 2 * b + c;
-      if (den < 0) peak = std::clamp(std::exp(b - (a - c) * (a - c) / (8 * den)), 1.0 * height,
-                                     1.5 * height);
+      if (den < 0)
+        peak = std::clamp(std::exp(b - (a - c) * (a - c) / (8 * den)), 1.0 * height, 1.5 * height);
     }
     result.profile.intensity[u] = static_cast<float>(std::min(1.0, peak / full_scale));
     result.profile.width_px[u] = static_cast<float>(extent.fwhm_px);
@@ -168,9 +167,12 @@ PeakDetectionResult Detect(const ImageView<Pixel>& image, const PeakDetectionOpt
 
 std::string PeakEstimatorName(PeakEstimator estimator) {
   switch (estimator) {
-    case PeakEstimator::kCenterOfGravity: return "cog";
-    case PeakEstimator::kGaussian: return "gaussian";
-    case PeakEstimator::kBlaisRioux: return "blais-rioux";
+    case PeakEstimator::kCenterOfGravity:
+      return "cog";
+    case PeakEstimator::kGaussian:
+      return "gaussian";
+    case PeakEstimator::kBlaisRioux:
+      return "blais-rioux";
   }
   return "?";
 }
@@ -205,9 +207,9 @@ void PeakDetectionOptions::Check(const std::string& what) const {
 
 std::string PeakDetectionResult::Summary() const {
   char b[200];
-  std::snprintf(b, sizeof b, "%zu columns: %zu valid, %zu saturated, %zu ambiguous, %zu without peak (%s)",
-                status.size(), valid, saturated, ambiguous, no_peak,
-                PeakEstimatorName(estimator).c_str());
+  std::snprintf(
+      b, sizeof b, "%zu columns: %zu valid, %zu saturated, %zu ambiguous, %zu without peak (%s)",
+      status.size(), valid, saturated, ambiguous, no_peak, PeakEstimatorName(estimator).c_str());
   return b;
 }
 

@@ -13,10 +13,11 @@
 //   - Blais-Rioux: zero crossing of the 4th-order FIR derivative g(i) = f(i+2) + f(i+1) -
 //     f(i-1) - f(i-2), located by linear interpolation between the two samples around it.
 // Output is a triangulation::Profile (row_px NaN = no peak; intensity = peak height above the
-// background (Gaussian through the top three samples) / full scale, 0..1; width_px = FWHM by linear interpolation at half height) plus a
-// per-column status: saturated (a sample at full scale inside the peak) and ambiguous (a second,
-// separated peak at least `ambiguity_ratio` as high as the first: a reflection, an edge, a
-// multi-path ghost) are reported, never silently mixed with clean peaks.
+// background (Gaussian through the top three samples) / full scale, 0..1; width_px = FWHM by linear
+// interpolation at half height) plus a per-column status: saturated (a sample at full scale inside
+// the peak) and ambiguous (a second, separated peak at least `ambiguity_ratio` as high as the
+// first: a reflection, an edge, a multi-path ghost) are reported, never silently mixed with clean
+// peaks.
 
 #include <cstdint>
 #include <string>
@@ -86,13 +87,13 @@ using ImageView16 = ImageView<std::uint16_t>;
 
 /// Peaks of one image.
 struct PeakDetectionResult {
-  Profile profile;                  ///< One entry per column (full image width).
-  std::vector<PeakStatus> status;   ///< Per column.
-  std::vector<float> background;    ///< Per column: background level, gray levels.
-  std::size_t valid = 0;            ///< Columns with a clean peak.
-  std::size_t saturated = 0;        ///< Columns whose peak is saturated.
-  std::size_t ambiguous = 0;        ///< Columns with two separated peaks.
-  std::size_t no_peak = 0;          ///< Columns without a peak.
+  Profile profile;                 ///< One entry per column (full image width).
+  std::vector<PeakStatus> status;  ///< Per column.
+  std::vector<float> background;   ///< Per column: background level, gray levels.
+  std::size_t valid = 0;           ///< Columns with a clean peak.
+  std::size_t saturated = 0;       ///< Columns whose peak is saturated.
+  std::size_t ambiguous = 0;       ///< Columns with two separated peaks.
+  std::size_t no_peak = 0;         ///< Columns without a peak.
 
   /// e.g. "1024 columns: 1000 valid, 3 saturated, 5 ambiguous, 16 without peak (gaussian)".
   std::string Summary() const;

@@ -46,8 +46,9 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
       throw InputError("a robot sweep needs the cell's frame graph (cell.yaml)");
     }
     if (header.joint_count == 0 || robot.empty()) {
-      throw InputError("the profiles record no robot joints (joint_count 0): a robot sweep needs "
-                       "them; use a linear sweep (velocity) instead");
+      throw InputError(
+          "the profiles record no robot joints (joint_count 0): a robot sweep needs "
+          "them; use a linear sweep (velocity) instead");
     }
     if (!graph->HasFrame("sensor") || !graph->HasFrame(options.target_frame) ||
         !graph->Connected("sensor", options.target_frame)) {

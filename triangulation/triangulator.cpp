@@ -114,7 +114,8 @@ Triangulator::Triangulator(calib::CameraModel camera, const Eigen::Vector4d& pla
       << grid.points << " of " << rays.size() << " image rays meet it validly (" << grid.parallel
       << " (nearly) parallel to it, " << grid.behind_camera << " meet it behind the camera, "
       << grid.out_of_range << " at depths outside [" << options_.min_depth_mm << ", "
-      << options_.max_depth_mm << "] mm); check the plane's frame (sensor = camera frame), sign and units";
+      << options_.max_depth_mm
+      << "] mm); check the plane's frame (sensor = camera frame), sign and units";
     throw InputError(o.str());
   }
   BuildTables();
@@ -131,10 +132,18 @@ Triangulator::Reject Triangulator::Classify(double x, double y) const {
 
 void Triangulator::Count(Reject r, TriangulationCounts& counts) {
   switch (r) {
-    case Reject::kOk: ++counts.points; break;
-    case Reject::kParallel: ++counts.parallel; break;
-    case Reject::kBehind: ++counts.behind_camera; break;
-    case Reject::kOutOfRange: ++counts.out_of_range; break;
+    case Reject::kOk:
+      ++counts.points;
+      break;
+    case Reject::kParallel:
+      ++counts.parallel;
+      break;
+    case Reject::kBehind:
+      ++counts.behind_camera;
+      break;
+    case Reject::kOutOfRange:
+      ++counts.out_of_range;
+      break;
   }
 }
 

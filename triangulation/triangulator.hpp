@@ -61,15 +61,16 @@ struct TriangulatorOptions {
 
 /// Counts of triangulated and rejected peaks.
 struct TriangulationCounts {
-  std::size_t points = 0;          ///< Valid 3D points.
-  std::size_t no_peak = 0;         ///< Columns without a peak (row NaN).
-  std::size_t outside_image = 0;   ///< Rows outside [-0.5, height - 0.5] or columns outside.
-  std::size_t parallel = 0;        ///< Rays (nearly) parallel to the laser plane.
-  std::size_t behind_camera = 0;   ///< The plane meets the ray behind the camera.
-  std::size_t out_of_range = 0;    ///< Depth outside [min_depth_mm, max_depth_mm].
+  std::size_t points = 0;         ///< Valid 3D points.
+  std::size_t no_peak = 0;        ///< Columns without a peak (row NaN).
+  std::size_t outside_image = 0;  ///< Rows outside [-0.5, height - 0.5] or columns outside.
+  std::size_t parallel = 0;       ///< Rays (nearly) parallel to the laser plane.
+  std::size_t behind_camera = 0;  ///< The plane meets the ray behind the camera.
+  std::size_t out_of_range = 0;   ///< Depth outside [min_depth_mm, max_depth_mm].
 
   TriangulationCounts& operator+=(const TriangulationCounts& o);
-  /// e.g. "1000 points; rejected: 24 no peak, 0 outside image, 0 parallel, 0 behind, 0 out of range".
+  /// e.g. "1000 points; rejected: 24 no peak, 0 outside image, 0 parallel, 0 behind, 0 out of
+  /// range".
   std::string Summary() const;
 };
 
@@ -114,10 +115,10 @@ class Triangulator {
   calib::CameraModel camera_;
   Eigen::Vector4d plane_;
   TriangulatorOptions options_;
-  double min_w_ = 0;       // 1 / max_depth_mm
-  double max_w_ = 0;       // 1 / min_depth_mm
-  double sin2_min_ = 0;    // sin^2(min angle)
-  double row_lo_ = -0.5;   // table domain in rows
+  double min_w_ = 0;      // 1 / max_depth_mm
+  double max_w_ = 0;      // 1 / min_depth_mm
+  double sin2_min_ = 0;   // sin^2(min angle)
+  double row_lo_ = -0.5;  // table domain in rows
   double inv_step_ = 0;
   int intervals_ = 0;
   // Per column, per interval: x(t) = c0 + t (c1 + t (c2 + t c3)), y(t) likewise, t in [0, 1).

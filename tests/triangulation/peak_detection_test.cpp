@@ -109,8 +109,8 @@ TEST(PeakDetection, SimulatedStripeImagesScatterNearTheCramerRaoBound) {
       }
     }
     const double mean = sum / n, rms = std::sqrt(sum2 / n);
-    std::printf("%s: mean %.4f px, rms %.4f px, CRB %.4f px\n", PeakEstimatorName(e).c_str(),
-                mean, rms, crb);
+    std::printf("%s: mean %.4f px, rms %.4f px, CRB %.4f px\n", PeakEstimatorName(e).c_str(), mean,
+                rms, crb);
     EXPECT_GT(rms, 0.9 * crb) << PeakEstimatorName(e);
     EXPECT_LT(rms, 3.0 * crb) << PeakEstimatorName(e);
     // Averaged over all subpixel phases the S-curves cancel: only noise remains (5 sigma).
@@ -154,8 +154,8 @@ TEST(PeakDetection, SecondSeparatedPeaksMakeColumnsAmbiguous) {
     const double amp = u < 40 ? 72 : 24;
     for (int v = 80; v < 100; ++v) {
       const double d = (v - 90.0) / (3.0 * kFwhmToSigma);
-      img[v * w + u] = static_cast<std::uint8_t>(
-          std::min(255.0, img[v * w + u] + amp * std::exp(-0.5 * d * d)));
+      img[v * w + u] =
+          static_cast<std::uint8_t>(std::min(255.0, img[v * w + u] + amp * std::exp(-0.5 * d * d)));
     }
   }
   PeakDetectionOptions o;
@@ -197,7 +197,8 @@ TEST(PeakDetection, SixteenBitImagesGiveTheSameRowsAsScaledEightBitOnes) {
   const std::vector<double> rows = PhaseRows(w, 10.0);
   const auto img8 = StripeImage<std::uint8_t>(w, h, rows, 3.0, 150, 6, 0, 1, 255);
   std::vector<std::uint16_t> img16(img8.size());
-  for (std::size_t i = 0; i < img8.size(); ++i) img16[i] = static_cast<std::uint16_t>(img8[i] * 257);
+  for (std::size_t i = 0; i < img8.size(); ++i)
+    img16[i] = static_cast<std::uint16_t>(img8[i] * 257);
   PeakDetectionOptions o8, o16;
   o16.min_height = o8.min_height * 257;
   const auto r8 = DetectPeaks(ImageView8{img8.data(), w, h, 0}, o8);

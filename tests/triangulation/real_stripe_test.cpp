@@ -148,8 +148,8 @@ TEST(RealStripe, EstimatorsAgreeOnTheBoard) {
       }
       ASSERT_GT(n, 200);
       const double rms = std::sqrt(sum2 / n);
-      std::printf("%s: gaussian vs %s rms %.3f px\n", c.file.c_str(),
-                  PeakEstimatorName(e).c_str(), rms);
+      std::printf("%s: gaussian vs %s rms %.3f px\n", c.file.c_str(), PeakEstimatorName(e).c_str(),
+                  rms);
       EXPECT_LT(rms, 0.35) << c.file << " " << PeakEstimatorName(e);
     }
   }

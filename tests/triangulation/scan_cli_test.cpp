@@ -132,8 +132,8 @@ TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
   // The simulator's truth/sensor.yaml.
   std::ostringstream truth;
   truth.precision(17);
-  truth << "format: lasercell.sim_sensor\nversion: 1\nlaser_plane_in_sensor:\n  normal: ["
-        << n.x() << ", " << n.y() << ", " << n.z() << "]\n  d_mm: " << plane_[3] << "\n";
+  truth << "format: lasercell.sim_sensor\nversion: 1\nlaser_plane_in_sensor:\n  normal: [" << n.x()
+        << ", " << n.y() << ", " << n.z() << "]\n  d_mm: " << plane_[3] << "\n";
   io::WriteFileAtomically(P("sensor.yaml"), truth.str());
   r = Cli(common + " --sensor-truth " + P("sensor.yaml") + " --out " + P("truth.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -141,8 +141,8 @@ TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
 }
 
 TEST_F(ScanCli, BadInputExitsTwoWithOneLine) {
-  const std::string base = "scan triangulate --camera " + P("camera.cameramodel") +
-                           " --profiles " + P("plane.lcp") + " --out " + P("x.ply");
+  const std::string base = "scan triangulate --camera " + P("camera.cameramodel") + " --profiles " +
+                           P("plane.lcp") + " --out " + P("x.ply");
   CliRun r = Cli(base);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("no laser plane"), std::string::npos) << r.err;

@@ -96,16 +96,17 @@ TEST(Triangulator, RaysParallelToThePlaneOrBehindTheCameraAreCountedAndNaN) {
   const Triangulator tri(s.camera, s.plane);
   std::vector<float> rows(1024);
   std::vector<Eigen::Vector3d> points(1024);
-  for (int u = 0; u < 1024; ++u) rows[u] = u % 4 == 0 ? std::numeric_limits<float>::quiet_NaN()
-                                                      : static_cast<float>(1023 - u % 300);
+  for (int u = 0; u < 1024; ++u)
+    rows[u] =
+        u % 4 == 0 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(1023 - u % 300);
   for (const auto path : {TriangulationPath::kFast, TriangulationPath::kExact}) {
     const TriangulationCounts c = tri.Triangulate(rows, 0, points, path);
     EXPECT_EQ(c.no_peak, 256u);
     EXPECT_GT(c.behind_camera, 100u);  // the bottom rows look below the laser's horizon
     EXPECT_GT(c.points, 100u);
-    EXPECT_EQ(c.points + c.no_peak + c.behind_camera + c.parallel + c.out_of_range +
-                  c.outside_image,
-              1024u);
+    EXPECT_EQ(
+        c.points + c.no_peak + c.behind_camera + c.parallel + c.out_of_range + c.outside_image,
+        1024u);
     std::size_t nan = 0;
     for (const auto& p : points) nan += std::isnan(p.x()) ? 1 : 0;
     EXPECT_EQ(nan, 1024u - c.points);
@@ -215,8 +216,9 @@ TEST(Triangulator, SimulatedPlaneSweepLiesOnTheTruePlaneWithinTheRowNoise) {
       if (std::isnan(pts[c].x())) continue;
       const double dist = m.dot(pts[c]) + e;
       const double dv = 1e-3;
-      const Eigen::Vector3d dp_dv = (tri.TriangulateExact(c, p.row_px[c] + dv) -
-                                     tri.TriangulateExact(c, p.row_px[c] - dv)) / (2 * dv);
+      const Eigen::Vector3d dp_dv =
+          (tri.TriangulateExact(c, p.row_px[c] + dv) - tri.TriangulateExact(c, p.row_px[c] - dv)) /
+          (2 * dv);
       const double sigma = std::abs(m.dot(dp_dv)) * sigma_row;
       const double z = dist / sigma;
       sum += z;
@@ -230,8 +232,8 @@ TEST(Triangulator, SimulatedPlaneSweepLiesOnTheTruePlaneWithinTheRowNoise) {
   std::printf("plane sweep: %zu points, normalized residual mean %.4f, rms %.4f, max %.2f\n", n,
               mean, rms, worst);
   EXPECT_LT(std::abs(mean), 5.0 / std::sqrt(static_cast<double>(n)));  // no bias
-  EXPECT_NEAR(rms, 1.0, 5.0 / std::sqrt(2.0 * n));                      // the noise, no more
-  EXPECT_LT(worst, 6.0);                                                // Gaussian tails
+  EXPECT_NEAR(rms, 1.0, 5.0 / std::sqrt(2.0 * n));                     // the noise, no more
+  EXPECT_LT(worst, 6.0);                                               // Gaussian tails
 }
 
 }  // namespace
