@@ -12,8 +12,10 @@
 #include <string>
 
 #include "calib/camera_model.hpp"
+#include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "datasets/calibration_captures.hpp"
 #include "datasets/cell.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/simulate.hpp"
@@ -138,6 +140,43 @@ TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
   r = Cli(common + " --sensor-truth " + P("sensor.yaml") + " --out " + P("truth.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ExpectOnPlane(P("truth.ply"));
+}
+
+TEST_F(ScanCli, RobotSweepIsPosedThroughTheCellFile) {
+  // The simulator's arc sweep over the plane, joints in the profiles; the true cell.yaml plus
+  // the laser_planes section (which the command strips before reading the frame graph).
+  const datasets::Scene scene = datasets::MakePlaneScene(truth_.layout, 150.0, {1500, 1500});
+  const datasets::LaserRenderer renderer(scene, truth_.sensor, config_.render);
+  const datasets::JointTrajectory traj = datasets::MakeArcTrajectory(config_, truth_);
+  datasets::SweepTiming timing = config_.timing;
+  timing.profiles = 8;
+  timing.rate_hz = 7.0 / traj.times_s.back();
+  timing.jitter_s = 0;
+  const auto state_at = [&](double t) {
+    datasets::SensorState st;
+    st.joints_rad = traj.At(t);
+    st.scene_from_sensor = datasets::TrueCellFromSensor(truth_, st.joints_rad);
+    return st;
+  };
+  const datasets::SweepResult r =
+      datasets::RenderSweep(renderer, state_at, timing, 4, 6, "vision_robot", 1);
+  WriteProfiles(P("robot.lcp"), r.profiles);
+  std::ostringstream planes;
+  planes.precision(17);
+  const Eigen::Vector3d n = plane_.head<3>();
+  const Eigen::Vector3d p0 = -plane_[3] * n;
+  planes << "laser_planes:\n  version: 1\n  planes:\n    laser:\n      frame: sensor\n"
+         << "      normal: [" << n.x() << ", " << n.y() << ", " << n.z() << "]\n"
+         << "      point_mm: [" << p0.x() << ", " << p0.y() << ", " << p0.z() << "]\n";
+  io::WriteFileAtomically(P("cell.yaml"), FrameGraphToYaml(truth_.Graph()) + planes.str());
+  const CliRun run =
+      Cli("scan triangulate --camera " + P("camera.cameramodel") + " --profiles " + P("robot.lcp") +
+          " --cell " + P("cell.yaml") + " --frame cell --out " + P("robot.ply"));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const PointCloud cloud = io::ReadPointCloud(P("robot.ply"));
+  EXPECT_EQ(cloud.size(), r.valid_peaks);
+  ASSERT_GT(cloud.size(), 3000u);
+  for (const auto& p : cloud.positions) ASSERT_NEAR(p.z(), 150.0, 1.0);  // see ExpectOnPlane
 }
 
 TEST_F(ScanCli, BadInputExitsTwoWithOneLine) {
