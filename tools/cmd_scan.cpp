@@ -189,14 +189,15 @@ void AddScanCommands(CLI::App& app) {
                   "cell.yaml: frame graph (for --frame) and laser plane (laser_planes section)");
   tri->add_option("--laser", args->laser, "Name of the laser plane in cell.yaml")
       ->capture_default_str();
-  tri->add_option(
-         "--laser-plane", args->laser_plane,
-         "Laser plane nx,ny,nz,d (n . p + d = 0 in the sensor frame, mm); overrides --cell")
+  tri->add_option("--laser-plane", args->laser_plane,
+                  "Laser plane nx,ny,nz,d (n . p + d = 0 in the sensor frame, mm; write "
+                  "--laser-plane=... when nx is negative); overrides --cell")
       ->delimiter(',');
   tri->add_option("--sensor-truth", args->sensor_truth,
                   "Laser plane from the simulator's truth/sensor.yaml; overrides --cell");
   tri->add_option("--velocity-mm-s", args->velocity,
-                  "Linear sweep: sensor velocity vx,vy,vz in mm/s (sensor frame at t0)")
+                  "Linear sweep: sensor velocity vx,vy,vz in mm/s (sensor frame at t0; write "
+                  "--velocity-mm-s=... when vx is negative)")
       ->delimiter(',');
   tri->add_option("--frame", args->frame,
                   "Robot sweep: express points in this cell frame (e.g. vision_base), posing each "
