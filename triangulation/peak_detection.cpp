@@ -76,6 +76,20 @@ PeakDetectionResult Detect(const ImageView<Pixel>& image, const PeakDetectionOpt
     throw InputError("peak detection: image stride " + std::to_string(stride) +
                      " is smaller than its width " + std::to_string(image.width));
   }
+  if (options.peaks_per_row) {
+    // Transpose once and detect per column of the transpose.
+    std::vector<Pixel> transposed(static_cast<std::size_t>(image.width) * image.height);
+    for (int v = 0; v < image.height; ++v) {
+      for (int u = 0; u < image.width; ++u) {
+        transposed[static_cast<std::size_t>(u) * image.height + v] =
+            image.data[static_cast<std::size_t>(v) * stride + u];
+      }
+    }
+    PeakDetectionOptions columns = options;
+    columns.peaks_per_row = false;
+    return Detect(ImageView<Pixel>{transposed.data(), image.height, image.width, 0}, columns,
+                  full_scale);
+  }
   const int r0 = options.first_row < 0 ? 0 : options.first_row;
   const int r1 = options.last_row < 0 ? image.height - 1 : options.last_row;
   if (r0 > r1 || r1 >= image.height) {

@@ -69,6 +69,10 @@ struct PeakDetectionOptions {
   /// First and last row searched (ROI; -1: the whole column).
   int first_row = -1;
   int last_row = -1;
+  /// The stripe runs along the image columns (a vertical line, e.g. a camera turned by 90 deg):
+  /// detect one peak per image ROW instead. The result's "columns" are then image rows and its
+  /// row_px are image columns (sub-pixel); first_row/last_row bound the searched image columns.
+  bool peaks_per_row = false;
 
   /// Throws OptionError naming `what` and the field.
   void Check(const std::string& what = "PeakDetectionOptions") const;

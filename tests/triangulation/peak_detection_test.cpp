@@ -209,5 +209,22 @@ TEST(PeakDetection, SixteenBitImagesGiveTheSameRowsAsScaledEightBitOnes) {
   }
 }
 
+TEST(PeakDetection, PeaksPerRowEqualPeaksPerColumnOfTheTransposedImage) {
+  const int w = 50, h = 40;
+  const std::vector<double> rows = PhaseRows(w, 10.0);
+  const auto img = StripeImage<std::uint8_t>(w, h, rows, 3.0, 150, 6, 1.0, 7, 255);
+  std::vector<std::uint8_t> transposed(img.size());
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) transposed[u * h + v] = img[v * w + u];
+  }
+  PeakDetectionOptions per_row;
+  per_row.peaks_per_row = true;
+  const auto by_row = DetectPeaks(ImageView8{transposed.data(), h, w, 0}, per_row);
+  const auto by_column = DetectPeaks(ImageView8{img.data(), w, h, 0}, {});
+  ASSERT_EQ(by_row.profile.row_px.size(), static_cast<std::size_t>(w));
+  EXPECT_EQ(by_row.profile.row_px, by_column.profile.row_px);
+  EXPECT_EQ(by_row.valid, static_cast<std::size_t>(w));
+}
+
 }  // namespace
 }  // namespace lasercell::triangulation

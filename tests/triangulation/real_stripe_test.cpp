@@ -1,6 +1,7 @@
 // Peak detection on real laser-stripe images (datasets/real/laser_stripe_chessboard: a green
-// line across a planar chessboard, 640 x 480 JPEG). The stripe runs along the image rows, so the
-// image is transposed: profile column k = image row k, peak "row" = image column. The laser
+// line across a planar chessboard, 640 x 480 JPEG). The stripe is vertical (it crosses every image
+// row), so the detector runs with peaks_per_row: profile column k = image row k, peak "row" =
+// image column. The laser
 // signal is green minus red (the white and grey board reflect both; the 532 nm line only green).
 // No ground truth: what must hold is geometry. The laser plane meets the planar board in a 3D
 // line, which the lens (k1 = -0.35, strong barrel distortion) maps to a smooth curve; so on the
@@ -23,17 +24,17 @@ namespace {
 
 const std::string kDir = LASERCELL_SOURCE_DIR "/datasets/real/laser_stripe_chessboard/";
 
-// Green minus red, transposed (480 columns of 640 rows), 8-bit.
+// Green minus red (640 x 480, 8-bit).
 std::vector<std::uint8_t> StripeSignal(const std::string& file, int* w, int* h) {
   const cv::Mat bgr = cv::imread(kDir + file, cv::IMREAD_COLOR);
   EXPECT_FALSE(bgr.empty()) << file;
-  *w = bgr.rows;
-  *h = bgr.cols;
+  *w = bgr.cols;
+  *h = bgr.rows;
   std::vector<std::uint8_t> out(static_cast<std::size_t>(bgr.rows) * bgr.cols);
   for (int y = 0; y < bgr.rows; ++y) {
     for (int x = 0; x < bgr.cols; ++x) {
       const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
-      out[static_cast<std::size_t>(x) * bgr.rows + y] =
+      out[static_cast<std::size_t>(y) * bgr.cols + x] =
           static_cast<std::uint8_t>(std::max(0, int(p[1]) - int(p[2])));
     }
   }
@@ -69,6 +70,7 @@ PeakDetectionResult Detect(const Case& c, PeakEstimator estimator) {
   const auto img = StripeSignal(c.file, &w, &h);
   PeakDetectionOptions o;
   o.estimator = estimator;
+  o.peaks_per_row = true;  // the line is vertical in these images
   return DetectPeaks(ImageView8{img.data(), w, h, 0}, o);
 }
 
