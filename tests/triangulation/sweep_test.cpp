@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include "core/error.hpp"
@@ -167,6 +168,21 @@ TEST(Sweep, RobotSweepThroughTheFrameGraphLandsOnThePlaneInTheCell) {
   for (auto& p : no_joints.profiles) p.joints_rad.clear();
   o.target_frame = "cell";
   EXPECT_THROW(AssembleSweep(no_joints, s.tri, o, &graph), InputError);
+}
+
+TEST(Sweep, BadOptionsNameTheField) {
+  SweepOptions o;
+  o.velocity_mm_s.x() = std::numeric_limits<double>::quiet_NaN();
+  try {
+    o.Check();
+    FAIL();
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("SweepOptions.velocity_mm_s"), std::string::npos);
+  }
+  SweepOptions robot;
+  robot.motion = SweepMotion::kRobot;
+  robot.target_frame = "";
+  EXPECT_THROW(robot.Check(), OptionError);
 }
 
 TEST(Sweep, ProfilesOfAnotherSensorSizeAreRejected) {
