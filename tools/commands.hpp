@@ -8,4 +8,6 @@ void AddCloudCommands(CLI::App& app);   ///< cloud info, cloud convert
 void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
 void AddLocalizeCommand(CLI::App& app);  ///< localize
 void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
+/// calibrate joints, calibrate handeye-laser (under the `calibrate` parent given).
+void AddCalibrateJointsCommands(CLI::App& calibrate);
 }  // namespace lasercell::tools

@@ -1,0 +1,201 @@
+// Laser eye-in-hand calibration (issue 7 item 3b): synthetic exact sweeps on the simulator's
+// planned poses, rendered simulator sweeps through the private ray/plane step, bad motions.
+
+#include "calib/laser_hand_eye.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <random>
+
+#include "calib/camera_model.hpp"
+#include "calib/internal/kinematic_profile_points.hpp"
+#include "core/error.hpp"
+#include "core/se3.hpp"
+#include "datasets/robots.hpp"
+#include "datasets/simulate.hpp"
+#include "tests/calib/joint_test_util.hpp"
+#include "triangulation/profile_io.hpp"
+
+namespace lasercell::calib {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::kDeg;
+
+datasets::SimConfig EyeInHandConfig() {
+  datasets::SimConfig config;
+  config.seed = 11;
+  return config;
+}
+
+/// A hand-eye start a few mm / degrees off the truth.
+Eigen::Isometry3d Perturbed(const Eigen::Isometry3d& x) {
+  Eigen::Isometry3d p = x;
+  p.linear() = (Eigen::AngleAxisd(1.5 * kDeg, Eigen::Vector3d(1, -2, 1).normalized()) * x.linear());
+  p.translation() += Eigen::Vector3d(3, -2, 4);
+  return p;
+}
+
+/// Eye-in-hand on one planned pose set: error vs truth and its reported 1 sigma.
+struct HandEyeOutcome {
+  double t_err_mm, r_err_deg;
+  LaserHandEyeResult result;
+};
+
+HandEyeOutcome SolveSynthetic(const datasets::SimConfig& config,
+                              const datasets::PoseSweepOptions& set, int profiles,
+                              double known_centre_sigma_mm = 0) {
+  const testing::PlannedPoses poses = testing::PlanPoses(config, set, 77);
+  const std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, profiles, 0.05, 5);
+  const Eigen::Isometry3d truth = poses.truth.vision_flange_from_sensor;
+  LaserHandEyeOptions options;
+  options.solver.point_sigma_mm = 0.05;
+  if (known_centre_sigma_mm > 0) {
+    // Centres as the half-sphere calibration would give them: truth + N(0, sigma) per axis.
+    std::mt19937_64 rng(99);
+    std::normal_distribution<double> n(0.0, known_centre_sigma_mm);
+    for (const Eigen::Vector3d& c : poses.centres_in_base) {
+      options.solver.known_centres_in_base.push_back(c + Eigen::Vector3d(n(rng), n(rng), n(rng)));
+    }
+    options.solver.known_centre_sigma_mm = known_centre_sigma_mm;
+  }
+  const LaserHandEyeResult r =
+      CalibrateLaserHandEye(poses.truth.true_vision_robot, Perturbed(truth), sweeps, options);
+  EXPECT_TRUE(r.converged) << r.Summary();
+  // Noise is along the ray; the residual is its component along the sphere normal.
+  EXPECT_LT(r.rms_mm, 0.05);
+  EXPECT_NEAR(r.radius_mm, config.spheres.radius_mm, 0.05);
+  // Error within 4 sigma in the left-perturbation coordinates of the reported covariance.
+  const Vector6d xi = RotationVectorTranslation(truth * r.flange_from_sensor.inverse());
+  for (int k = 0; k < 6; ++k) EXPECT_LT(std::abs(xi[k]), 4 * std::sqrt(r.covariance(k, k))) << k;
+  return {TranslationDistance(r.flange_from_sensor, truth),
+          RotationDistance(r.flange_from_sensor, truth) / kDeg, r};
+}
+
+// Every sweep sees its sphere at the laser's stand-off (700 mm), so a rotation of the sensor
+// about that point, with the sphere centres following, is weakly observed from 25 mm spheres:
+// with free centres the camera centre (700 mm from the data) is known to ~0.3 mm. With the
+// centres known from the half-sphere calibration (0.02 mm per axis), the 12-pose default set
+// reaches the issue's 0.05 mm / 0.02 deg (sigma 0.05 mm along the ray, true robot model).
+TEST(LaserHandEye, RecoversTheMountWithKnownSphereCentres) {
+  const datasets::SimConfig config = EyeInHandConfig();
+  const HandEyeOutcome o = SolveSynthetic(config, config.eye_in_hand, 20, 0.02);
+  std::printf("laser hand-eye, 12 poses, known centres: %.4f mm, %.5f deg; %s\n", o.t_err_mm,
+              o.r_err_deg, o.result.Summary().c_str());
+  EXPECT_LT(o.t_err_mm, 0.05);
+  EXPECT_LT(o.r_err_deg, 0.02);
+}
+
+// Free centres, 50 poses (tilt 5-35 deg, roll +-180 deg): measured, within its reported sigma.
+TEST(LaserHandEye, FiftyPosesWithFreeCentres) {
+  const datasets::SimConfig config = EyeInHandConfig();
+  const HandEyeOutcome o = SolveSynthetic(config, config.joint_poses, 10);
+  std::printf("laser hand-eye, 50 poses, free centres: %.4f mm, %.5f deg; %s\n", o.t_err_mm,
+              o.r_err_deg, o.result.Summary().c_str());
+  EXPECT_LT(o.r_err_deg, 0.02);
+}
+
+// The default eye-in-hand set (12 poses, tilt 5-25 deg, roll +-60 deg, 3 per sphere) sees each
+// sphere's top from nearly the same direction: a rotation of the sensor about the target
+// (hand-eye rx with ty) is weakly observed. Measured, not hidden: the reported 1 sigma says so
+// (hundreds of um), and the error stays within it (checked in SolveSynthetic).
+TEST(LaserHandEye, TwelvePoseSetIsWeakAndSaysSo) {
+  const datasets::SimConfig config = EyeInHandConfig();
+  const HandEyeOutcome o = SolveSynthetic(config, config.eye_in_hand, 20);
+  std::printf("laser hand-eye, 12 poses: %.4f mm, %.5f deg; %s\n", o.t_err_mm, o.r_err_deg,
+              o.result.Summary().c_str());
+  EXPECT_GT(std::sqrt(o.result.covariance.bottomRightCorner<3, 3>().trace()), 0.05);
+}
+
+// The rendered simulator sweeps of the joint-pose set (default noise: 0.05 px per row)
+// -> private exact ray/plane -> hand-eye with the TRUE robot model: within the issue's numbers.
+TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
+  datasets::SimConfig config = EyeInHandConfig();
+  config.joint_poses.profiles = 10;
+  config.capture_planes = config.capture_spheres = config.capture_seats = false;
+  config.capture_trajectory = config.capture_chessboard_images = false;
+  config.capture_laser_line_images = config.write_meshes = false;
+  config.capture_eye_in_hand = config.capture_touches = false;
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / "lasercell_laser_hand_eye_test").string();
+  datasets::SimulateCell(config, dir, {}, 2);
+  const datasets::CellTruth truth = datasets::MakeCellTruth(config);
+  const CameraModel camera = LoadCameraModel(dir + "/truth/camera.cameramodel");
+  const Eigen::Vector4d plane = truth.sensor.laser.Coefficients();
+  std::vector<SphereSweep> sweeps;
+  for (int i = 0; i < config.joint_poses.poses; ++i) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "profiles/joint_pose_%03d.lcp", i);
+    const triangulation::ProfileSet set = triangulation::ReadProfiles(dir + "/" + name);
+    SphereSweep s;
+    s.name = name;
+    s.sphere = i % 4;  // records/sphere_sweeps.yaml says the same (the CLI reads it)
+    for (const triangulation::Profile& p : set.profiles) {
+      s.profiles.push_back({p.joints_rad, internal::ProfilePointsOnPlane(
+                                              camera, plane, set.header.first_column, p.row_px)});
+    }
+    sweeps.push_back(std::move(s));
+  }
+  std::filesystem::remove_all(dir);
+  const LaserHandEyeResult r = CalibrateLaserHandEye(
+      truth.true_vision_robot, Perturbed(truth.vision_flange_from_sensor), sweeps, {});
+  ASSERT_TRUE(r.converged) << r.Summary();
+  const double t_err = TranslationDistance(r.flange_from_sensor, truth.vision_flange_from_sensor);
+  const double r_err = RotationDistance(r.flange_from_sensor, truth.vision_flange_from_sensor) / kDeg;
+  std::printf("laser hand-eye rendered (50 poses): %.4f mm, %.5f deg, %s\n", t_err, r_err,
+              r.Summary().c_str());
+  EXPECT_LT(t_err, 0.05);
+  EXPECT_LT(r_err, 0.02);
+}
+
+TEST(LaserHandEye, RejectsPureTranslations) {
+  datasets::SimConfig config = EyeInHandConfig();
+  const testing::PlannedPoses poses = testing::PlanPoses(config, config.eye_in_hand, 77);
+  std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, 8, 0.05, 5);
+  // Replace every pose's joints by the first pose's wrist orientation: the nominal IK of
+  // translated copies of pose 0's flange pose.
+  const DhChain& robot = poses.truth.true_vision_robot;
+  const Eigen::Isometry3d f0 = robot.BaseFromFlange(sweeps[0].profiles[0].joints_rad);
+  for (std::size_t i = 0; i < sweeps.size(); ++i) {
+    for (SweptProfile& p : sweeps[i].profiles) {
+      Eigen::Isometry3d target = f0;
+      target.translation() += Eigen::Vector3d(10.0 * i, -5.0 * i, 3.0 * i);
+      const auto q = datasets::SolveIk(robot, target, sweeps[0].profiles[0].joints_rad);
+      ASSERT_TRUE(q.has_value());
+      p.joints_rad = *q;
+    }
+  }
+  try {
+    CalibrateLaserHandEye(robot, poses.truth.vision_flange_from_sensor, sweeps);
+    FAIL() << "pure translations accepted";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("pure translations"));
+  }
+}
+
+TEST(LaserHandEye, RejectsRotationsAboutOneAxis) {
+  datasets::SimConfig config = EyeInHandConfig();
+  const testing::PlannedPoses poses = testing::PlanPoses(config, config.eye_in_hand, 77);
+  std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, 8, 0.05, 5);
+  // Only joint 6 differs between the poses: every relative flange rotation is about flange z.
+  const std::vector<double> q0 = sweeps[0].profiles[0].joints_rad;
+  for (std::size_t i = 0; i < sweeps.size(); ++i) {
+    for (SweptProfile& p : sweeps[i].profiles) {
+      p.joints_rad = q0;
+      p.joints_rad[5] += 0.3 * static_cast<double>(i);
+    }
+  }
+  try {
+    CalibrateLaserHandEye(poses.truth.true_vision_robot, poses.truth.vision_flange_from_sensor,
+                          sweeps);
+    FAIL() << "single-axis rotations accepted";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("about one axis"));
+  }
+}
+
+}  // namespace
+}  // namespace lasercell::calib
