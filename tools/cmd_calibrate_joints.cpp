@@ -37,6 +37,8 @@
 namespace lasercell::tools {
 namespace {
 
+using report::HtmlReport;
+using report::WriteHtmlReport;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 constexpr const char* kToolName = "lasercell calibrate joints";
 
@@ -239,11 +241,12 @@ void AddCommonReport(HtmlReport& report, const std::vector<calib::SweepResidual>
     rows.push_back({s.name, std::to_string(s.sphere), std::to_string(s.points), buf[0], buf[1],
                     buf[2]});
   }
-  report.AddBars("RMS point-to-sphere distance per pose (mm)", labels, rms);
-  report.AddBars("Mean signed distance per pose (mm): a pose error shows as a bias", labels, mean);
+  report.AddBars("RMS point-to-sphere distance per pose", labels, rms, "rms (mm)");
+  report.AddBars("Mean signed distance per pose: a pose error shows as a bias", labels, mean,
+                 "mean (mm)");
   report.AddTable({"sweep", "sphere", "points", "rms (mm)", "mean (mm)", "max |r| (mm)"}, rows);
   report.AddHeading("Residuals");
-  report.AddHistogram("Point-to-sphere distances (mm)", residuals, 40);
+  report.AddHistogram("Point-to-sphere distances", residuals, "signed distance (mm)", 40);
   report.AddHeading("Observability");
   report.AddParagraph(obs.Summary());
   std::vector<std::string> idx;
@@ -252,7 +255,8 @@ void AddCommonReport(HtmlReport& report, const std::vector<calib::SweepResidual>
     idx.push_back(std::to_string(i + 1));
     logsv.push_back(std::log10(std::max(1e-300, obs.singular_values[i])));
   }
-  report.AddBars("log10 singular values of the column-scaled Jacobian", idx, logsv);
+  report.AddBars("Singular values of the column-scaled identification Jacobian", idx, logsv,
+                 "log10 singular value");
   for (const calib::UnidentifiableDirection& d : obs.directions) {
     std::string names;
     for (const std::string& n : d.parameters) names += (names.empty() ? "" : ", ") + n;

@@ -13,6 +13,7 @@
 
 #include "calib/joint_identification.hpp"
 #include "datasets/calibration_captures.hpp"
+#include "datasets/robots.hpp"
 #include "datasets/simulate.hpp"
 
 namespace lasercell::calib::testing {
@@ -40,6 +41,30 @@ inline PlannedPoses PlanPoses(const datasets::SimConfig& config,
   }
   p.up_in_base = base_from_cell.linear().col(2);
   return p;
+}
+
+/// Moves pose i's sweep by range_offsets_mm[i % size] along the laser's central ray (the laser
+/// plane stays where it is in space, so the sphere is still swept, at another range), re-solving
+/// the joints on the nominal robot. Poses whose IK fails keep their plan.
+inline void VaryRange(PlannedPoses& p, const std::vector<double>& range_offsets_mm) {
+  const Eigen::Vector3d ray_in_sensor = p.truth.sensor.laser.center_in_sensor;
+  const Eigen::Isometry3d base_from_cell = p.truth.layout.cell_from_vision_base.inverse();
+  const Eigen::Isometry3d sensor_from_flange = p.truth.vision_flange_from_sensor.inverse();
+  for (std::size_t i = 0; i < p.plans.size(); ++i) {
+    datasets::PoseSweep& plan = p.plans[i];
+    const double shift = range_offsets_mm[i % range_offsets_mm.size()];
+    std::vector<std::vector<double>> joints;
+    for (std::size_t w = 0; w < plan.commanded_cell_from_sensor.size(); ++w) {
+      Eigen::Isometry3d cell_from_sensor = plan.commanded_cell_from_sensor[w];
+      cell_from_sensor.translation() -= shift * (cell_from_sensor.linear() * ray_in_sensor);
+      const auto q = datasets::SolveIk(p.truth.nominal_vision_robot,
+                                       base_from_cell * cell_from_sensor * sensor_from_flange,
+                                       plan.trajectory.joints_rad[w]);
+      if (!q) break;
+      joints.push_back(*q);
+    }
+    if (joints.size() == plan.trajectory.joints_rad.size()) plan.trajectory.joints_rad = joints;
+  }
 }
 
 /// Sweeps of `profiles` exposures each along the planned trajectories, noise sigma_mm along the
