@@ -36,6 +36,8 @@ std::optional<SeedSphere> AlgebraicSphere(const std::vector<Eigen::Vector3d>& po
 
 namespace {
 
+constexpr std::size_t kMaxScoringPoints = 2500;
+
 /// Standard deviation of the points across their best-fitting plane, mm.
 double PlaneThickness(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& idx) {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
@@ -91,34 +93,40 @@ std::optional<SeedSphere> FindSphere(const std::vector<Eigen::Vector3d>& points,
   if (candidates.size() < 10) return std::nullopt;
   std::mt19937 rng(options.seed);
   auto draw = [&](std::size_t n) { return static_cast<std::size_t>(rng() % n); };
-  const auto inliers_of = [&](const SeedSphere& s) {
+  // Hypotheses are drawn and scored on an even subset (speed); the winner is refined on all.
+  std::vector<int> scoring;
+  const std::size_t stride = (candidates.size() + kMaxScoringPoints - 1) / kMaxScoringPoints;
+  for (std::size_t k = 0; k < candidates.size(); k += stride) scoring.push_back(candidates[k]);
+  const auto inliers_among = [&](const SeedSphere& s, const std::vector<int>& among) {
     std::vector<int> in;
-    for (int i : candidates) {
+    for (int i : among) {
       if (std::abs((points[i] - s.centre).norm() - s.radius_mm) < options.inlier_gate_mm) {
         in.push_back(i);
       }
     }
     return in;
   };
+  const auto inliers_of = [&](const SeedSphere& s) { return inliers_among(s, candidates); };
   std::optional<SeedSphere> best;
   std::vector<int> near;
   const double r2 = options.neighbourhood_mm * options.neighbourhood_mm;
   for (int h = 0; h < options.hypotheses; ++h) {
-    const int seed = candidates[draw(candidates.size())];
+    const int seed = scoring[draw(scoring.size())];
     near.clear();
-    for (int i : candidates) {
+    for (int i : scoring) {
       if ((points[i] - points[seed]).squaredNorm() < r2) near.push_back(i);
     }
-    if (near.size() < 10) continue;
+    if (near.size() < 4) continue;
     std::vector<int> sample = {seed};
     while (sample.size() < 4) sample.push_back(near[draw(near.size())]);
     std::optional<SeedSphere> s = AlgebraicSphere(points, sample);
     if (!s || s->radius_mm < options.min_radius_mm || s->radius_mm > options.max_radius_mm) {
       continue;
     }
-    s->inliers = inliers_of(*s);
+    s->inliers = inliers_among(*s, scoring);
     if (best && s->inliers.size() <= best->inliers.size()) continue;
-    if (s->inliers.size() < 10) continue;
+    if (s->inliers.size() < 10 * scoring.size() / candidates.size()) continue;
+    if (s->inliers.size() < 4) continue;
     // A plane that fits the inliers about as well as the sphere: a patch of floor or deck.
     double sphere_ms = 0;
     for (int i : s->inliers) {
@@ -129,7 +137,9 @@ std::optional<SeedSphere> FindSphere(const std::vector<Eigen::Vector3d>& points,
     if (PlaneThickness(points, s->inliers) < 3 * std::sqrt(sphere_ms) + 1e-3) continue;
     best = std::move(s);
   }
-  if (!best || best->inliers.size() < 10) return std::nullopt;
+  if (!best) return std::nullopt;
+  best->inliers = inliers_of(*best);
+  if (best->inliers.size() < 10) return std::nullopt;
   for (int round = 0; round < 2; ++round) {
     std::optional<SeedSphere> refined = AlgebraicSphere(points, best->inliers);
     if (!refined || refined->radius_mm < options.min_radius_mm ||
