@@ -85,11 +85,16 @@ std::vector<calib::SphereSweep> LoadSweeps(const std::string& path, const std::s
   } catch (const YAML::Exception& e) {
     throw FileError(path, std::string("not YAML: ") + e.what());
   }
-  if (!root["format"] || root["format"].as<std::string>() != "lasercell.sphere_sweeps") {
-    throw FileError(path, "not a sphere-sweep list (format: lasercell.sphere_sweeps expected)");
-  }
-  if (!root["version"] || root["version"].as<int>() != 1) {
-    throw FileError(path, "unsupported version (this lasercell reads version 1)");
+  try {
+    if (!root.IsMap() || !root["format"] ||
+        root["format"].as<std::string>() != "lasercell.sphere_sweeps") {
+      throw FileError(path, "not a sphere-sweep list (format: lasercell.sphere_sweeps expected)");
+    }
+    if (!root["version"] || root["version"].as<int>() != 1) {
+      throw FileError(path, "unsupported version (this lasercell reads version 1)");
+    }
+  } catch (const YAML::Exception&) {
+    throw FileError(path, "malformed format/version fields");
   }
   const YAML::Node list = root[set];
   if (!list || !list.IsSequence() || list.size() == 0) {
@@ -103,7 +108,15 @@ std::vector<calib::SphereSweep> LoadSweeps(const std::string& path, const std::s
       throw FileError(path, set + " entry " + std::to_string(i + 1) +
                                 " needs profiles_file and aimed_at_sphere");
     }
-    const std::string file = e["profiles_file"].as<std::string>();
+    std::string file;
+    int sphere = 0;
+    try {
+      file = e["profiles_file"].as<std::string>();
+      sphere = e["aimed_at_sphere"].as<int>();
+    } catch (const YAML::Exception&) {
+      throw FileError(path, set + " entry " + std::to_string(i + 1) +
+                                ": profiles_file must be a path and aimed_at_sphere an integer");
+    }
     std::filesystem::path full = dir / file;
     if (!std::filesystem::exists(full)) full = dir.parent_path() / file;  // relative to the set
     const triangulation::ProfileSet profiles = triangulation::ReadProfiles(full.string());
@@ -119,7 +132,7 @@ std::vector<calib::SphereSweep> LoadSweeps(const std::string& path, const std::s
     }
     calib::SphereSweep sweep;
     sweep.name = file;
-    sweep.sphere = e["aimed_at_sphere"].as<int>();
+    sweep.sphere = sphere;
     for (const triangulation::Profile& p : profiles.profiles) {
       sweep.profiles.push_back({p.joints_rad, calib::internal::ProfilePointsOnPlane(
                                                   camera, plane, profiles.header.first_column,
