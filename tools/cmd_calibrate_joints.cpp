@@ -44,7 +44,7 @@ constexpr const char* kToolName = "lasercell calibrate joints";
 
 struct JointsArgs {
   std::string cell, camera, sweeps, set, report, json, robot = "vision_robot", output;
-  std::string laser_plane;
+  std::string laser_plane, touches;
   std::string sensor_frame = "sensor";
   bool with_handeye = false, dh_deltas = false;
   double point_sigma_mm = 0.1, radius_mm = 0;
@@ -141,6 +141,69 @@ std::vector<calib::SphereSweep> LoadSweeps(const std::string& path, const std::s
     sweeps.push_back(std::move(sweep));
   }
   return sweeps;
+}
+
+/// Sphere centres in the robot base from the handling robot's touches of the sphere tops
+/// (records/touches.yaml: tops in handling_base, the sphere radius, the touch sigma): centre =
+/// top - radius * up (cell +z), mapped into `base` through the cell's frame graph.
+struct KnownCentres {
+  std::vector<Eigen::Vector3d> centres_in_base;
+  double sigma_mm = 0;
+  double radius_mm = 0;
+};
+
+KnownCentres CentresFromTouches(const std::string& path, const FrameGraph& graph,
+                                const std::string& base) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(io::ReadFileBytes(path));
+  } catch (const YAML::Exception& e) {
+    throw FileError(path, std::string("not YAML: ") + e.what());
+  }
+  KnownCentres k;
+  std::string frame;
+  std::vector<std::pair<int, Eigen::Vector3d>> tops;
+  try {
+    if (!root.IsMap() || !root["format"] || root["format"].as<std::string>() != "lasercell.touches" ||
+        !root["version"] || root["version"].as<int>() != 1) {
+      throw FileError(path, "not a touch list (format: lasercell.touches, version: 1 expected)");
+    }
+    frame = root["frame"].as<std::string>();
+    k.radius_mm = root["sphere_radius_mm"].as<double>();
+    k.sigma_mm = root["stated_sigma_mm"].as<double>();
+    for (const YAML::Node& t : root["touches"]) {
+      const std::vector<double> p = t["point_in_handling_base"].as<std::vector<double>>();
+      if (p.size() != 3) throw FileError(path, "a touch point needs 3 coordinates (mm)");
+      tops.emplace_back(t["sphere"].as<int>(), Eigen::Vector3d(p[0], p[1], p[2]));
+    }
+  } catch (const YAML::Exception& e) {
+    throw FileError(path, std::string("malformed touch list: ") + e.what());
+  }
+  if (!(k.radius_mm > 0) || !(k.sigma_mm > 0)) {
+    throw FileError(path, "sphere_radius_mm and stated_sigma_mm must be positive");
+  }
+  if (!graph.HasFrame(frame) || !graph.Connected(base, frame)) {
+    throw FileError(path, "its frame '" + frame + "' is not connected to '" + base +
+                              "' in the cell; the cell must hold both robots' bases");
+  }
+  const Eigen::Isometry3d base_from_frame = graph.Transform(base, frame);
+  // "Up" is the cell's +z when the cell frame exists, else the touch frame's own z.
+  const Eigen::Vector3d up_in_frame =
+      graph.HasFrame("cell") && graph.Connected("cell", frame)
+          ? Eigen::Vector3d(graph.Transform(frame, "cell").linear().col(2))
+          : Eigen::Vector3d::UnitZ();
+  k.centres_in_base.assign(tops.size(), Eigen::Vector3d::Constant(NAN));
+  for (const auto& [sphere, top] : tops) {
+    if (sphere < 0 || sphere >= static_cast<int>(tops.size())) {
+      throw FileError(path, "sphere index " + std::to_string(sphere) + " out of range");
+    }
+    k.centres_in_base[static_cast<std::size_t>(sphere)] =
+        base_from_frame * (top - k.radius_mm * up_in_frame);
+  }
+  for (const Eigen::Vector3d& c : k.centres_in_base) {
+    if (!c.allFinite()) throw FileError(path, "every sphere needs exactly one touch");
+  }
+  return k;
 }
 
 std::string NowIso() {
@@ -319,6 +382,12 @@ void RunJoints(const JointsArgs& a) {
   o.point_sigma_mm = a.point_sigma_mm;
   o.radius_mm = a.radius_mm;
   o.max_points_per_sweep = a.max_points;
+  if (!a.touches.empty()) {
+    const KnownCentres k = CentresFromTouches(a.touches, graph, robot.base);
+    o.known_centres_in_base = k.centres_in_base;
+    o.known_centre_sigma_mm = k.sigma_mm;
+    if (o.radius_mm <= 0) o.radius_mm = k.radius_mm;
+  }
   const calib::JointIdentificationResult r = calib::IdentifyRobot(robot.chain, x0, sweeps, o);
 
   FrameGraph updated = graph;
@@ -369,6 +438,7 @@ void RunJoints(const JointsArgs& a) {
       {"version", 1},
       {"robot", a.robot},
       {"sweep_set", a.set},
+      {"sphere_centres", a.touches.empty() ? "free" : "from touches " + a.touches},
       {"converged", r.converged},
       {"termination", r.termination},
       {"iterations", r.iterations},
@@ -434,6 +504,12 @@ void RunHandEyeLaser(const JointsArgs& a) {
   o.solver.point_sigma_mm = a.point_sigma_mm;
   o.solver.radius_mm = a.radius_mm;
   o.solver.max_points_per_sweep = a.max_points;
+  if (!a.touches.empty()) {
+    const KnownCentres k = CentresFromTouches(a.touches, graph, robot.base);
+    o.solver.known_centres_in_base = k.centres_in_base;
+    o.solver.known_centre_sigma_mm = k.sigma_mm;
+    if (o.solver.radius_mm <= 0) o.solver.radius_mm = k.radius_mm;
+  }
   const calib::LaserHandEyeResult r = calib::CalibrateLaserHandEye(robot.chain, x0, sweeps, o);
   FrameGraph updated = graph;
   StaticEdge edge;
@@ -488,6 +564,9 @@ void AddShared(CLI::App* cmd, JointsArgs& a) {
   cmd->add_option("--laser-plane", a.laser_plane,
                   "Laser plane nx,ny,nz,d in the sensor frame (n.p + d = 0, mm); required "
                   "until cell.yaml carries it");
+  cmd->add_option("--touches", a.touches,
+                  "Sphere tops touched by the handling robot (records/touches.yaml): fixes the "
+                  "sphere centres (mapped through the cell), making joint 1 identifiable");
   cmd->add_option("--robot", a.robot, "Robot name in the cell (default vision_robot)");
   cmd->add_option("--sensor-frame", a.sensor_frame, "Sensor frame name (default sensor)");
   cmd->add_option("--point-sigma", a.point_sigma_mm, "A-priori point noise, mm (default 0.1)")

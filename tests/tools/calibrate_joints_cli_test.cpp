@@ -57,7 +57,7 @@ class CalibrateJointsCli : public ::testing::Test {
          "format: lasercell.sim_config\nversion: 1\nseed: 5\n"
          "eye_in_hand: {profiles: 12}\njoint_poses: {profiles: 10}\n"
          "captures: {planes: false, spheres: false, seats: false, trajectory: false, "
-         "chessboard_images: false, laser_line_images: false, meshes: false, touches: false}\n");
+         "chessboard_images: false, laser_line_images: false, meshes: false}\n");
     std::string err;
     ASSERT_EQ(RunCli("simulate cell --quiet --out " + (dir_ / "sim").string() + " --config " +
                       (dir_ / "sim.yaml").string(), &err), 0) << err;
@@ -126,6 +126,26 @@ TEST_F(CalibrateJointsCli, JointsUpdatesOnlyTheRobotAndWritesAVersionedJson) {
   EXPECT_NEAR(chain.joints()[2].joint_offset_rad * 180 / M_PI,
               j["joint_offsets"][2]["offset_deg"].get<double>(), 1e-12);
   EXPECT_NE(Slurp(dir_ / "joints.html").find("<svg"), std::string::npos);
+}
+
+// With the touched sphere tops (records/touches.yaml, 0.05 mm per axis) the centres are known
+// in vision_base through the cell, and joint 1 becomes identifiable: all 6 offsets recovered.
+TEST_F(CalibrateJointsCli, TouchesMakeJointOneIdentifiable) {
+  const fs::path cell = dir_ / "touch_cell.yaml";
+  fs::copy_file(dir_ / "nominal_cell.yaml", cell, fs::copy_options::overwrite_existing);
+  std::string err;
+  ASSERT_EQ(RunCli("calibrate joints" + Common(cell.string()) + " --touches " +
+                       (dir_ / "sim/records/touches.yaml").string() + " --json " +
+                       (dir_ / "touch.json").string(), &err), 0) << err;
+  const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "touch.json"));
+  EXPECT_TRUE(j["observability"]["unidentifiable"].empty());
+  const lasercell::FrameGraph truth = lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
+  const auto& true_chain = dynamic_cast<const lasercell::DhChain&>(truth.Robot("vision_robot"));
+  for (int k = 0; k < 6; ++k) {
+    const double true_deg = true_chain.joints()[k].joint_offset_rad * 180 / M_PI;
+    EXPECT_TRUE(j["joint_offsets"][k]["estimated"].get<bool>());
+    EXPECT_NEAR(j["joint_offsets"][k]["offset_deg"].get<double>(), true_deg, 0.005) << k + 1;
+  }
 }
 
 TEST_F(CalibrateJointsCli, HandEyeLaserUpdatesTheFlangeSensorEdge) {
