@@ -311,6 +311,29 @@ TEST(JointIdentification, RejectsPosesRotatingAboutOneAxisWithHandEye) {
   }
 }
 
+TEST(JointIdentification, RejectsPureTranslationsWithHandEye) {
+  const testing::PlannedPoses& poses = FiftyPoses();
+  std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, 4, 0.05, 3);
+  const DhChain& robot = poses.truth.nominal_vision_robot;
+  const std::vector<double> q0 = sweeps[0].profiles[0].joints_rad;
+  const Eigen::Isometry3d f0 = robot.BaseFromFlange(q0);
+  for (std::size_t i = 0; i < sweeps.size(); ++i) {
+    Eigen::Isometry3d target = f0;
+    target.translation() += Eigen::Vector3d(2.0 * i, -1.0 * i, 0.5 * i);
+    const auto q = datasets::SolveIk(robot, target, q0);
+    ASSERT_TRUE(q.has_value()) << i;
+    for (SweptProfile& p : sweeps[i].profiles) p.joints_rad = *q;
+  }
+  JointIdentificationOptions options;
+  options.estimate_hand_eye = true;
+  try {
+    IdentifyRobot(robot, poses.truth.vision_flange_from_sensor, sweeps, options);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("pure translations"));
+  }
+}
+
 TEST(JointIdentificationOptions, CheckNamesTheField) {
   JointIdentificationOptions o;
   o.point_sigma_mm = 0;
