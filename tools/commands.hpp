@@ -9,4 +9,6 @@ void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
 void AddLocalizeCommand(CLI::App& app);  ///< localize
 void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
 void AddScanCommands(CLI::App& app);  ///< scan triangulate
+/// calibrate joints, calibrate handeye-laser (under the `calibrate` parent given).
+void AddCalibrateJointsCommands(CLI::App& calibrate);
 }  // namespace lasercell::tools

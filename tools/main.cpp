@@ -20,6 +20,9 @@ int main(int argc, char** argv) {
   lasercell::tools::AddSimulateCommands(app);
   lasercell::tools::AddScanCommands(app);
   lasercell::tools::AddBenchCommands(app);
+  CLI::App* calibrate = app.add_subcommand("calibrate", "Calibrate the cell: camera, laser, spheres, hand-eye, joints");
+  calibrate->require_subcommand(1);
+  lasercell::tools::AddCalibrateJointsCommands(*calibrate);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
