@@ -18,6 +18,10 @@ int main(int argc, char** argv) {
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
+  CLI::App* calibrate =
+      app.add_subcommand("calibrate", "Calibrate the cell: spheres (more to come)");
+  calibrate->require_subcommand(1);
+  lasercell::tools::AddCalibrateSpheresCommand(*calibrate);
   lasercell::tools::AddBenchCommands(app);
   try {
     app.parse(argc, argv);
