@@ -60,7 +60,7 @@ std::vector<SweptSphere> SweptSpheresFrom(const SphereSegmentationResult& segmen
   std::vector<SweptSphere> out;
   for (const SegmentedSphere& s : segmentation.spheres) {
     out.push_back({s.fit.center, s.fit.CenterCovariance(), s.fit.radius_mm,
-                   s.fit.radius_sigma_mm});
+                   s.fit.radius_sigma_mm, s.fit.covariance.block<3, 1>(0, 3)});
   }
   return out;
 }
@@ -167,17 +167,45 @@ HalfSphereCalibrationResult CalibrateHalfSpheres(const std::vector<SweptSphere>&
   }
   std::sort(pairs.begin(), pairs.end());
   const double s2 = options.touch_sigma_mm * options.touch_sigma_mm;
+  std::vector<Eigen::Vector3d> centers_hb;
   for (const auto& [t, s] : pairs) {
     swept_used[s] = touch_used[t] = 1;
     src.push_back(swept[s].center_in_sweep);
     src_cov.push_back(swept[s].covariance);
-    dst.push_back(touched_center(t, swept[s].radius_mm));
+    centers_hb.push_back(touched_center(t, swept[s].radius_mm));
+    dst.push_back(centers_hb.back());
     dst_cov.push_back(s2 * Eigen::Matrix3d::Identity() +
                       swept[s].radius_sigma_mm * swept[s].radius_sigma_mm * up * up.transpose());
   }
   RigidFitOptions rigid = options.rigid;
   rigid.item_name = "sphere";
   result.fit = FitRigidTransform(src, dst, src_cov, dst_cov, rigid);
+  bool free_radius = false;
+  for (const auto& [t, s] : pairs) free_radius = free_radius || swept[s].radius_sigma_mm > 0;
+  if (free_radius) {
+    // A fitted radius is correlated with the centre (on a cap seen from above the top point is
+    // better known than either). Fit the tops instead: top_in_sweep = c + (r + tip) u with u =
+    // R^T up from the previous estimate, covariance [I u] Cov(c, r) [I u]^T, against the touches
+    // themselves (sigma_touch^2 I). Two rounds: u moves by the rotation error only.
+    for (int round = 0; round < 2; ++round) {
+      const Eigen::Vector3d u = result.fit.target_from_source.linear().transpose() * up;
+      for (std::size_t i = 0; i < pairs.size(); ++i) {
+        const SweptSphere& sw = swept[pairs[i].second];
+        src[i] = sw.center_in_sweep + (sw.radius_mm + options.tool_tip_radius_mm) * u;
+        Eigen::Matrix<double, 3, 4> j;
+        j << Eigen::Matrix3d::Identity(), u;
+        Eigen::Matrix4d c4 = Eigen::Matrix4d::Zero();
+        c4.topLeftCorner<3, 3>() = sw.covariance;
+        c4.block<3, 1>(0, 3) = sw.center_radius_covariance;
+        c4.block<1, 3>(3, 0) = sw.center_radius_covariance.transpose();
+        c4(3, 3) = sw.radius_sigma_mm * sw.radius_sigma_mm;
+        src_cov[i] = j * c4 * j.transpose();
+        dst[i] = touches[pairs[i].first].point_in_handling_base;
+        dst_cov[i] = s2 * Eigen::Matrix3d::Identity();
+      }
+      result.fit = FitRigidTransform(src, dst, src_cov, dst_cov, rigid);
+    }
+  }
   result.handling_base_from_sweep = result.fit.target_from_source;
   result.covariance = result.fit.covariance;
   for (std::size_t i = 0; i < pairs.size(); ++i) {
@@ -185,8 +213,8 @@ HalfSphereCalibrationResult CalibrateHalfSpheres(const std::vector<SweptSphere>&
     HalfSphereResidual r;
     r.sphere = touches[t].sphere;
     r.swept = s;
-    r.center_in_sweep = src[i];
-    r.center_in_handling_base = dst[i];
+    r.center_in_sweep = swept[s].center_in_sweep;
+    r.center_in_handling_base = centers_hb[i];
     r.residual_mm = result.fit.residuals_mm[i];
     r.residual_norm_mm = result.fit.residual_norms_mm[i];
     r.mahalanobis = result.fit.mahalanobis[i];

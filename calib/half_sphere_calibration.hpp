@@ -15,9 +15,11 @@
 // simulated cell and the reference cell); a robot mounted otherwise must state it. A tilt of
 // `up` by a angle shifts every touched centre by r * a sideways (0.44 mm per degree for r = 25):
 // a common shift, absorbed by the translation.
-// So centre_in_handling_base = touch - (r + tip) * up, with covariance sigma_touch^2 I (+
-// sigma_r^2 up up^T for a free radius), and a weighted rigid fit (rigid_fit.hpp) gives
-// handling_base_from_sweep with its 6x6 covariance.
+// So centre_in_handling_base = touch - (r + tip) * up, with covariance sigma_touch^2 I, and a
+// weighted rigid fit (rigid_fit.hpp) of the swept centres to them gives handling_base_from_sweep
+// with its 6x6 covariance. With fitted (free) radii the tops themselves are fitted instead:
+// top_in_sweep = c + (r + tip) R^T up with the joint centre-radius covariance, against the touch
+// points (the radius and the centre height are strongly correlated on a cap seen from above).
 //
 // Correspondence: the touches are labelled, the swept spheres are not. Every injective
 // assignment of the smaller set into the larger is scored by the RMS of a closed-form rigid fit;
@@ -67,6 +69,8 @@ struct SweptSphere {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();   ///< Of the centre, mm^2.
   double radius_mm = 0;        ///< Fitted or given radius.
   double radius_sigma_mm = 0;  ///< 0 when the radius was given.
+  /// Cross-covariance of centre and radius (mm^2; zero when the radius was given).
+  Eigen::Vector3d center_radius_covariance = Eigen::Vector3d::Zero();
 };
 
 /// Options of CalibrateHalfSpheres.

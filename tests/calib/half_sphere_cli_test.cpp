@@ -63,7 +63,10 @@ class CalibrateSpheresCli : public ::testing::Test {
     graph.SetStaticEdge(e);
     SaveFrameGraph((dir_ / "cell.yaml").string(), graph);
   }
-  void TearDown() override { fs::remove_all(dir_); }
+  // LASERCELL_KEEP_TEST_FILES=1 keeps the folder (sweep, touches, cell, JSON, report) to look at.
+  void TearDown() override {
+    if (std::getenv("LASERCELL_KEEP_TEST_FILES") == nullptr) fs::remove_all(dir_);
+  }
 
   std::string Args(const std::string& cell = "cell.yaml", const std::string& sweep = "sweep.ply",
                    const std::string& touches = "touches.yaml") const {
