@@ -429,9 +429,58 @@ SphereSegmentationResult SegmentSpheres(const PointCloud& cloud,
     }
     for (std::size_t j : component) used[j] = 1;
     kept_centers.push_back(fit.center);
-    result.spheres.push_back({std::move(fit), component, peak.sum, shell_fraction, thr});
+    const double kappa = LineCorrelationFactor(cloud, component, fit.residuals_mm, fit.outlier);
+    if (kappa > 1.0) {
+      fit.covariance *= kappa;
+      fit.radius_sigma_mm *= std::sqrt(kappa);
+      if (kappa > 1.5) {
+        fit.warnings.push_back(Fmt("residuals are correlated along the laser line (speckle?): "
+                                   "covariance inflated %.2fx", kappa));
+      }
+    }
+    result.spheres.push_back({std::move(fit), component, peak.sum, shell_fraction, thr, kappa});
   }
   return result;
+}
+
+double LineCorrelationFactor(const PointCloud& cloud, const std::vector<std::size_t>& indices,
+                             const std::vector<double>& residuals,
+                             const std::vector<std::uint8_t>& outlier, int max_lag) {
+  if (!cloud.HasProfile() || !cloud.HasColumn() || indices.size() < 10) return 1.0;
+  // Residual per (profile, column), inliers only.
+  std::unordered_map<std::uint64_t, double> at;
+  double sum2 = 0;
+  std::size_t n = 0;
+  auto key = [](std::int64_t profile, std::int64_t column) {
+    return (static_cast<std::uint64_t>(profile) << 32) ^ static_cast<std::uint64_t>(column);
+  };
+  for (std::size_t i = 0; i < indices.size(); ++i) {
+    if (outlier[i]) continue;
+    const std::size_t p = indices[i];
+    at[key(cloud.profile[p], cloud.column[p])] = residuals[i];
+    sum2 += residuals[i] * residuals[i];
+    ++n;
+  }
+  if (n < 10 || !(sum2 > 0)) return 1.0;
+  const double var = sum2 / static_cast<double>(n);
+  double kappa = 1.0;
+  for (int lag = 1; lag <= max_lag; ++lag) {
+    double cross = 0;
+    std::size_t pairs = 0;
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+      if (outlier[i]) continue;
+      const std::size_t p = indices[i];
+      const auto it = at.find(key(cloud.profile[p], cloud.column[p] + lag));
+      if (it == at.end()) continue;
+      cross += residuals[i] * it->second;
+      ++pairs;
+    }
+    if (pairs < 10) break;
+    const double rho = cross / static_cast<double>(pairs) / var;
+    if (rho <= 0) break;
+    kappa += 2 * rho;
+  }
+  return kappa;
 }
 
 std::string SphereSegmentationResult::Summary() const {
