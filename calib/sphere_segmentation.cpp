@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -173,6 +174,13 @@ SphereSegmentationResult SegmentSpheres(const PointCloud& cloud,
   SphereSegmentationResult result;
   const std::vector<Eigen::Vector3d>& pts = cloud.positions;
   if (pts.empty()) return result;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    // Cell indices must fit the hash keys; 1e8 mm (100 km) is far beyond any cell.
+    if (!pts[i].allFinite() || pts[i].cwiseAbs().maxCoeff() > 1e8) {
+      throw InputError("SegmentSpheres: point " + std::to_string(i) +
+                       " is not finite or lies beyond 1e8 mm; the cloud must be in millimetres");
+    }
+  }
   const double r_nom = options.radius_mm;
 
   // 1. Voting samples: the first point of every sample_spacing voxel.

@@ -226,6 +226,7 @@ report::HtmlReport MakeReport(const SpheresArgs& a, const calib::HalfSphereCalib
 
 void Run(const SpheresArgs& a) {
   FrameGraph graph = LoadFrameGraph(a.cell);
+  FrameGraph().AddFrame(a.sweep_frame);  // throws for a name that is not lower snake case
   CheckEdgeFits(graph, a.sweep_frame, a.cell);
   const std::string touches_text = io::ReadFileBytes(a.touches);
   const calib::SphereTouches touches = calib::ParseTouchesYaml(touches_text, a.touches);
