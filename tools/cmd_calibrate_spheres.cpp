@@ -266,6 +266,12 @@ void Run(const SpheresArgs& a) {
     throw InputError(a.sweep + " + " + a.touches + ": " + e.what());
   }
 
+  // Warnings of the matched spheres' fits (small caps, correlated noise) join the result's.
+  for (const auto& s : result.spheres) {
+    for (const auto& w : seg.spheres[s.swept].fit.warnings) {
+      result.warnings.push_back("sphere " + std::to_string(s.sphere) + ": " + w);
+    }
+  }
   EdgeProvenance provenance;
   provenance.tool = std::string("lasercell calibrate spheres ") + LASERCELL_VERSION;
   provenance.date = UtcNow();

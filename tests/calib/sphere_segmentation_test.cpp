@@ -148,3 +148,44 @@ TEST(SegmentSpheres, SpeckleAndReflectionGhostsDoNotBreakIt) {
 
 }  // namespace
 }  // namespace lasercell::calib
+
+namespace lasercell::calib {
+namespace {
+
+// The effective-sample-size factor of an AR(1) series with coefficient phi is (1 + phi) / (1 -
+// phi): 1 for white noise, 9 for phi = 0.8. 40 profiles x 500 columns.
+TEST(LineCorrelationFactor, MatchesTheAr1Theory) {
+  for (double phi : {0.0, 0.5, 0.8}) {
+    datasets::Rng rng(31);
+    PointCloud cloud;
+    std::vector<double> residuals;
+    for (int p = 0; p < 40; ++p) {
+      double x = rng.Normal() / std::sqrt(1 - phi * phi);
+      for (int c = 0; c < 500; ++c) {
+        x = phi * x + rng.Normal();
+        cloud.positions.emplace_back(c, p, 0);
+        cloud.profile.push_back(p);
+        cloud.column.push_back(c);
+        residuals.push_back(x);
+      }
+    }
+    std::vector<std::size_t> indices(residuals.size());
+    for (std::size_t i = 0; i < indices.size(); ++i) indices[i] = i;
+    const std::vector<std::uint8_t> outlier(residuals.size(), 0);
+    const double kappa = LineCorrelationFactor(cloud, indices, residuals, outlier);
+    const double theory = (1 + phi) / (1 - phi);
+    std::printf("[ measured ] AR(1) phi %.1f: kappa %.2f (theory %.2f)\n", phi, kappa, theory);
+    EXPECT_NEAR(kappa, theory, 0.15 * theory);
+  }
+  // Without profile/column fields there is nothing to measure.
+  PointCloud plain;
+  plain.positions.assign(20, Eigen::Vector3d::Zero());
+  std::vector<std::size_t> idx(20);
+  for (std::size_t i = 0; i < 20; ++i) idx[i] = i;
+  EXPECT_EQ(LineCorrelationFactor(plain, idx, std::vector<double>(20, 1.0),
+                                  std::vector<std::uint8_t>(20, 0)),
+            1.0);
+}
+
+}  // namespace
+}  // namespace lasercell::calib
