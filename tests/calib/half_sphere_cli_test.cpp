@@ -134,6 +134,27 @@ TEST_F(CalibrateSpheresCli, WritesTheEdgeTheJsonAndTheReport) {
   EXPECT_EQ(LoadFrameGraph((dir_ / "cell.yaml").string()).static_edges().size(), 2u);
 }
 
+TEST_F(CalibrateSpheresCli, FreeRadiusFitsTheRadiiAndAgreesWithTheTruth) {
+  const CliRun run = Cli(Args() + " --free-radius --sweep-frame sweep_start --json " +
+                             (dir_ / "f.json").string(), dir_);
+  ASSERT_EQ(run.code, 0) << run.err;
+  const nlohmann::json j = nlohmann::json::parse(io::ReadFileBytes((dir_ / "f.json").string()));
+  ASSERT_EQ(j["spheres"].size(), 4u);
+  for (const auto& s : j["spheres"]) {
+    const double sigma = s["fit"]["radius_sigma_mm"];
+    EXPECT_GT(sigma, 0.0);
+    EXPECT_NEAR(s["radius_mm"].get<double>(), 25.0, std::max(5 * sigma, 0.01));
+  }
+  const auto& pose = j["handling_base_from_sweep_start"];
+  const Eigen::Vector3d t(pose["translation_mm"][0], pose["translation_mm"][1],
+                          pose["translation_mm"][2]);
+  const double sigma_t = Eigen::Vector3d(j["sigma"]["translation_mm"][0],
+                                         j["sigma"]["translation_mm"][1],
+                                         j["sigma"]["translation_mm"][2]).norm();
+  EXPECT_LT((t - testing::DefaultSphereSweep().handling_base_from_sweep.translation()).norm(),
+            4 * sigma_t);
+}
+
 TEST_F(CalibrateSpheresCli, RefusesAnEdgeThatWouldCloseACycle) {
   SaveFrameGraph((dir_ / "truth_cell.yaml").string(), truth_.Graph());
   const CliRun run = Cli(Args("truth_cell.yaml"), dir_);
