@@ -10,4 +10,5 @@ void AddLocalizeCommand(CLI::App& app);  ///< localize
 void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
 /// calibrate spheres (under the `calibrate` parent created in main.cpp)
 void AddCalibrateSpheresCommand(CLI::App& calibrate);
+void AddScanCommands(CLI::App& app);  ///< scan triangulate
 }  // namespace lasercell::tools

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
+  lasercell::tools::AddScanCommands(app);
   CLI::App* calibrate =
       app.add_subcommand("calibrate", "Calibrate the cell: spheres (more to come)");
   calibrate->require_subcommand(1);
