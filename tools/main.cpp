@@ -19,6 +19,10 @@ int main(int argc, char** argv) {
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
   lasercell::tools::AddScanCommands(app);
+  CLI::App* calibrate =
+      app.add_subcommand("calibrate", "Calibrate the cell: spheres (more to come)");
+  calibrate->require_subcommand(1);
+  lasercell::tools::AddCalibrateSpheresCommand(*calibrate);
   lasercell::tools::AddBenchCommands(app);
   CLI::App* calibrate = app.add_subcommand("calibrate", "Calibrate the cell: camera, laser, spheres, hand-eye, joints");
   calibrate->require_subcommand(1);
