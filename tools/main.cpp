@@ -19,14 +19,12 @@ int main(int argc, char** argv) {
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
   lasercell::tools::AddScanCommands(app);
-  CLI::App* calibrate =
-      app.add_subcommand("calibrate", "Calibrate the cell: spheres (more to come)");
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate", "Calibrate the cell: camera, laser, spheres, hand-eye, joints");
   calibrate->require_subcommand(1);
   lasercell::tools::AddCalibrateSpheresCommand(*calibrate);
-  lasercell::tools::AddBenchCommands(app);
-  CLI::App* calibrate = app.add_subcommand("calibrate", "Calibrate the cell: camera, laser, spheres, hand-eye, joints");
-  calibrate->require_subcommand(1);
   lasercell::tools::AddCalibrateJointsCommands(*calibrate);
+  lasercell::tools::AddBenchCommands(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
