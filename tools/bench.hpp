@@ -10,6 +10,9 @@ namespace lasercell::tools {
 /// Registers `bench registration` and `bench robustness` (cmd_bench.cpp).
 void AddBenchCommands(CLI::App& app);
 
+/// Registers `bench calibration` under `bench` (bench_calibration.cpp).
+void AddCalibrationBenchCommand(CLI::App& bench);
+
 /// Arguments of `lasercell bench robustness`.
 struct RobustnessBenchArgs {
   int placements = 200;                                  ///< Random model poses per noise level.

@@ -8,4 +8,6 @@ void AddCloudCommands(CLI::App& app);   ///< cloud info, cloud convert
 void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
 void AddLocalizeCommand(CLI::App& app);  ///< localize
 void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
+/// calibrate handeye (cmd_calibrate_handeye.cpp); `calibrate` is the parent subcommand.
+void AddCalibrateHandEyeCommand(CLI::App& calibrate);
 }  // namespace lasercell::tools

@@ -19,6 +19,9 @@ int main(int argc, char** argv) {
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
   lasercell::tools::AddBenchCommands(app);
+  auto* calibrate = app.add_subcommand("calibrate", "Calibrate the cell (camera, laser, robots)");
+  calibrate->require_subcommand(1);
+  lasercell::tools::AddCalibrateHandEyeCommand(*calibrate);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
