@@ -270,8 +270,9 @@ std::string ChessboardDetectionsText(const ChessboardDetections& d, const std::s
     << "image_size " << d.width_px << " " << d.height_px << "\n";
   for (std::size_t i = 0; i < d.images.size(); ++i) {
     for (std::size_t k = 0; k < d.corners_px[i].size(); ++k) {
-      o << d.images[i] << " " << k << " " << FormatDouble(d.corners_px[i][k].x()) << " "
-        << FormatDouble(d.corners_px[i][k].y()) << "\n";
+      char b[64];  // 1e-4 px: far below any detector's precision
+      std::snprintf(b, sizeof b, " %.4f %.4f\n", d.corners_px[i][k].x(), d.corners_px[i][k].y());
+      o << d.images[i] << " " << k << b;
     }
   }
   return o.str();

@@ -70,7 +70,7 @@ struct ChessboardDetections {
 };
 /// Parses the text above; throws FileError(name, ...) naming the line.
 ChessboardDetections ParseChessboardDetections(const std::string& text, const std::string& name);
-/// Writes the text above (every number round-trips).
+/// Writes the text above (pixels with 4 decimals).
 std::string ChessboardDetectionsText(const ChessboardDetections& detections,
                                      const std::string& comment = "");
 

@@ -21,6 +21,7 @@
 #include "calib/pose_io.hpp"
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
+#include "core/html_report.hpp"
 #include "core/io/file_util.hpp"
 #include "tools/commands.hpp"
 
@@ -97,6 +98,82 @@ nlohmann::json MatrixJson(const Matrix6d& c) {
     for (int k = 0; k < 6; ++k) rows.back().push_back(c(r, k));
   }
   return rows;
+}
+
+std::string Fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+void WriteReport(const HandEyeArgs& args, const calib::HandEyeResult& r,
+                 const std::vector<std::string>& used, std::size_t n_views) {
+  report::HtmlReport rep("lasercell calibrate handeye");
+  rep.AddParagraph(r.Summary());
+  for (const auto& w : r.warnings) rep.AddWarning(w);
+  rep.AddHeading("Result");
+  rep.AddKeyValues({{args.flange_frame + "_from_" + args.camera_frame,
+                     PoseToFileNotation(r.flange_from_camera)},
+                    {"base_from_board", PoseToFileNotation(r.base_from_board)},
+                    {"reprojection RMS", Fmt("%.4f px", r.reprojection_rms_px)},
+                    {"residual sigma (scales the covariance)", Fmt("%.4f px", r.residual_sigma_px)},
+                    {"AX-XB RMS (consecutive motions)",
+                     Fmt("%.4f deg", r.axxb_rms_rotation_deg) + " / " +
+                         Fmt("%.4f mm", r.axxb_rms_translation_mm)},
+                    {"views / corners", std::to_string(n_views) + " / " +
+                                            std::to_string(r.observations)},
+                    {"Ceres", r.termination}});
+  rep.AddHeading("Per pose");
+  std::vector<double> rot, trans;
+  for (const auto& c : r.view_closure) {
+    rot.push_back(c.rotation_deg);
+    trans.push_back(c.translation_mm);
+  }
+  rep.AddBars("Reprojection RMS per pose", used, r.view_rms_px, "RMS (px)");
+  rep.AddBars("Closure |Y^-1 A_i X C_i| rotation per pose", used, rot, "rotation (deg)");
+  rep.AddBars("Closure |Y^-1 A_i X C_i| translation per pose", used, trans, "translation (mm)");
+  std::vector<std::string> motion_labels;
+  std::vector<double> mr, mt;
+  for (std::size_t i = 0; i < r.axxb.size(); ++i) {
+    motion_labels.push_back(used[i] + "->" + used[i + 1]);
+    mr.push_back(r.axxb[i].rotation_deg);
+    mt.push_back(r.axxb[i].translation_mm);
+  }
+  rep.AddBars("AX-XB rotation residual per motion", motion_labels, mr, "rotation (deg)");
+  rep.AddBars("AX-XB translation residual per motion", motion_labels, mt, "translation (mm)");
+  std::vector<std::vector<std::string>> rows;
+  for (std::size_t i = 0; i < used.size(); ++i) {
+    rows.push_back({used[i], Fmt("%.4f", r.view_rms_px[i]), Fmt("%.4f", rot[i]),
+                    Fmt("%.4f", trans[i])});
+  }
+  rep.AddTable({"image", "reprojection RMS px", "closure deg", "closure mm"}, rows);
+  rep.AddHeading("Residuals");
+  std::vector<double> ru, rv;
+  for (const auto& e : r.residuals_px) {
+    ru.push_back(e.x());
+    rv.push_back(e.y());
+  }
+  rep.AddHistogram("Corner residuals, u", ru, "residual u (px)");
+  rep.AddHistogram("Corner residuals, v", rv, "residual v (px)");
+  rep.AddScatter("Corner residuals", {{"residual", ru, rv, false}},
+                 {"u (px)", "v (px)", true, false, {0, 0, 0, 0}});
+  rep.AddHeading("Covariance of " + args.flange_frame + "_from_" + args.camera_frame);
+  rep.AddParagraph("6x6 over [rotation vector rad (left perturbation); translation mm], scaled by "
+                   "the residual variance; intrinsics and robot poses taken as exact.");
+  const char* names[6] = {"rx (rad)", "ry (rad)", "rz (rad)", "tx (mm)", "ty (mm)", "tz (mm)"};
+  std::vector<std::vector<std::string>> cov;
+  for (int i = 0; i < 6; ++i) {
+    std::vector<std::string> row = {names[i]};
+    for (int k = 0; k < 6; ++k) row.push_back(Fmt("%.3e", r.flange_from_camera_covariance(i, k)));
+    cov.push_back(row);
+  }
+  rep.AddTable({"", "rx", "ry", "rz", "tx", "ty", "tz"}, cov);
+  const Eigen::Vector3d sr = r.SigmaRotationDeg(), st = r.SigmaTranslationMm();
+  rep.AddKeyValues({{"1 sigma rotation (deg)", Fmt("%.5f", sr.x()) + ", " + Fmt("%.5f", sr.y()) +
+                                                   ", " + Fmt("%.5f", sr.z())},
+                    {"1 sigma translation (mm)", Fmt("%.4f", st.x()) + ", " + Fmt("%.4f", st.y()) +
+                                                     ", " + Fmt("%.4f", st.z())}});
+  report::WriteHtmlReport(args.report, rep);
 }
 
 std::string NowIso() {
@@ -230,6 +307,7 @@ void Run(const HandEyeArgs& args) {
   graph.SetStaticEdge(edge);
   SaveFrameGraph(args.cell, graph);
 
+  if (!args.report.empty()) WriteReport(args, r, used, views.size());
   if (!args.json.empty()) {
     std::vector<Eigen::Isometry3d> a;
     for (const auto& v : views) a.push_back(v.base_from_flange);
