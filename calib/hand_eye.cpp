@@ -111,14 +111,21 @@ Eigen::Vector4d QuatMul(const Eigen::Vector4d& p, const Eigen::Vector4d& q) {
 // [a - b, [a + b]x, 0, 0; a' - b', [a' + b']x, a - b, [a + b]x] (vector parts) acting on (q, q');
 // the solution lies in the span of the two smallest right singular vectors, fixed by |q| = 1 and
 // q . q' = 0 (eqs. 31-35).
+// The SVD weighs the real (rotation) and dual (translation) rows together, so the result depends
+// on the length unit; translations are scaled to unit RMS first and the result scaled back.
 Eigen::Isometry3d DaniilidisSolve(const std::vector<Motion>& motions) {
+  double ss = 0;
+  for (const Motion& m : motions) {
+    ss += m.a.translation().squaredNorm() + m.b.translation().squaredNorm();
+  }
+  const double scale = ss > 0 ? std::sqrt(ss / (2.0 * static_cast<double>(motions.size()))) : 1.0;
   Eigen::MatrixXd t = Eigen::MatrixXd::Zero(6 * motions.size(), 8);
   for (std::size_t k = 0; k < motions.size(); ++k) {
     const Eigen::Vector4d a = Quat(motions[k].a.linear()), b = Quat(motions[k].b.linear());
-    const Eigen::Vector4d ta(0, motions[k].a.translation().x(), motions[k].a.translation().y(),
-                             motions[k].a.translation().z());
-    const Eigen::Vector4d tb(0, motions[k].b.translation().x(), motions[k].b.translation().y(),
-                             motions[k].b.translation().z());
+    const Eigen::Vector3d ma = motions[k].a.translation() / scale;
+    const Eigen::Vector3d mb = motions[k].b.translation() / scale;
+    const Eigen::Vector4d ta(0, ma.x(), ma.y(), ma.z());
+    const Eigen::Vector4d tb(0, mb.x(), mb.y(), mb.z());
     const Eigen::Vector4d ad = 0.5 * QuatMul(ta, a), bd = 0.5 * QuatMul(tb, b);
     const Eigen::Vector3d av = a.tail<3>(), bv = b.tail<3>(), adv = ad.tail<3>(),
                           bdv = bd.tail<3>();
@@ -159,7 +166,7 @@ Eigen::Isometry3d DaniilidisSolve(const std::vector<Motion>& motions) {
   Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
   x.linear() =
       Eigen::Quaterniond(real[0], real[1], real[2], real[3]).normalized().toRotationMatrix();
-  x.translation() = tq.tail<3>();
+  x.translation() = scale * tq.tail<3>();
   return x;
 }
 

@@ -104,29 +104,41 @@ std::vector<Row> RunMethods(const std::vector<calib::HandEyeView>& views,
       {cv::CALIB_HAND_EYE_HORAUD, "OpenCV 4.6 calibrateHandEye HORAUD (pre-#24871)"},
       {cv::CALIB_HAND_EYE_ANDREFF, "OpenCV 4.6 calibrateHandEye ANDREFF"},
       {cv::CALIB_HAND_EYE_DANIILIDIS, "OpenCV 4.6 calibrateHandEye DANIILIDIS (pre-#24871)"}};
-  for (const auto& [m, name] : he) {
-    cv::Mat r, t;
-    try {
-      cv::calibrateHandEye(r_g2b, t_g2b, r_t2c, t_t2c, r, t, m);
-    } catch (const cv::Exception&) {
-      rows.push_back({name, {}, {}, false, "threw"});
-      continue;
-    }
-    rows.push_back({name, Pose(r, t), {}, false, ""});
-  }
   const std::pair<cv::RobotWorldHandEyeCalibrationMethod, const char*> rw[] = {
       {cv::CALIB_ROBOT_WORLD_HAND_EYE_SHAH, "OpenCV 4.6 calibrateRobotWorldHandEye SHAH"},
       {cv::CALIB_ROBOT_WORLD_HAND_EYE_LI, "OpenCV 4.6 calibrateRobotWorldHandEye LI"}};
-  for (const auto& [m, name] : rw) {
-    cv::Mat r_b2w, t_b2w, r_g2c, t_g2c;
-    try {
-      cv::calibrateRobotWorldHandEye(r_t2c, t_t2c, r_b2g, t_b2g, r_b2w, t_b2w, r_g2c, t_g2c, m);
-    } catch (const cv::Exception&) {
-      rows.push_back({name, {}, {}, false, "threw"});
-      continue;
+  // OpenCV is unit-agnostic in principle, but ANDREFF and LI mix rotation and translation in one
+  // linear system: run every OpenCV method with translations in mm and again in metres.
+  for (const double scale : {1.0, 1e-3}) {
+    const std::string unit = scale == 1.0 ? ", mm" : ", m";
+    std::vector<cv::Mat> tg, tt, tb;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      tg.push_back(t_g2b[i] * scale);
+      tt.push_back(t_t2c[i] * scale);
+      tb.push_back(t_b2g[i] * scale);
     }
-    // base2world = board_from_base, gripper2cam = camera_from_flange.
-    rows.push_back({name, Pose(r_g2c, t_g2c).inverse(), Pose(r_b2w, t_b2w).inverse(), true, ""});
+    for (const auto& [m, name] : he) {
+      cv::Mat r, t;
+      try {
+        cv::calibrateHandEye(r_g2b, tg, r_t2c, tt, r, t, m);
+      } catch (const cv::Exception&) {
+        rows.push_back({name + unit, {}, {}, false, "threw"});
+        continue;
+      }
+      rows.push_back({name + unit, Pose(r, t / scale), {}, false, ""});
+    }
+    for (const auto& [m, name] : rw) {
+      cv::Mat r_b2w, t_b2w, r_g2c, t_g2c;
+      try {
+        cv::calibrateRobotWorldHandEye(r_t2c, tt, r_b2g, tb, r_b2w, t_b2w, r_g2c, t_g2c, m);
+      } catch (const cv::Exception&) {
+        rows.push_back({name + unit, {}, {}, false, "threw"});
+        continue;
+      }
+      // base2world = board_from_base, gripper2cam = camera_from_flange.
+      rows.push_back({name + unit, Pose(r_g2c, t_g2c / scale).inverse(),
+                      Pose(r_b2w, t_b2w / scale).inverse(), true, ""});
+    }
   }
   for (auto m : {calib::HandEyeMethod::kTsaiLenz, calib::HandEyeMethod::kParkMartin,
                  calib::HandEyeMethod::kDaniilidis}) {

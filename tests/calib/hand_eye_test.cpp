@@ -132,6 +132,28 @@ TEST(HandEyeReprojectionCost, JacobianMatchesNumericDifferences) {
   }
 }
 
+TEST(BoardPoseReprojectionCost, JacobianMatchesNumericDifferences) {
+  const CameraModel camera = Opencv8();
+  const Eigen::Isometry3d camera_from_board =
+      PoseFromRotationVector({2.9, 0.2, -0.3}, {-60, 40, 620});
+  const BoardPoseReprojectionCost functor(camera, camera_from_board, {90, 60, 0}, {500.2, 480.7});
+  ceres::AutoDiffCostFunction<BoardPoseReprojectionCost, 2, 6> autodiff(
+      new BoardPoseReprojectionCost(functor));
+  ceres::NumericDiffOptions nd;
+  nd.relative_step_size = 1e-7;
+  ceres::NumericDiffCostFunction<BoardPoseReprojectionCost, ceres::CENTRAL, 2, 6> numeric(
+      new BoardPoseReprojectionCost(functor), ceres::TAKE_OWNERSHIP, 2, nd);
+  const double d[6] = {0.004, -0.003, 0.002, 0.7, -0.4, 1.1};
+  const double* params[1] = {d};
+  double r_a[2], r_n[2], ja[12], jn[12];
+  double* jas[1] = {ja};
+  double* jns[1] = {jn};
+  ASSERT_TRUE(autodiff.Evaluate(params, r_a, jas));
+  ASSERT_TRUE(numeric.Evaluate(params, r_n, jns));
+  EXPECT_NEAR(r_a[1], r_n[1], 1e-12);
+  for (int k = 0; k < 12; ++k) EXPECT_NEAR(ja[k], jn[k], 1e-4 * (1 + std::abs(jn[k]))) << k;
+}
+
 // sigma = 0.03 px per corner coordinate: the corner error measured on the simulator's rendered
 // chessboard images (OpenCV SB + cornerSubPix: 0.029 px RMS, `lasercell bench calibration`).
 // 15 views of a 9 x 6 board (30 mm), camera 600 mm away. Reported 1 sigma here is 0.004-0.017 mm
