@@ -28,6 +28,8 @@
 namespace lasercell::tools {
 namespace {
 
+namespace fs = std::filesystem;
+
 constexpr double kDeg = M_PI / 180.0;
 
 struct HandEyeArgs {
@@ -268,6 +270,23 @@ void Run(const HandEyeArgs& args) {
                      std::to_string(camera.width_px()) + "x" + std::to_string(camera.height_px()));
   }
 
+  if (!poses.images.empty()) {  // the pose file names its images: they must match, in order
+    for (std::size_t i = 0; i < det.images.size(); ++i) {
+      if (fs::path(poses.images[i]).filename() != fs::path(det.images[i]).filename()) {
+        throw InputError("image " + std::to_string(i + 1) + " is " + det.images[i] + " but pose " +
+                         std::to_string(i + 1) + " in " + args.poses + " is for " +
+                         poses.images[i]);
+      }
+    }
+  }
+  if (det.cols % 2 == 1 && det.rows % 2 == 1) {
+    std::fprintf(stderr,
+                 "calibrate handeye: warning: a %dx%d-inner-corner board looks the same turned by "
+                 "180 deg; the detector may number its corners from either end in different "
+                 "images (watch the per-view RMS); prefer a board with an even inner-corner "
+                 "count along one side\n",
+                 det.cols, det.rows);
+  }
   const std::vector<Eigen::Vector3d> board =
       calib::internal::ChessboardCorners(det.cols, det.rows, det.square_mm);
   std::vector<calib::HandEyeView> views;

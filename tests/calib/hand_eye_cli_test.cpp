@@ -15,6 +15,12 @@
 
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "calib/pose_io.hpp"
+#include "datasets/calibration_captures.hpp"
+#include "datasets/sensor.hpp"
+#include "datasets/sim_config.hpp"
+#include "datasets/simulate.hpp"
+#include <random>
 
 namespace lasercell {
 namespace {
@@ -124,6 +130,47 @@ TEST_F(HandEyeCli, PosesInMetresGivenAsYamlAreRejected) {
                        Data("corners.txt") + " --poses " + poses);
   EXPECT_EQ(r.code, 2) << r.output;
   EXPECT_NE(r.output.find("look like metres"), std::string::npos) << r.output;
+}
+
+// The simulator's record path: records/hand_eye_images.yaml (commanded joints) through the robot
+// of the true cell.yaml, corners = the plan's true projections + N(0, 0.03 px) as a corners file;
+// the new edge is within the 0.05 mm / 0.02 deg of the true one.
+TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
+  datasets::SimConfig config;
+  const datasets::CellTruth truth = datasets::MakeCellTruth(config);
+  const datasets::ChessboardTarget board = config.chessboard;
+  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
+  const std::string cell = (dir_ / "cell.yaml").string();
+  io::WriteFileAtomically(cell, FrameGraphToYaml(truth.Graph()));
+  io::WriteFileAtomically((dir_ / "camera.cameramodel").string(),
+                          datasets::MrcalCameraModelText(config.sensor.camera));
+  io::WriteFileAtomically((dir_ / "record.yaml").string(),
+                          datasets::HandEyeImagesRecordYaml(board, set));
+  calib::ChessboardDetections det;
+  det.cols = board.squares_x - 1;
+  det.rows = board.squares_y - 1;
+  det.square_mm = board.square_mm;
+  det.width_px = config.sensor.camera.width_px;
+  det.height_px = config.sensor.camera.height_px;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  for (std::size_t i = 0; i < set.images.size(); ++i) {
+    det.images.push_back(fs::path(datasets::HandEyeImageFile(i)).filename().string());
+    det.corners_px.emplace_back();
+    for (const auto& q : set.images[i].corners_px) {
+      det.corners_px.back().push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
+    }
+  }
+  io::WriteFileAtomically((dir_ / "corners.txt").string(), calib::ChessboardDetectionsText(det));
+  const CliRun r = RunCli("calibrate handeye --cell " + cell + " --camera " +
+                          (dir_ / "camera.cameramodel").string() + " --corners " +
+                          (dir_ / "corners.txt").string() + " --poses " +
+                          (dir_ / "record.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const FrameGraph g = LoadFrameGraph(cell);
+  const Eigen::Isometry3d got = g.Transform("vision_flange", "sensor");
+  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.output;
+  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.output;
 }
 
 }  // namespace
