@@ -9,8 +9,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <memory>
-#include <sstream>
 
 #include "calib/cost_functions/hand_eye_reprojection.hpp"
 #include "calib/internal/chessboard_cv.hpp"
@@ -187,6 +185,21 @@ Eigen::Isometry3d Perturbed(const Eigen::Isometry3d& pose, const double* d) {
 
 AxXbError ClosureOf(const Eigen::Isometry3d& d) {
   return {AngleOf(d.linear()) / kDeg, d.translation().norm()};
+}
+
+// True when listing the board points backwards is the board turned by 180 degrees about its
+// centre (p_{N-1-k} = 2c - p_k): then a detector may number the corners from either end.
+bool ReversalIsRigid(const std::vector<Eigen::Vector3d>& p) {
+  if (p.size() < 2) return false;
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (const auto& q : p) c += q;
+  c /= static_cast<double>(p.size());
+  double extent = 0;
+  for (const auto& q : p) extent = std::max(extent, (q - c).norm());
+  for (std::size_t k = 0; k < p.size(); ++k) {
+    if ((p[p.size() - 1 - k] - (2 * c - p[k])).norm() > 1e-9 * std::max(1.0, extent)) return false;
+  }
+  return true;
 }
 
 }  // namespace
@@ -395,6 +408,41 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
   for (const HandEyeView& v : views) {
     result.camera_from_board.push_back(EstimateCameraFromBoard(v, camera));
   }
+  // A 180-degree-symmetric board: make every view's corner numbering agree with view 1's. The
+  // rotation angle of a robot motion equals that of the camera motion (A X = X B), whatever X;
+  // the wrong numbering turns the board by 180 deg and breaks that equality.
+  std::vector<HandEyeView> reordered;
+  const std::vector<HandEyeView>* used_views = &views;
+  if (options.fix_symmetric_board_order && ReversalIsRigid(views[0].corners_in_board)) {
+    bool all_same_board = true;
+    for (const HandEyeView& v : views) {
+      all_same_board = all_same_board && v.corners_in_board == views[0].corners_in_board;
+    }
+    if (all_same_board) {
+      reordered = views;
+      for (std::size_t i = 1; i < views.size(); ++i) {
+        const double angle_a = AngleOf((poses[0].inverse() * poses[i]).linear());
+        HandEyeView flipped = views[i];
+        std::reverse(flipped.corners_px.begin(), flipped.corners_px.end());
+        const Eigen::Isometry3d c_flipped = EstimateCameraFromBoard(flipped, camera);
+        const double keep = std::abs(
+            AngleOf((result.camera_from_board[0] * result.camera_from_board[i].inverse()).linear()) -
+            angle_a);
+        const double flip = std::abs(
+            AngleOf((result.camera_from_board[0] * c_flipped.inverse()).linear()) - angle_a);
+        if (flip + 0.5 * kDeg < keep) {
+          reordered[i] = flipped;
+          result.camera_from_board[i] = c_flipped;
+          result.reversed_views.push_back(static_cast<int>(i));
+          result.warnings.push_back("view " + std::to_string(i + 1) +
+                                    ": corner numbering reversed to match view 1 (the board is "
+                                    "symmetric under a 180-degree turn)");
+        }
+      }
+      used_views = &reordered;
+    }
+  }
+  const std::vector<HandEyeView>& vs = *used_views;
   result.initial_flange_from_camera =
       SolveHandEyeClosedForm(poses, result.camera_from_board, options.initialisation);
   Eigen::Isometry3d x = result.initial_flange_from_camera;
@@ -404,7 +452,7 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
   if (options.refine) {
     double dx[6] = {0, 0, 0, 0, 0, 0}, dy[6] = {0, 0, 0, 0, 0, 0};
     ceres::Problem problem;
-    AddResiduals(views, camera, x, y, dx, dy, &problem);
+    AddResiduals(vs, camera, x, y, dx, dy, &problem);
     ceres::Solver::Options o;
     o.linear_solver_type = ceres::DENSE_QR;
     o.max_num_iterations = options.max_iterations;
@@ -425,7 +473,7 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
 
   // Residuals at the solution.
   double ss = 0;
-  for (const HandEyeView& v : views) {
+  for (const HandEyeView& v : vs) {
     double view_ss = 0;
     for (std::size_t k = 0; k < v.corners_px.size(); ++k) {
       const Eigen::Vector2d r = Residual(camera, v, k, x, y);
@@ -439,9 +487,9 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
   result.reprojection_rms_px = std::sqrt(ss / result.observations);
   const int dof = 2 * result.observations - 12;
   result.residual_sigma_px = dof > 0 ? std::sqrt(ss / dof) : 0.0;
-  for (std::size_t i = 0; i < views.size(); ++i) {
+  for (std::size_t i = 0; i < vs.size(); ++i) {
     result.view_closure.push_back(
-        ClosureOf(y.inverse() * views[i].base_from_flange * x * result.camera_from_board[i]));
+        ClosureOf(y.inverse() * vs[i].base_from_flange * x * result.camera_from_board[i]));
     if (result.view_rms_px[i] > 3.0 * result.reprojection_rms_px && result.view_rms_px[i] > 0.5) {
       char b[160];
       std::snprintf(b, sizeof b, "view %zu: reprojection RMS %.3f px, > 3x the overall %.3f px",
@@ -450,7 +498,7 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
     }
   }
   double sr = 0, st = 0;
-  for (std::size_t i = 0; i + 1 < views.size(); ++i) {
+  for (std::size_t i = 0; i + 1 < vs.size(); ++i) {
     const AxXbError e = AxXbResidual(
         poses[i].inverse() * poses[i + 1],
         result.camera_from_board[i] * result.camera_from_board[i + 1].inverse(), x);
@@ -467,7 +515,7 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
     // Linearise again at the solution (perturbations 0) and invert J^T J.
     double dx[6] = {0, 0, 0, 0, 0, 0}, dy[6] = {0, 0, 0, 0, 0, 0};
     ceres::Problem problem;
-    AddResiduals(views, camera, x, y, dx, dy, &problem);
+    AddResiduals(vs, camera, x, y, dx, dy, &problem);
     ceres::Covariance::Options co;
     co.algorithm_type = ceres::DENSE_SVD;
     co.num_threads = options.threads;

@@ -97,6 +97,9 @@ struct HandEyeOptions {
   double function_tolerance = 1e-12;  ///< Ceres relative cost change to stop (> 0).
   bool estimate_covariance = true;    ///< Compute the 6x6 covariances.
   int threads = 1;                    ///< Ceres threads (>= 1).
+  /// For boards symmetric under a 180-degree turn (odd x odd inner corners), renumber the corners
+  /// of views whose numbering runs from the other end than view 1's (see CalibrateHandEye).
+  bool fix_symmetric_board_order = true;
 
   /// Throws OptionError naming the field.
   void Check() const;
@@ -128,6 +131,7 @@ struct HandEyeResult {
   std::vector<AxXbError> axxb;
   double axxb_rms_rotation_deg = 0;   ///< RMS over `axxb`.
   double axxb_rms_translation_mm = 0; ///< RMS over `axxb`.
+  std::vector<int> reversed_views;    ///< 0-based views whose corner numbering was reversed.
   std::vector<std::string> warnings;  ///< e.g. a view with a large residual.
 
   /// 1 sigma of X: rotation deg per axis (x, y, z) and translation mm per axis.
@@ -138,7 +142,10 @@ struct HandEyeResult {
 };
 
 /// Eye-in-hand calibration: per-view PnP, motion checks, closed form, then the joint Ceres
-/// refinement of X and Y over every corner's reprojection error. Throws InputError for fewer
+/// refinement of X and Y over every corner's reprojection error. When every view has the same
+/// board points and listing them backwards is the board turned by 180 degrees, a view whose
+/// camera motion from view 1 rotates by an angle that matches the robot's only after reversing
+/// its corners is reversed (reported in reversed_views and warnings). Throws InputError for fewer
 /// than 3 views, views with < 4 corners or mismatched corner/board counts, and the motion
 /// degeneracies of CheckHandEyeMotions.
 HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const CameraModel& camera,

@@ -80,10 +80,16 @@ Eigen::Isometry3d Pose(const cv::Mat& r, const cv::Mat& t) {
   return p;
 }
 
-// Every method on the same views and per-view board poses.
-std::vector<Row> RunMethods(const std::vector<calib::HandEyeView>& views,
+// Every method on the same views and per-view board poses. Views whose corner numbering our
+// calibration reversed (180-degree-symmetric boards) are reversed in `views` too, so that every
+// method and the evaluation see the same numbering.
+std::vector<Row> RunMethods(std::vector<calib::HandEyeView>& views,
                             const calib::CameraModel& camera, calib::HandEyeResult* ours) {
   *ours = calib::CalibrateHandEye(views, camera);
+  for (int i : ours->reversed_views) {
+    auto& c = views[static_cast<std::size_t>(i)].corners_px;
+    std::reverse(c.begin(), c.end());
+  }
   const std::vector<Eigen::Isometry3d>& c = ours->camera_from_board;
   std::vector<Eigen::Isometry3d> a;
   for (const auto& v : views) a.push_back(v.base_from_flange);

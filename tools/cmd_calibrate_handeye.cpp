@@ -279,14 +279,6 @@ void Run(const HandEyeArgs& args) {
       }
     }
   }
-  if (det.cols % 2 == 1 && det.rows % 2 == 1) {
-    std::fprintf(stderr,
-                 "calibrate handeye: warning: a %dx%d-inner-corner board looks the same turned by "
-                 "180 deg; the detector may number its corners from either end in different "
-                 "images (watch the per-view RMS); prefer a board with an even inner-corner "
-                 "count along one side\n",
-                 det.cols, det.rows);
-  }
   const std::vector<Eigen::Vector3d> board =
       calib::internal::ChessboardCorners(det.cols, det.rows, det.square_mm);
   std::vector<calib::HandEyeView> views;
