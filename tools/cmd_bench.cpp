@@ -281,6 +281,7 @@ void AddBenchCommands(CLI::App& app) {
   rob->add_option("--json", rargs->json_out, "Also write every trial as JSON");
   rob->callback([rargs] { RunRobustnessBench(*rargs); });
 
+  AddBenchPeaksCommand(*bench);
   AddCalibrationBenchCommand(*bench);
 }
 
