@@ -13,4 +13,6 @@ void AddCalibrateSpheresCommand(CLI::App& calibrate);
 void AddScanCommands(CLI::App& app);  ///< scan triangulate
 /// calibrate joints, calibrate handeye-laser (under the `calibrate` parent given).
 void AddCalibrateJointsCommands(CLI::App& calibrate);
+/// calibrate handeye (cmd_calibrate_handeye.cpp); `calibrate` is the parent subcommand.
+void AddCalibrateHandEyeCommand(CLI::App& calibrate);
 }  // namespace lasercell::tools

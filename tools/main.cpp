@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   calibrate->require_subcommand(1);
   lasercell::tools::AddCalibrateSpheresCommand(*calibrate);
   lasercell::tools::AddCalibrateJointsCommands(*calibrate);
+  lasercell::tools::AddCalibrateHandEyeCommand(*calibrate);
   lasercell::tools::AddBenchCommands(app);
   try {
     app.parse(argc, argv);
