@@ -18,8 +18,13 @@ int main(int argc, char** argv) {
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
-  CLI::App* calibrate = app.add_subcommand("calibrate", "Calibrate the cell: camera, ...");
+  lasercell::tools::AddScanCommands(app);
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate", "Calibrate the cell: camera, laser, spheres, hand-eye, joints");
   calibrate->require_subcommand(1);
+  lasercell::tools::AddCalibrateSpheresCommand(*calibrate);
+  lasercell::tools::AddCalibrateJointsCommands(*calibrate);
+  lasercell::tools::AddCalibrateHandEyeCommand(*calibrate);
   lasercell::tools::AddCalibrateCameraCommand(*calibrate);
   lasercell::tools::AddBenchCommands(app);
   try {
