@@ -162,6 +162,22 @@ std::string LinearSweepTruth(const LinearSweep& sweep, const Eigen::Isometry3d& 
   return o.str();
 }
 
+// What a cell with a linear axis knows of its sweeps (no truth): when the motion starts and its
+// velocity in the sensor frame (the axis direction as the sensor is mounted on it, and the
+// commanded speed). `lasercell scan triangulate --velocity-mm-s` takes the latter.
+std::string LinearSweepRecord(const LinearSweep& sweep, const SimConfig& config) {
+  const Eigen::Vector3d v_sensor = sweep.cell_from_sensor_start.linear().transpose() * sweep.velocity_mm_s;
+  std::ostringstream o;
+  o << "format: lasercell.linear_sweep\nversion: 1\n"
+    << "# Every linear capture (profiles/plane_*, spheres, seat_*) uses this motion: the sensor\n"
+    << "# frame at t0 moves with constant velocity; points of the profile stamped t_ns lie at\n"
+    << "# p_in_sensor_t0 = p_in_sensor + velocity_mm_s_in_sensor * (t_ns - t0_ns) * 1e-9.\n"
+    << "t0_ns: " << config.timing.start_ns << "\n"
+    << "velocity_mm_s_in_sensor: " << Vec(v_sensor) << "\n"
+    << "speed_mm_s: " << Num(sweep.velocity_mm_s.norm()) << "\n";
+  return o.str();
+}
+
 std::string ExposureTimesTruth(const SweepResult& result, const SimConfig& config) {
   if (config.timing.timestamp_noise_s <= 0) return "";  // timestamps are the true times
   std::ostringstream o;
@@ -732,6 +748,9 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
   if (config.capture_seats) {
     RunSeats(config, truth, seats, sweep, hb_from_cell, out, report, captures_yaml, progress,
              threads);
+  }
+  if (config.capture_planes || config.capture_spheres || config.capture_seats) {
+    out.Write("records/linear_sweep.yaml", LinearSweepRecord(sweep, config));
   }
   if (config.capture_trajectory) {
     const SeatCapture& seat = seats.front();
