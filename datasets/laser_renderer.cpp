@@ -76,6 +76,10 @@ void SweepTiming::Check(const std::string& what) const {
     throw OptionError(what + ".jitter_s and timestamp_noise_s must be >= 0, jitter below 0.2 "
                              "profile periods (got " + std::to_string(jitter_s) + ")");
   }
+  if (!(joint_noise_rad >= 0) || joint_noise_rad > 0.01) {
+    throw OptionError(what + ".joint_noise_rad must be in [0, 0.01] rad (got " +
+                      std::to_string(joint_noise_rad) + ")");
+  }
 }
 
 std::size_t ExposureTruth::ValidCount() const {
@@ -417,6 +421,9 @@ SweepResult RenderSweep(const LaserRenderer& renderer,
     profile.sequence = static_cast<std::uint64_t>(i);
     profile.timestamp_ns = timing.start_ns + static_cast<std::int64_t>(std::llround(stamp * 1e9));
     profile.joints_rad = state.joints_rad;
+    if (timing.joint_noise_rad > 0) {
+      for (double& q : profile.joints_rad) q += timing.joint_noise_rad * timing_rng.Normal();
+    }
     valid[i] = profile.ValidCount();
     result.profiles.profiles[i] = std::move(profile);
     result.exposure_time_s[i] = t;

@@ -158,6 +158,9 @@ struct SweepTiming {
   double rate_hz = 100.0;        ///< Nominal profile rate.
   double jitter_s = 20e-6;       ///< Sigma of the true exposure time about the nominal grid, s.
   double timestamp_noise_s = 0;  ///< Sigma of the recorded timestamp about the true time, s.
+  /// Sigma of each recorded joint value about the true one (encoder noise), rad. The sensor
+  /// pose always comes from the true joints; only the profile's recorded joints get the noise.
+  double joint_noise_rad = 0;
   std::int64_t start_ns = 1'000'000'000;  ///< Timestamp of the nominal first exposure, ns.
 
   /// Throws OptionError naming `what` and the field.

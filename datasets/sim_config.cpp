@@ -255,6 +255,24 @@ void SimConfig::Check() const {
       }
     }
   }
+  for (const auto& [errors, name] : {std::pair{&dh_a_errors_mm, "dh_a_errors_mm"},
+                                     std::pair{&dh_d_errors_mm, "dh_d_errors_mm"}}) {
+    if (!*errors) continue;
+    if ((*errors)->size() != 6) {
+      throw OptionError(std::string("SimConfig.vision_robot.") + name +
+                        " must list 6 values (got " + std::to_string((*errors)->size()) + ")");
+    }
+    for (double v : **errors) {
+      if (!std::isfinite(v) || std::abs(v) > 10) {
+        throw OptionError(std::string("SimConfig.vision_robot.") + name +
+                          " values must be within +-10 mm");
+      }
+    }
+  }
+  if (!(dh_length_sigma_mm >= 0 && dh_length_sigma_mm <= 5)) {
+    throw OptionError("SimConfig.vision_robot.dh_length_sigma_mm must be in [0, 5] (got " +
+                      std::to_string(dh_length_sigma_mm) + ")");
+  }
   if (!(joint_offset_sigma_deg >= 0 && joint_offset_sigma_deg <= 5)) {
     throw OptionError("SimConfig.vision_robot.joint_offset_sigma_deg must be in [0, 5] (got " +
                       std::to_string(joint_offset_sigma_deg) + ")");
@@ -430,6 +448,7 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     t.Read("rate_hz", &c.timing.rate_hz);
     t.Read("jitter_s", &c.timing.jitter_s);
     t.Read("timestamp_noise_s", &c.timing.timestamp_noise_s);
+    t.Read("joint_noise_rad", &c.timing.joint_noise_rad);
     t.Read("start_ns", &c.timing.start_ns);
     t.Done();
   }
@@ -458,6 +477,12 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     r.Read("joint_offsets_deg", &offsets);
     if (!offsets.empty()) c.joint_offsets_deg = offsets;
     r.Read("joint_offset_sigma_deg", &c.joint_offset_sigma_deg);
+    std::vector<double> a_errors, d_errors;
+    r.Read("dh_a_errors_mm", &a_errors);
+    if (!a_errors.empty()) c.dh_a_errors_mm = a_errors;
+    r.Read("dh_d_errors_mm", &d_errors);
+    if (!d_errors.empty()) c.dh_d_errors_mm = d_errors;
+    r.Read("dh_length_sigma_mm", &c.dh_length_sigma_mm);
     r.Done();
   }
   {
@@ -619,7 +644,8 @@ std::string SimConfigToYaml(const SimConfig& c) {
     << ", reflection_intensity: " << Num(r.reflection_intensity) << "}\n";
   o << "timing: {profiles: " << c.timing.profiles << ", rate_hz: " << Num(c.timing.rate_hz)
     << ", jitter_s: " << Num(c.timing.jitter_s) << ", timestamp_noise_s: "
-    << Num(c.timing.timestamp_noise_s) << ", start_ns: " << c.timing.start_ns << "}\n";
+    << Num(c.timing.timestamp_noise_s) << ", joint_noise_rad: " << Num(c.timing.joint_noise_rad)
+    << ", start_ns: " << c.timing.start_ns << "}\n";
   o << "cell:\n  vision_base_mm: " << List(c.vision_base_mm) << "\n  vision_base_yaw_deg: "
     << Num(c.vision_base_yaw_deg) << "\n  handling_base_mm: " << List(c.handling_base_mm)
     << "\n  handling_base_yaw_deg: " << Num(c.handling_base_yaw_deg) << "\n  floor_size_mm: "
@@ -631,6 +657,9 @@ std::string SimConfigToYaml(const SimConfig& c) {
   o << "vision_robot:\n";
   if (c.joint_offsets_deg) o << "  joint_offsets_deg: " << List(*c.joint_offsets_deg) << "\n";
   o << "  joint_offset_sigma_deg: " << Num(c.joint_offset_sigma_deg) << "\n";
+  if (c.dh_a_errors_mm) o << "  dh_a_errors_mm: " << List(*c.dh_a_errors_mm) << "\n";
+  if (c.dh_d_errors_mm) o << "  dh_d_errors_mm: " << List(*c.dh_d_errors_mm) << "\n";
+  o << "  dh_length_sigma_mm: " << Num(c.dh_length_sigma_mm) << "\n";
   o << "sweep: {measuring_height_mm: " << Num(c.measuring_height_mm) << ", length_mm: "
     << Num(c.sweep_length_mm) << ", center_xy_mm: " << List(c.sweep_center_xy_mm)
     << ", direction_deg: " << Num(c.sweep_direction_deg) << "}\n";

@@ -17,12 +17,13 @@
 //            intensity_sigma, dropout_probability, speckle_sigma_px,
 //            speckle_correlation_px, speckle_intensity_sigma, occlusion_epsilon_mm,
 //            reflection_probability, reflection_intensity}
-//   timing: {profiles, rate_hz, jitter_s, timestamp_noise_s, start_ns}
+//   timing: {profiles, rate_hz, jitter_s, timestamp_noise_s, joint_noise_rad, start_ns}
 //   cell: {vision_base_mm: [x, y, z], vision_base_yaw_deg, handling_base_mm: [x, y, z],
 //          handling_base_yaw_deg, floor_size_mm,
 //          albedo: {floor, pallet, seat, white_plane, spheres, stands, chessboard_light,
 //                   chessboard_dark}}
-//   vision_robot: {joint_offsets_deg: [6] (explicit), joint_offset_sigma_deg}
+//   vision_robot: {joint_offsets_deg: [6] (explicit), joint_offset_sigma_deg,
+//                  dh_a_errors_mm: [6], dh_d_errors_mm: [6] (explicit), dh_length_sigma_mm}
 //   sweep: {measuring_height_mm, length_mm, center_xy_mm: [x, y], direction_deg}
 //   seats: {count, max_shift_mm, max_tilt_deg, max_yaw_deg, shape: {ChairSeatOptions fields}}
 //   planes: {heights_mm: [...], size_mm: [x, y]}
@@ -126,6 +127,12 @@ struct SimConfig {
   // The true vision robot.
   std::optional<std::vector<double>> joint_offsets_deg;  ///< Explicit true joint offsets.
   double joint_offset_sigma_deg = 0.1;  ///< Else drawn N(0, sigma) per joint from the seed.
+  /// Explicit DH length errors of the true robot, added to a_i and d_i (6 values each, mm).
+  std::optional<std::vector<double>> dh_a_errors_mm;
+  std::optional<std::vector<double>> dh_d_errors_mm;
+  /// Else drawn N(0, sigma) per a_i and d_i from the seed (0: the true robot has exact lengths,
+  /// only joint offsets differ from the nominal UR5).
+  double dh_length_sigma_mm = 0.0;
 
   // Linear sweeps (calibration planes, spheres, part scenes).
   double measuring_height_mm = 244.0;  ///< Height (cell z) where the laser crosses the optical axis.

@@ -31,6 +31,7 @@ constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 // Random streams (rng.hpp StreamSeed): one per purpose, so adding a capture never changes the
 // others.
 constexpr std::uint64_t kRobotStream = 0x0B07;
+constexpr std::uint64_t kDhLengthStream = 0x0B08;
 constexpr std::uint64_t kPlaneStream = 0x1000;
 constexpr std::uint64_t kSphereStream = 0x2000;
 constexpr std::uint64_t kTrajectoryStream = 0x3000;
@@ -253,6 +254,14 @@ std::string RobotsTruth(const CellTruth& t) {
   o << "]\n  joint_offsets_deg: [";
   for (std::size_t i = 0; i < t.joint_offsets_rad.size(); ++i) {
     o << (i ? ", " : "") << Num(t.joint_offsets_rad[i] * kRadToDeg);
+  }
+  o << "]\n  # ... and these errors added to the nominal a_i and d_i (mm).\n  dh_a_errors_mm: [";
+  for (std::size_t i = 0; i < t.dh_a_errors_mm.size(); ++i) {
+    o << (i ? ", " : "") << Num(t.dh_a_errors_mm[i]);
+  }
+  o << "]\n  dh_d_errors_mm: [";
+  for (std::size_t i = 0; i < t.dh_d_errors_mm.size(); ++i) {
+    o << (i ? ", " : "") << Num(t.dh_d_errors_mm[i]);
   }
   o << "]\nhandling_robot:\n  model: Nachi SC15F stand-in (datasets ApproximateNachiSc15f)\n";
   return o.str();
@@ -531,7 +540,21 @@ CellTruth MakeCellTruth(const SimConfig& config) {
       t.joint_offsets_rad.push_back(rng.Normal(0.0, config.joint_offset_sigma_deg * kDegToRad));
     }
   }
-  t.true_vision_robot = ApplyRobotErrors(t.nominal_vision_robot, {t.joint_offsets_rad, {}, {}});
+  // DH length errors draw from a stream of their own, so enabling them leaves the joint offsets
+  // (and every other draw) of a seed unchanged.
+  Rng dh_rng(StreamSeed(config.seed, kDhLengthStream));
+  const auto lengths = [&](const std::optional<std::vector<double>>& explicit_mm) {
+    if (explicit_mm) return *explicit_mm;
+    std::vector<double> e(6, 0.0);
+    if (config.dh_length_sigma_mm > 0) {
+      for (double& v : e) v = dh_rng.Normal(0.0, config.dh_length_sigma_mm);
+    }
+    return e;
+  };
+  t.dh_a_errors_mm = lengths(config.dh_a_errors_mm);
+  t.dh_d_errors_mm = lengths(config.dh_d_errors_mm);
+  t.true_vision_robot = ApplyRobotErrors(t.nominal_vision_robot,
+                                         {t.joint_offsets_rad, t.dh_a_errors_mm, t.dh_d_errors_mm});
   t.handling_robot = ApproximateNachiSc15f();
   t.seat = MakeChairSeat(config.seat_shape);
   return t;

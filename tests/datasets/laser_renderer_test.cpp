@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -317,6 +319,46 @@ TEST(LaserRenderer, SpeckleHasTheConfiguredSigmaAndGrain) {
   ASSERT_GT(n, 500);
   // One exposure of grain 3: n_eff ~ n / 7.5; 5 standard errors.
   EXPECT_NEAR(std::sqrt(ss / n), 0.2, 5 * 0.2 / std::sqrt(2.0 * n / 7.5));
+}
+
+TEST(LaserRenderer, EncoderNoiseChangesOnlyTheRecordedJoints) {
+  Fixture f;
+  const ChairSeat seat = MakeChairSeat();
+  const Scene scene = MakeSeatScene(f.layout, seat, DrawSeatPlacement({}, seat, 9, 0).cell_from_part);
+  const LaserRenderer renderer(scene, f.sensor, f.render);
+  SweepTiming timing;
+  timing.profiles = 400;
+  const Eigen::Isometry3d start =
+      LookDownPose(f.sensor, {-200, 0, 250}, f.sensor_options.standoff_mm);
+  const std::vector<double> q_true = {0.1, -1.2, 1.0, -0.4, 1.5, 0.3};
+  const auto state_at = [&](double t) {
+    SensorState s;
+    s.scene_from_sensor = Eigen::Translation3d(100.0 * t, 0, 0) * start;
+    s.joints_rad = q_true;
+    return s;
+  };
+  const SweepResult exact = RenderSweep(renderer, state_at, timing, 42, 6, "vision_robot", 2);
+  timing.joint_noise_rad = 2e-5;
+  const SweepResult noisy = RenderSweep(renderer, state_at, timing, 42, 6, "vision_robot", 2);
+  double sum_sq = 0;
+  int n = 0;
+  for (int i = 0; i < timing.profiles; ++i) {
+    const auto& a = exact.profiles.profiles[i];
+    const auto& b = noisy.profiles.profiles[i];
+    EXPECT_EQ(a.joints_rad, q_true);
+    // Same peaks, same timestamps: the noise is in the record only.
+    EXPECT_EQ(a.timestamp_ns, b.timestamp_ns);
+    ASSERT_EQ(a.row_px.size(), b.row_px.size());
+    EXPECT_EQ(0, std::memcmp(a.row_px.data(), b.row_px.data(), a.row_px.size() * sizeof(float)));
+    for (int j = 0; j < 6; ++j) {
+      sum_sq += (b.joints_rad[j] - q_true[j]) * (b.joints_rad[j] - q_true[j]);
+      ++n;
+    }
+  }
+  // 2400 draws: the sample sigma is within 10 % of the configured one (5 sigma of its spread).
+  EXPECT_NEAR(std::sqrt(sum_sq / n), 2e-5, 0.1 * 2e-5);
+  timing.joint_noise_rad = -1;
+  EXPECT_THROW(timing.Check(), OptionError);
 }
 
 TEST(LaserRenderer, SweepsAreIdenticalForAnyThreadCount) {

@@ -263,6 +263,38 @@ TEST(CellTruth, RobotTrajectoryIsReachableAndTheTrueRobotMissesIt) {
   EXPECT_EQ(traj.At(1e9), traj.joints_rad.back());
 }
 
+TEST(CellTruth, DhLengthErrorsAreAppliedAndLeaveTheJointOffsetDrawsUnchanged) {
+  SimConfig config;
+  const CellTruth plain = MakeCellTruth(config);
+  EXPECT_EQ(plain.dh_a_errors_mm, std::vector<double>(6, 0.0));
+  config.dh_length_sigma_mm = 0.5;
+  const CellTruth drawn = MakeCellTruth(config);
+  EXPECT_EQ(drawn.joint_offsets_rad, plain.joint_offsets_rad);
+  double rms = 0;
+  for (int i = 0; i < 6; ++i) {
+    rms += drawn.dh_a_errors_mm[i] * drawn.dh_a_errors_mm[i] +
+           drawn.dh_d_errors_mm[i] * drawn.dh_d_errors_mm[i];
+    EXPECT_DOUBLE_EQ(drawn.true_vision_robot.joints()[i].a_mm,
+                     plain.nominal_vision_robot.joints()[i].a_mm + drawn.dh_a_errors_mm[i]);
+    EXPECT_DOUBLE_EQ(drawn.true_vision_robot.joints()[i].d_mm,
+                     plain.nominal_vision_robot.joints()[i].d_mm + drawn.dh_d_errors_mm[i]);
+  }
+  EXPECT_GT(std::sqrt(rms / 12), 0.1);
+  EXPECT_LT(std::sqrt(rms / 12), 1.5);
+  // Explicit values win over the draw, and round-trip through YAML.
+  config.dh_a_errors_mm = std::vector<double>{0, 0.2, -0.3, 0, 0, 0};
+  const CellTruth explicit_truth = MakeCellTruth(config);
+  EXPECT_EQ(explicit_truth.dh_a_errors_mm, *config.dh_a_errors_mm);
+  EXPECT_EQ(SimConfigToYaml(SimConfigFromYaml(SimConfigToYaml(config), "x.yaml")),
+            SimConfigToYaml(config));
+  EXPECT_NE(ConfigError("vision_robot: {dh_d_errors_mm: [1, 2]}\n").find(
+                "SimConfig.vision_robot.dh_d_errors_mm must list 6 values"),
+            std::string::npos);
+  EXPECT_NE(ConfigError("vision_robot: {dh_length_sigma_mm: -1}\n").find(
+                "SimConfig.vision_robot.dh_length_sigma_mm"),
+            std::string::npos);
+}
+
 TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   SimConfig config = SmallConfig();
   config.render.reflection_probability = 0.5;  // ghosts draw random numbers too
