@@ -196,10 +196,10 @@ void SummarizeLoo(LaserPlaneResult& r) {
 /// One plate observation: the mean peak of a column at one height.
 struct ColumnObservation {
   int item = 0;
-  Eigen::Vector2d pixel;
-  Eigen::Vector3d ray;
-  Eigen::Vector3d ray_up;    // ray at row - 0.5
-  Eigen::Vector3d ray_down;  // ray at row + 0.5
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();
+  Eigen::Vector3d ray = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ray_up = Eigen::Vector3d::Zero();    // ray at row - 0.5
+  Eigen::Vector3d ray_down = Eigen::Vector3d::Zero();  // ray at row + 0.5
   double height = 0;
   int count = 0;
 };
@@ -282,6 +282,7 @@ void HeightPlaneOptions::Check() const {
     throw OptionError("HeightPlaneOptions.zero_distance_mm must be finite");
   }
   if (!(inlier_band_px > 0)) throw OptionError("HeightPlaneOptions.inlier_band_px must be > 0");
+  if (!(max_row_step_px > 0)) throw OptionError("HeightPlaneOptions.max_row_step_px must be > 0");
   if (min_columns < 3) throw OptionError("HeightPlaneOptions.min_columns must be >= 3");
   if (min_peaks_per_column < 1) throw OptionError("HeightPlaneOptions.min_peaks_per_column must be >= 1");
   if (!(min_triangulation_angle_deg >= 0 && min_triangulation_angle_deg < 90)) {
@@ -361,7 +362,10 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
       if (!p.allFinite()) continue;
       columns[std::lround(p.x())].push_back(p.y());
     }
-    int used_columns = 0;
+    // Per column the mean of the peaks near the column's median row; then the longest run of
+    // neighbouring columns whose rows change by < max_row_step_px: the plate, not the floor or
+    // fixtures the edge columns may see instead (they sit many px away).
+    std::vector<std::pair<long, std::pair<double, int>>> cells;
     for (auto& [column, rows] : columns) {
       const double median = Median(rows);
       double sum = 0;
@@ -373,16 +377,37 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
         }
       }
       if (count < options.min_peaks_per_column) continue;
+      cells.push_back({column, {sum / count, count}});
+    }
+    std::size_t best_begin = 0, best_end = 0;
+    for (std::size_t begin = 0; begin < cells.size();) {
+      std::size_t end = begin + 1;
+      while (end < cells.size() && cells[end].first - cells[end - 1].first <= 2 &&
+             std::abs(cells[end].second.first - cells[end - 1].second.first) < options.max_row_step_px) {
+        ++end;
+      }
+      if (end - begin > best_end - best_begin) {
+        best_begin = begin;
+        best_end = end;
+      }
+      begin = end;
+    }
+    int used_columns = 0;
+    for (std::size_t k = best_begin; k < best_end; ++k) {
       ColumnObservation o;
       o.item = static_cast<int>(i);
-      o.pixel = Eigen::Vector2d(static_cast<double>(column), sum / count);
+      o.pixel = Eigen::Vector2d(static_cast<double>(cells[k].first), cells[k].second.first);
       o.height = c.height_mm;
-      o.count = count;
+      o.count = cells[k].second.second;
       obs.push_back(o);
       pixels.push_back(o.pixel);
       pixels.push_back(o.pixel - Eigen::Vector2d(0, 0.5));
       pixels.push_back(o.pixel + Eigen::Vector2d(0, 0.5));
       ++used_columns;
+    }
+    if (best_end - best_begin < cells.size()) {
+      item.note = std::to_string(cells.size() - (best_end - best_begin)) +
+                  " columns off the plate (not in the longest smooth run) dropped";
     }
     if (used_columns < options.min_columns) {
       throw InputError("capture '" + c.name + "' (height " + Num(c.height_mm) + " mm): only " +

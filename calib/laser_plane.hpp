@@ -57,6 +57,9 @@ struct HeightPlaneOptions {
   /// Per column and height, peaks farther than this from the column's median row are not on the
   /// plate (floor, plate edges) and are dropped, px. Default 2 px.
   double inlier_band_px = 2.0;
+  /// The plate's stripe is the longest run of neighbouring columns whose mean rows differ by
+  /// less than this (px); columns outside it see something else (floor, plate edge). Default 3.
+  double max_row_step_px = 3.0;
   /// A height needs at least this many columns with plate peaks. Default 20.
   int min_columns = 20;
   /// A column/height cell needs at least this many peaks to count. Default 3.

@@ -164,8 +164,13 @@ std::string FrameGraphToYaml(const FrameGraph& graph) {
     for (const auto& [name, plane] : graph.laser_planes()) {
       const std::string what = "laser plane '" + name + "'";
       const auto vec = [&](const Eigen::Vector3d& v) {
-        return "[" + Number(v.x(), what) + ", " + Number(v.y(), what) + ", " +
-               Number(v.z(), what) + "]";
+        std::string text("[");
+        for (int k = 0; k < 3; ++k) {
+          if (k > 0) text.append(", ");
+          text.append(Number(v(k), what));
+        }
+        text.append("]");
+        return text;
       };
       out += "    " + NameToken(name) + ":\n      frame: " + NameToken(plane.frame) +
              "\n      normal: " + vec(plane.normal) + "\n      point_mm: " + vec(plane.point_mm) +

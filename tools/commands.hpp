@@ -8,4 +8,6 @@ void AddCloudCommands(CLI::App& app);   ///< cloud info, cloud convert
 void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
 void AddLocalizeCommand(CLI::App& app);  ///< localize
 void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
+/// calibrate laser; `calibrate` is the parent subcommand (created once in main.cpp).
+void AddCalibrateLaserCommand(CLI::App& calibrate);
 }  // namespace lasercell::tools

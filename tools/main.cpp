@@ -19,6 +19,11 @@ int main(int argc, char** argv) {
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
   lasercell::tools::AddBenchCommands(app);
+  {
+    CLI::App* calibrate = app.add_subcommand("calibrate", "Calibrate the cell: camera, laser plane, ...");
+    calibrate->require_subcommand(1);
+    lasercell::tools::AddCalibrateLaserCommand(*calibrate);
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
