@@ -456,7 +456,7 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
   std::vector<double> candidates;
   if (estimate) {
     const double top = *heights.rbegin();
-    for (int k = 0; k <= 300; ++k) candidates.push_back(top + std::pow(10.0, -1.0 + 6.0 * k / 300.0));
+    for (int k = 0; k <= 120; ++k) candidates.push_back(top + std::pow(10.0, -1.0 + 6.0 * k / 120.0));
   } else {
     candidates.push_back(*options.zero_distance_mm);
   }
@@ -564,67 +564,28 @@ ChessboardSpec ParseChessboardSpec(const std::string& text, const std::string& w
 
 namespace {
 
-/// Stripe points of one image: detection, pose, peaks, rays ∩ board plane.
+/// Stripe points of one image: board pose, rays of the stripe pixels ∩ board plane.
 struct ImagePoints {
   std::vector<Eigen::Vector2d> pixels;
   std::vector<Eigen::Vector3d> rays;
   std::vector<Eigen::Vector3d> points;
 };
 
-ImagePoints DetectStripeImage(const CameraModel& camera, const StripeImage& image,
-                              const ChessboardSpec& board, const StripeOptions& options,
-                              LaserPlaneItem& item) {
+ImagePoints StripePoints(const CameraModel& camera, const StripeObservation& observation,
+                         const ChessboardSpec& board, LaserPlaneItem& item) {
   ImagePoints out;
-  const cv::Mat gray = internal::GrayOf(image);
-  const auto corners = internal::FindChessboard(gray, board.cols, board.rows);
-  if (!corners) {
-    item.note = "chessboard with " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-                " inner corners not found (check --board)";
-    return out;
-  }
   const Eigen::Isometry3d camera_from_board =
-      internal::BoardPose(camera, *corners, board, &item.reprojection_rms_px);
-  // The board region: the inner-corner grid grown by the margin, sampled along its edges
-  // (straight on the board, curved in a distorted image).
-  const double s = board.square_mm, g = options.board_margin_squares;
-  const double x0 = -g * s, y0 = -g * s, x1 = (board.cols - 1 + g) * s, y1 = (board.rows - 1 + g) * s;
-  std::vector<cv::Point2f> region;
-  const int kSteps = 16;
-  const Eigen::Vector2d corners_board[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
-  for (int e = 0; e < 4; ++e) {
-    for (int k = 0; k < kSteps; ++k) {
-      const Eigen::Vector2d b = corners_board[e] + (corners_board[(e + 1) % 4] - corners_board[e]) * (static_cast<double>(k) / kSteps);
-      const Eigen::Vector3d p = camera_from_board * Eigen::Vector3d(b.x(), b.y(), 0.0);
-      const Eigen::Vector2d q = camera.Project(p);
-      region.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
-    }
-  }
-  std::vector<cv::Point2f> hull;
-  cv::convexHull(region, hull);
-  const cv::Mat laser = internal::LaserChannel(image, options.laser_color);
-  auto by_columns = internal::StripePeaks(laser, hull, false, options);
-  auto by_rows = internal::StripePeaks(laser, hull, true, options);
-  item.scan_along_rows = by_rows.size() > by_columns.size();
-  out.pixels = item.scan_along_rows ? std::move(by_rows) : std::move(by_columns);
-  if (static_cast<int>(out.pixels.size()) < options.min_peaks_per_image) {
-    item.note = "laser stripe not found on the board (" + std::to_string(out.pixels.size()) +
-                " peaks, need " + std::to_string(options.min_peaks_per_image) + ")";
-    out.pixels.clear();
-    return out;
-  }
+      internal::BoardPose(camera, observation.corners_px, board, &item.reprojection_rms_px);
   const Eigen::Vector3d board_normal = camera_from_board.linear().col(2);
   const double board_offset = -board_normal.dot(camera_from_board.translation());
-  const std::vector<Eigen::Vector3d> rays = camera.UnprojectMany(out.pixels);
-  std::vector<Eigen::Vector2d> kept;
+  const std::vector<Eigen::Vector3d> rays = camera.UnprojectMany(observation.stripe_px);
   for (std::size_t k = 0; k < rays.size(); ++k) {
     const auto p = internal::IntersectRayPlane(rays[k], board_normal, board_offset);
     if (!p) continue;
-    kept.push_back(out.pixels[k]);
+    out.pixels.push_back(observation.stripe_px[k]);
     out.rays.push_back(rays[k]);
     out.points.push_back(*p);
   }
-  out.pixels = std::move(kept);
-  item.note = std::string("stripe: one peak per image ") + (item.scan_along_rows ? "row" : "column");
   return out;
 }
 
@@ -643,14 +604,79 @@ PlaneFit FitPoints(const std::vector<Eigen::Vector3d>& points, const std::vector
 
 }  // namespace
 
+StripeObservation DetectStripe(const CameraModel& camera, const StripeImage& image,
+                               const ChessboardSpec& board, const StripeOptions& options) {
+  options.Check();
+  if (image.width_px != camera.width_px() || image.height_px != camera.height_px()) {
+    throw InputError("image '" + image.name + "' is " + std::to_string(image.width_px) + "x" +
+                     std::to_string(image.height_px) + " but the camera model is " +
+                     std::to_string(camera.width_px()) + "x" + std::to_string(camera.height_px()) +
+                     "; use the camera that took the images");
+  }
+  LASERCELL_CHECK(image.pixels.size() == static_cast<std::size_t>(image.width_px) *
+                                             image.height_px * image.channels &&
+                      (image.channels == 1 || image.channels == 3),
+                  "StripeImage buffer size");
+  StripeObservation out;
+  out.name = image.name;
+  const cv::Mat gray = internal::GrayOf(image);
+  const auto corners = internal::FindChessboard(gray, board.cols, board.rows);
+  if (!corners) {
+    out.note = "chessboard with " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+               " inner corners not found (check --board)";
+    return out;
+  }
+  out.corners_px = *corners;
+  const Eigen::Isometry3d camera_from_board = internal::BoardPose(camera, out.corners_px, board, nullptr);
+  // The board region: the inner-corner grid grown by the margin, sampled along its edges
+  // (straight on the board, curved in a distorted image).
+  const double s = board.square_mm, g = options.board_margin_squares;
+  const double x0 = -g * s, y0 = -g * s, x1 = (board.cols - 1 + g) * s, y1 = (board.rows - 1 + g) * s;
+  std::vector<cv::Point2f> region;
+  const int kSteps = 16;
+  const Eigen::Vector2d outline[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+  for (int e = 0; e < 4; ++e) {
+    for (int k = 0; k < kSteps; ++k) {
+      const Eigen::Vector2d b =
+          outline[e] + (outline[(e + 1) % 4] - outline[e]) * (static_cast<double>(k) / kSteps);
+      const Eigen::Vector2d q = camera.Project(camera_from_board * Eigen::Vector3d(b.x(), b.y(), 0.0));
+      region.emplace_back(static_cast<float>(q.x()), static_cast<float>(q.y()));
+    }
+  }
+  std::vector<cv::Point2f> hull;
+  cv::convexHull(region, hull);
+  const cv::Mat laser = internal::LaserChannel(image, options.laser_color);
+  auto by_columns = internal::StripePeaks(laser, hull, false, options);
+  auto by_rows = internal::StripePeaks(laser, hull, true, options);
+  out.scan_along_rows = by_rows.size() > by_columns.size();
+  out.stripe_px = out.scan_along_rows ? std::move(by_rows) : std::move(by_columns);
+  if (static_cast<int>(out.stripe_px.size()) < options.min_peaks_per_image) {
+    out.note = "laser stripe not found on the board (" + std::to_string(out.stripe_px.size()) +
+               " peaks, need " + std::to_string(options.min_peaks_per_image) + ")";
+    out.stripe_px.clear();
+    return out;
+  }
+  out.note = std::string("stripe: one peak per image ") + (out.scan_along_rows ? "row" : "column");
+  return out;
+}
+
 LaserPlaneResult CalibrateLaserPlaneFromStripes(const CameraModel& camera,
                                                 const std::vector<StripeImage>& images,
                                                 const ChessboardSpec& board,
                                                 const StripeOptions& options) {
+  std::vector<StripeObservation> observations;
+  for (const StripeImage& image : images) observations.push_back(DetectStripe(camera, image, board, options));
+  return CalibrateLaserPlaneFromStripeObservations(camera, observations, board, options);
+}
+
+LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
+    const CameraModel& camera, const std::vector<StripeObservation>& observations,
+    const ChessboardSpec& board, const StripeOptions& options) {
   options.Check();
   if (board.cols < 2 || board.rows < 2 || !(board.square_mm > 0)) {
     throw OptionError("board must have >= 2 x 2 inner corners and a positive square size");
   }
+  const auto& images = observations;
   LaserPlaneResult result;
   result.method = "stripe_chessboard";
   std::vector<Eigen::Vector3d> points, rays;
@@ -658,20 +684,22 @@ LaserPlaneResult CalibrateLaserPlaneFromStripes(const CameraModel& camera,
   std::vector<int> owner;
   int usable = 0;
   for (std::size_t i = 0; i < images.size(); ++i) {
-    const StripeImage& image = images[i];
-    if (image.width_px != camera.width_px() || image.height_px != camera.height_px()) {
-      throw InputError("image '" + image.name + "' is " + std::to_string(image.width_px) + "x" +
-                       std::to_string(image.height_px) + " but the camera model is " +
-                       std::to_string(camera.width_px()) + "x" + std::to_string(camera.height_px()) +
-                       "; use the camera that took the images");
-    }
-    LASERCELL_CHECK(image.pixels.size() == static_cast<std::size_t>(image.width_px) *
-                                               image.height_px * image.channels &&
-                        (image.channels == 1 || image.channels == 3),
-                    "StripeImage buffer size");
+    const StripeObservation& observation = observations[i];
     LaserPlaneItem item;
-    item.name = image.name;
-    ImagePoints found = DetectStripeImage(camera, image, board, options, item);
+    item.name = observation.name;
+    item.note = observation.note;
+    item.scan_along_rows = observation.scan_along_rows;
+    ImagePoints found;
+    const bool complete = observation.corners_px.size() == static_cast<std::size_t>(board.cols * board.rows);
+    if (!observation.corners_px.empty() && !complete) {
+      item.note = "has " + std::to_string(observation.corners_px.size()) + " corners, the board " +
+                  std::to_string(board.cols * board.rows);
+    }
+    if (complete && static_cast<int>(observation.stripe_px.size()) >= options.min_peaks_per_image) {
+      found = StripePoints(camera, observation, board, item);
+    } else if (complete && item.note.empty()) {
+      item.note = "too few stripe peaks (" + std::to_string(observation.stripe_px.size()) + ")";
+    }
     if (!found.points.empty()) {
       item.used = true;
       item.points = static_cast<int>(found.points.size());

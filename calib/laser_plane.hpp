@@ -182,7 +182,28 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
                                                 const std::vector<HeightCapture>& captures,
                                                 const HeightPlaneOptions& options = {});
 
-/// Method (b). Images where the board or the stripe is not found are kept as unused items with
+/// What method (b) measures in one image: the board's inner corners and the stripe peaks.
+struct StripeObservation {
+  std::string name;                          ///< Image file, for messages and reports.
+  std::vector<Eigen::Vector2d> corners_px;   ///< Inner corners, OpenCV order; empty: not found.
+  std::vector<Eigen::Vector2d> stripe_px;    ///< (column, row) stripe peaks on the board.
+  bool scan_along_rows = false;  ///< One peak per image row (a vertical stripe), else per column.
+  std::string note;              ///< Why the board or stripe was not found, or how it was scanned.
+};
+
+/// Detects the board (findChessboardCornersSB + cornerSubPix) and the stripe (one peak per scan
+/// line of the laser channel inside the board region; rows or columns, whichever gives more
+/// peaks). Throws InputError when the image size differs from the camera's.
+StripeObservation DetectStripe(const CameraModel& camera, const StripeImage& image,
+                               const ChessboardSpec& board, const StripeOptions& options = {});
+
+/// Method (b) from observations (board pose by PnP through the camera model, rays ∩ board
+/// plane, one plane over all images). Same errors as CalibrateLaserPlaneFromStripes.
+LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
+    const CameraModel& camera, const std::vector<StripeObservation>& observations,
+    const ChessboardSpec& board, const StripeOptions& options = {});
+
+/// Method (b): DetectStripe on every image, then CalibrateLaserPlaneFromStripeObservations. Images where the board or the stripe is not found are kept as unused items with
 /// the reason; throws InputError when fewer than 2 images are usable (listing why each failed),
 /// when the images' size differs from the camera's, or when the stripe points of all images lie
 /// in one plane through the camera centre (laser plane parallel to the camera rays).

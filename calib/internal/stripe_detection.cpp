@@ -48,8 +48,12 @@ cv::Mat LaserChannel(const StripeImage& image, const std::string& color) {
 
 std::optional<std::vector<Eigen::Vector2d>> FindChessboard(const cv::Mat& gray, int cols, int rows) {
   std::vector<cv::Point2f> corners;
-  const bool found = cv::findChessboardCornersSB(
-      gray, cv::Size(cols, rows), corners, cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
+  // SB's default first (it finds boards the exhaustive search sometimes misses), then exhaustive.
+  bool found = cv::findChessboardCornersSB(gray, cv::Size(cols, rows), corners);
+  if (!found) {
+    found = cv::findChessboardCornersSB(gray, cv::Size(cols, rows), corners,
+                                        cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
+  }
   if (!found || corners.size() != static_cast<std::size_t>(cols * rows)) return std::nullopt;
   cv::cornerSubPix(gray, corners, cv::Size(5, 5), cv::Size(-1, -1),
                    cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 40, 0.001));
@@ -146,7 +150,18 @@ std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser, const std::vector
       swk += w * k;
     }
     if (!(sw > 0)) continue;
-    const double position = swk / sw;
+    double position = swk / sw;
+    // Gaussian three-point estimator (log-parabola through the maximum and its neighbours): far
+    // less pixel-locking than the centre of gravity on a narrow stripe; the centre of gravity is
+    // kept for flat (saturated) tops.
+    const double a = profile[static_cast<std::size_t>(kmax - 1)] - background;
+    const double b = profile[static_cast<std::size_t>(kmax)] - background;
+    const double c = profile[static_cast<std::size_t>(kmax + 1)] - background;
+    if (a > 0 && c > 0 && b > a && b > c) {
+      const double la = std::log(a), lb = std::log(b), lc = std::log(c);
+      const double denom = la - 2 * lb + lc;
+      if (denom < 0) position = kmax + 0.5 * (la - lc) / denom;
+    }
     peaks.push_back(along_rows ? Eigen::Vector2d(position, line) : Eigen::Vector2d(line, position));
   }
   return peaks;
