@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -104,16 +105,23 @@ std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser, const std::vector
   std::vector<float> profile(static_cast<std::size_t>(length));
   std::vector<float> sorted;
   for (int line = 0; line < lines; ++line) {
-    // The samples of this scan line inside the region.
-    int first = length, last = -1;
-    for (int k = 0; k < length; ++k) {
-      const cv::Point2f p = along_rows ? cv::Point2f(static_cast<float>(k), static_cast<float>(line))
-                                       : cv::Point2f(static_cast<float>(line), static_cast<float>(k));
-      if (cv::pointPolygonTest(region, p, false) > 0) {
-        first = std::min(first, k);
-        last = std::max(last, k);
-      }
+    // The samples of this scan line inside the (convex) region: the span between the crossings
+    // of the line with the region's edges.
+    double lo_cross = std::numeric_limits<double>::infinity(), hi_cross = -lo_cross;
+    const double scan = line;
+    for (std::size_t e = 0; e < region.size(); ++e) {
+      const cv::Point2f& a = region[e];
+      const cv::Point2f& b = region[(e + 1) % region.size()];
+      const double ac = along_rows ? a.y : a.x, bc = along_rows ? b.y : b.x;
+      const double ak = along_rows ? a.x : a.y, bk = along_rows ? b.x : b.y;
+      if ((ac - scan) * (bc - scan) > 0 || ac == bc) continue;
+      const double k = ak + (bk - ak) * (scan - ac) / (bc - ac);
+      lo_cross = std::min(lo_cross, k);
+      hi_cross = std::max(hi_cross, k);
     }
+    if (!(hi_cross > lo_cross)) continue;
+    const int first = std::max(0, static_cast<int>(std::ceil(lo_cross)));
+    const int last = std::min(length - 1, static_cast<int>(std::floor(hi_cross)));
     if (last - first < 4) continue;
     for (int k = first; k <= last; ++k) {
       profile[static_cast<std::size_t>(k)] =
