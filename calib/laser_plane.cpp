@@ -589,6 +589,39 @@ ImagePoints StripePoints(const CameraModel& camera, const StripeObservation& obs
   return out;
 }
 
+/// Cluster-robust ("sandwich") covariance of (n, d) for r_k = n . p_k + d with the residuals of
+/// one view correlated (they share the view's board-pose error): C = H^-1 M H^-1 G / (G - 1),
+/// H = sum J^T J, M = sum over views of (sum J^T r)(sum J^T r)^T, J = [p^T B, 1] over the
+/// normal's tangent basis B and d (Liang & Zeger 1986). Returned over [n; d] (4x4).
+Eigen::Matrix4d ClusterRobustCovariance(const Eigen::Vector3d& normal, double offset,
+                                        const std::vector<Eigen::Vector3d>& points,
+                                        const std::vector<int>& owner, int clusters) {
+  Eigen::Matrix<double, 3, 2> basis;
+  basis.col(0) = normal.unitOrthogonal();
+  basis.col(1) = normal.cross(basis.col(0));
+  Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
+  std::map<int, Eigen::Vector3d> scores;
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    Eigen::Vector3d j;
+    j.head<2>() = basis.transpose() * points[k];
+    j(2) = 1.0;
+    const double r = normal.dot(points[k]) + offset;
+    hessian += j * j.transpose();
+    auto it = scores.try_emplace(owner[k], Eigen::Vector3d::Zero()).first;
+    it->second += j * r;
+  }
+  Eigen::Matrix3d meat = Eigen::Matrix3d::Zero();
+  for (const auto& [view, score] : scores) meat += score * score.transpose();
+  const Eigen::Matrix3d h_inv = hessian.inverse();
+  const Eigen::Matrix3d tangent =
+      h_inv * meat * h_inv * (static_cast<double>(clusters) / std::max(1, clusters - 1));
+  Eigen::Matrix<double, 4, 3> lift = Eigen::Matrix<double, 4, 3>::Zero();
+  lift.topLeftCorner<3, 2>() = basis;
+  lift(3, 2) = 1.0;
+  const Eigen::Matrix4d c = lift * tangent * lift.transpose();
+  return 0.5 * (c + c.transpose());
+}
+
 PlaneFit FitPoints(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& owner,
                    const Eigen::Vector3d& n0, double d0, int skip_item) {
   return Solve(n0, d0, 0.0, false, [&](ceres::Problem& problem, double* pn, double* pd, double*) {
@@ -744,6 +777,18 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
                               " stripe points farther than " + Num(options.outlier_sigmas) +
                               " robust sigmas from the plane were dropped");
     fit = FitPoints(kept_points, kept_owner, fit.normal, fit.offset, -1);
+  }
+  // Points of one view share its board-pose error, so the per-point covariance is optimistic;
+  // with >= 4 views use the cluster-robust one (never smaller than the per-point one here).
+  if (usable >= 4) {
+    const Eigen::Matrix4d robust =
+        ClusterRobustCovariance(fit.normal, fit.offset, kept_points, kept_owner, usable);
+    if (robust.allFinite() && robust.trace() > fit.covariance.trace()) fit.covariance = robust;
+  } else {
+    result.warnings.push_back(
+        "covariance from the point scatter only (" + std::to_string(usable) +
+        " views; >= 4 are needed to include the board-pose errors): it is optimistic, use the "
+        "leave-one-out change instead");
   }
   FillPlane(fit, result);
   std::vector<double> item_sum(images.size(), 0);

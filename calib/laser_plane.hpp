@@ -27,7 +27,9 @@
 // Units mm, rad (angles in reports: _deg), px. The normal is oriented so that d <= 0 (it points
 // from the sensor origin towards the plane); the point p0 = -d n is the plane's point nearest
 // the sensor origin. Covariance: 4x4 over [n; d] (rank 3), from Ceres at the solution, scaled
-// by the residuals' variance (reduced chi-square).
+// by the residuals' variance (reduced chi-square); for method (b) with >= 4 views the
+// cluster-robust (sandwich) covariance over views replaces it when larger, since the points of
+// one view share that view's board-pose error (with fewer views a warning says it is optimistic).
 
 #include <Eigen/Core>
 #include <cstdint>
