@@ -406,8 +406,7 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
       ++used_columns;
     }
     if (best_end - best_begin < cells.size()) {
-      item.note = std::to_string(cells.size() - (best_end - best_begin)) +
-                  " columns off the plate (not in the longest smooth run) dropped";
+      item.note = std::to_string(cells.size() - (best_end - best_begin)) + " columns off the plate dropped";
     }
     if (used_columns < options.min_columns) {
       throw InputError("capture '" + c.name + "' (height " + Num(c.height_mm) + " mm): only " +

@@ -28,7 +28,19 @@ namespace lasercell::calib {
 namespace {
 
 const std::string kDerived = std::string(LASERCELL_SOURCE_DIR) + "/datasets/real/laser_stripe_chessboard";
-const std::string kImages = std::string(LASERCELL_SOURCE_DIR) + "/../../shared/data/laser_stripe_chessboard";
+/// The images on the development machines: $LASERCELL_SHARED_DATA, or ../shared/data next to
+/// the main tree (/work/main) or a worktree (/work/wt/NAME); empty when absent.
+std::string ImagesDir() {
+  std::vector<std::string> candidates;
+  if (const char* env = std::getenv("LASERCELL_SHARED_DATA")) candidates.push_back(env);
+  candidates.push_back(std::string(LASERCELL_SOURCE_DIR) + "/../shared/data");
+  candidates.push_back(std::string(LASERCELL_SOURCE_DIR) + "/../../shared/data");
+  for (const auto& c : candidates) {
+    const std::string dir = c + "/laser_stripe_chessboard";
+    if (std::filesystem::is_directory(dir)) return dir;
+  }
+  return "";
+}
 const ChessboardSpec kBoard{6, 8, 40.0};
 
 std::string ObservationsText(const std::vector<StripeObservation>& observations) {
@@ -142,13 +154,14 @@ TEST(LaserPlaneReal, CommittedStripeMeasurementsGiveAConsistentPlane) {
 }
 
 TEST(LaserPlaneReal, ImagesReproduceTheCommittedMeasurements) {
-  if (!std::filesystem::is_directory(kImages)) {
-    GTEST_SKIP() << "the real stripe images are not here (" << kImages
-                 << "); they are not bundled (licence not stated)";
+  const std::string images_dir = ImagesDir();
+  if (images_dir.empty()) {
+    GTEST_SKIP() << "the real stripe images are not here (../shared/data/laser_stripe_chessboard "
+                    "or $LASERCELL_SHARED_DATA); they are not bundled (licence not stated)";
   }
   std::vector<StripeImage> images;
   for (int i = 0; i < 6; ++i) {
-    const std::string path = kImages + "/" + std::to_string(i) + "_right.jpg";
+    const std::string path = images_dir + "/" + std::to_string(i) + "_right.jpg";
     images.push_back(DecodeStripeImage(io::ReadFileBytes(path), path));
   }
   double rms_px = 0;
