@@ -47,6 +47,8 @@ struct PlaneFit {
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY();
   double offset = 0;
   double zero_distance = 0;  // D0 (method a)
+  double tilt = 0;           // plate tilt (method a), rad
+  double tilt_variance = 0;
   Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();
   double zero_distance_variance = 0;
   bool converged = false;
@@ -55,20 +57,24 @@ struct PlaneFit {
   std::string termination;
 };
 
-/// Adds residual blocks given the parameter blocks (normal[3], offset[1], zero_distance[1]).
-using AddResiduals = std::function<int(ceres::Problem&, double*, double*, double*)>;
+/// Adds residual blocks given the parameter blocks (normal[3], offset[1], zero_distance[1],
+/// tilt[1]).
+using AddResiduals = std::function<int(ceres::Problem&, double*, double*, double*, double*)>;
 
 /// Solves, then computes the covariance scaled by the reduced chi-square.
 PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_distance0,
-               bool estimate_zero_distance, const AddResiduals& add) {
+               bool estimate_zero_distance, double tilt0, bool estimate_tilt,
+               const AddResiduals& add) {
   PlaneFit fit;
   double n[3] = {normal0.x(), normal0.y(), normal0.z()};
   double d = offset0;
   double z = zero_distance0;
+  double a = tilt0;
   ceres::Problem problem;
-  const int count = add(problem, n, &d, &z);
+  const int count = add(problem, n, &d, &z, &a);
   problem.SetManifold(n, new ceres::SphereManifold<3>());
   if (problem.HasParameterBlock(&z) && !estimate_zero_distance) problem.SetParameterBlockConstant(&z);
+  if (problem.HasParameterBlock(&a) && !estimate_tilt) problem.SetParameterBlockConstant(&a);
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::DENSE_QR;
   options.max_num_iterations = 100;
@@ -84,7 +90,8 @@ PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_dista
   fit.normal = Eigen::Vector3d(n[0], n[1], n[2]).normalized();
   fit.offset = d;
   fit.zero_distance = z;
-  const int dof = count - (estimate_zero_distance ? 4 : 3);
+  fit.tilt = a;
+  const int dof = count - 3 - (estimate_zero_distance ? 1 : 0) - (estimate_tilt ? 1 : 0);
   const double sigma2 = dof > 0 ? 2.0 * summary.final_cost / dof : 0.0;
 
   ceres::Covariance::Options cov_options;
@@ -94,6 +101,7 @@ PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_dista
   ceres::Covariance covariance(cov_options);
   std::vector<std::pair<const double*, const double*>> blocks = {{n, n}, {n, &d}, {&d, &d}};
   if (estimate_zero_distance) blocks.push_back({&z, &z});
+  if (estimate_tilt) blocks.push_back({&a, &a});
   if (covariance.Compute(blocks, &problem)) {
     Eigen::Matrix<double, 3, 3, Eigen::RowMajor> cnn;
     Eigen::Vector3d cnd;
@@ -110,6 +118,10 @@ PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_dista
     if (estimate_zero_distance) {
       covariance.GetCovarianceBlock(&z, &z, &fit.zero_distance_variance);
       fit.zero_distance_variance *= sigma2;
+    }
+    if (estimate_tilt) {
+      covariance.GetCovarianceBlock(&a, &a, &fit.tilt_variance);
+      fit.tilt_variance *= sigma2;
     }
     fit.covariance_ok = fit.covariance.allFinite();
   }
@@ -209,6 +221,11 @@ Eigen::Vector3d PlatePoint(const Eigen::Vector3d& ray, const Eigen::Vector3d& m,
   return ray * ((height - zero_distance) / m.dot(ray));
 }
 
+/// The plate normal tilted by `tilt` rad from m0 towards t (HeightPlaneRayCost).
+Eigen::Vector3d TiltedNormal(const Eigen::Vector3d& m0, const Eigen::Vector3d& t, double tilt) {
+  return std::cos(tilt) * m0 + std::sin(tilt) * t;
+}
+
 /// Weight making n.p + d a row residual in px: 1 / |d(n.p + d)/d row| (times sqrt(count): the
 /// observation is a mean of `count` peaks).
 double RowWeight(const ColumnObservation& o, const Eigen::Vector3d& m, const Eigen::Vector3d& n,
@@ -219,29 +236,33 @@ double RowWeight(const ColumnObservation& o, const Eigen::Vector3d& m, const Eig
   return slope > 1e-12 ? std::sqrt(static_cast<double>(o.count)) / slope : 0.0;
 }
 
-PlaneFit FitHeights(const std::vector<ColumnObservation>& obs, const Eigen::Vector3d& m,
-                    const Eigen::Vector3d& n0, double d0, double z0, bool estimate,
-                    int skip_item) {
+PlaneFit FitHeights(const std::vector<ColumnObservation>& obs, const Eigen::Vector3d& m0,
+                    const Eigen::Vector3d& tilt_direction, const Eigen::Vector3d& n0, double d0,
+                    double z0, double a0, bool estimate, bool estimate_tilt, int skip_item) {
   // Two passes: the weights depend (weakly) on the plane; recompute them at the first solution.
   PlaneFit fit;
   Eigen::Vector3d n = n0;
-  double d = d0, z = z0;
+  double d = d0, z = z0, a = a0;
   for (int pass = 0; pass < 2; ++pass) {
     std::vector<double> weights;
+    const Eigen::Vector3d m = TiltedNormal(m0, tilt_direction, a);
     for (const auto& o : obs) weights.push_back(RowWeight(o, m, n, z));
-    fit = Solve(n, d, z, estimate, [&](ceres::Problem& problem, double* pn, double* pd, double* pz) {
-      int count = 0;
-      for (std::size_t k = 0; k < obs.size(); ++k) {
-        if (obs[k].item == skip_item || weights[k] == 0) continue;
-        problem.AddResidualBlock(HeightPlaneRayCost::Create(obs[k].ray, m, obs[k].height, weights[k]),
-                                 nullptr, pn, pd, pz);
-        ++count;
-      }
-      return count;
-    });
+    fit = Solve(n, d, z, estimate, a, estimate_tilt,
+                [&](ceres::Problem& problem, double* pn, double* pd, double* pz, double* pa) {
+                  int count = 0;
+                  for (std::size_t k = 0; k < obs.size(); ++k) {
+                    if (obs[k].item == skip_item || weights[k] == 0) continue;
+                    problem.AddResidualBlock(
+                        HeightPlaneRayCost::Create(obs[k].ray, m0, tilt_direction, obs[k].height, weights[k]),
+                        nullptr, pn, pd, pz, pa);
+                    ++count;
+                  }
+                  return count;
+                });
     n = fit.normal;
     d = fit.offset;
     z = fit.zero_distance;
+    a = fit.tilt;
   }
   return fit;
 }
@@ -462,19 +483,25 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
   Eigen::Vector3d n0;
   double d0 = 0, z0 = 0;
   InitialHeights(obs, m, candidates, &n0, &d0, &z0);
-  const PlaneFit fit = FitHeights(obs, m, n0, d0, z0, estimate, -1);
+  // The one observable plate tilt: towards the laser line's direction on the plate.
+  const Eigen::Vector3d tilt_direction = n0.cross(m).normalized();
+  const bool estimate_tilt = options.estimate_plate_tilt;
+  const PlaneFit fit = FitHeights(obs, m, tilt_direction, n0, d0, z0, 0.0, estimate, estimate_tilt, -1);
   FillPlane(fit, result);
   result.zero_distance_mm = fit.zero_distance;
   result.zero_distance_sigma_mm = std::sqrt(std::max(0.0, fit.zero_distance_variance));
+  result.plate_tilt_deg = fit.tilt * kRadToDeg;
+  result.plate_tilt_sigma_deg = std::sqrt(std::max(0.0, fit.tilt_variance)) * kRadToDeg;
+  const Eigen::Vector3d m_fit = TiltedNormal(m, tilt_direction, fit.tilt);
 
   // Residuals, per-height RMS.
   double sum_mm = 0, sum_px = 0;
   std::vector<double> item_mm(result.items.size(), 0), item_px(result.items.size(), 0);
   std::vector<Eigen::Vector3d> used_rays, all_points;
   for (const auto& o : obs) {
-    const Eigen::Vector3d p = PlatePoint(o.ray, m, o.height, fit.zero_distance);
+    const Eigen::Vector3d p = PlatePoint(o.ray, m_fit, o.height, fit.zero_distance);
     const double r = fit.normal.dot(p) + fit.offset;
-    const double w = RowWeight(o, m, fit.normal, fit.zero_distance) / std::sqrt(static_cast<double>(o.count));
+    const double w = RowWeight(o, m_fit, fit.normal, fit.zero_distance) / std::sqrt(static_cast<double>(o.count));
     result.residuals.push_back({o.item, o.pixel, p, r});
     sum_mm += r * r;
     sum_px += (w * r) * (w * r);
@@ -503,8 +530,8 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
       item.loo_normal_change_deg = item.loo_offset_change_mm = item.loo_max_displacement_mm = kNaN;
       continue;
     }
-    const PlaneFit loo = FitHeights(obs, m, fit.normal, fit.offset, fit.zero_distance, estimate,
-                                    static_cast<int>(i));
+    const PlaneFit loo = FitHeights(obs, m, tilt_direction, fit.normal, fit.offset, fit.zero_distance,
+                                    fit.tilt, estimate, estimate_tilt, static_cast<int>(i));
     LooChange(fit.normal, fit.offset, loo.normal, loo.offset, all_points, item);
   }
   SummarizeLoo(result);
@@ -623,7 +650,7 @@ Eigen::Matrix4d ClusterRobustCovariance(const Eigen::Vector3d& normal, double of
 
 PlaneFit FitPoints(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& owner,
                    const Eigen::Vector3d& n0, double d0, int skip_item) {
-  return Solve(n0, d0, 0.0, false, [&](ceres::Problem& problem, double* pn, double* pd, double*) {
+  return Solve(n0, d0, 0.0, false, 0.0, false, [&](ceres::Problem& problem, double* pn, double* pd, double*, double*) {
     int count = 0;
     for (std::size_t k = 0; k < points.size(); ++k) {
       if (owner[k] == skip_item) continue;

@@ -17,8 +17,11 @@
 //      Observability: with m known, the images of the k parallel stripe lines fix the laser
 //      plane and D0 only for k >= 3 (for k = 2 a one-parameter family fits exactly), so D0 is
 //      estimated for k >= 3 and must be given (HeightPlaneOptions::zero_distance_mm) for k = 2.
-//      The plate's tilt about the laser line cannot be estimated from stripe images at all
-//      (the line images then define only a 1-D projectivity); it is the input m.
+//      Of m's two tilt angles, the tilt towards the laser line's direction on the plate changes
+//      how the stripe lines of different heights converge in the image and is estimated
+//      (HeightPlaneOptions::estimate_plate_tilt); the tilt about the line cannot be observed
+//      from stripe images at all (the line images then define only a 1-D projectivity per
+//      column plane), so that part of m is an input.
 //  (b) Laser stripe on a chessboard of unknown pose (Zhou & Zhang 2005): per image the board
 //      pose from its inner corners (OpenCV findChessboardCornersSB + cornerSubPix, rays from the
 //      camera model, PnP), the stripe peak per scan line inside the board region, the peaks'
@@ -53,6 +56,10 @@ struct HeightPlaneOptions {
   /// Unit normal m of the white plate in the sensor frame, pointing towards the sensor (need
   /// not be exactly unit; it is normalized). Known input (see the header comment).
   Eigen::Vector3d plate_normal_in_sensor = -Eigen::Vector3d::UnitZ();
+  /// Estimate the plate's tilt towards the laser line's direction on it (the one component of
+  /// m's error the stripe images observe: it makes the lines of different heights converge).
+  /// Default true; false keeps m exactly as given.
+  bool estimate_plate_tilt = true;
   /// Distance (mm) from the sensor origin to the height-0 plate along m, when known; otherwise
   /// (nullopt) it is estimated, which needs >= 3 distinct heights.
   std::optional<double> zero_distance_mm;
@@ -164,6 +171,8 @@ struct LaserPlaneResult {
   bool ill_conditioned = false;  ///< True when the geometry cannot determine the plane.
   std::optional<double> zero_distance_mm;  ///< Method (a): D0 (estimated or given).
   double zero_distance_sigma_mm = 0;       ///< Method (a): 1 sigma of D0 (0 when given).
+  double plate_tilt_deg = 0;        ///< Method (a): estimated tilt of m towards the line.
+  double plate_tilt_sigma_deg = 0;  ///< Method (a): its 1 sigma (0 when not estimated).
   std::vector<LaserPlaneItem> items;
   std::vector<LaserPlaneResidual> residuals;  ///< Used observations (for reports).
   /// Leave-one-out over the items: largest normal change (deg) and offset change (mm); NaN

@@ -36,6 +36,7 @@ struct LaserArgs {
   double plate_distance_mm = std::nan("");
   std::string laser_color = "green";
   bool quiet = false;
+  bool fixed_plate_normal = false;
 };
 
 std::vector<double> ParseList(const std::string& text, const std::string& what, std::size_t count = 0) {
@@ -152,6 +153,8 @@ nlohmann::json ResultJson(const calib::LaserPlaneResult& r, const std::string& c
   if (r.zero_distance_mm) {
     j["plate_zero_distance_mm"] = Number(*r.zero_distance_mm);
     j["plate_zero_distance_sigma_mm"] = Number(r.zero_distance_sigma_mm);
+    j["plate_tilt_deg"] = Number(r.plate_tilt_deg);
+    j["plate_tilt_sigma_deg"] = Number(r.plate_tilt_sigma_deg);
   }
   j["leave_one_out"] = {{"max_normal_change_deg", Number(r.loo_max_normal_change_deg)},
                         {"max_offset_change_mm", Number(r.loo_max_offset_change_mm)}};
@@ -202,7 +205,9 @@ report::HtmlReport MakeReport(const calib::LaserPlaneResult& r, const calib::Cam
   });
   if (r.zero_distance_mm) {
     page.AddParagraph("Distance from the sensor origin to the height-0 plate: " +
-                      Fmt(*r.zero_distance_mm, 8) + " mm (1 sigma " + Fmt(r.zero_distance_sigma_mm, 3) + " mm).");
+                      Fmt(*r.zero_distance_mm, 8) + " mm (1 sigma " + Fmt(r.zero_distance_sigma_mm, 3) +
+                      " mm). Plate normal tilted from the given one towards the laser line by " +
+                      Fmt(r.plate_tilt_deg, 4) + " deg (1 sigma " + Fmt(r.plate_tilt_sigma_deg, 3) + " deg).");
   }
   const bool heights = r.method == "heights";
   page.AddHeading(heights ? "Per height" : "Per image");
@@ -271,6 +276,7 @@ void Run(const LaserArgs& args) {
     const auto m = ParseList(args.plate_normal, "--plate-normal", 3);
     options.plate_normal_in_sensor = Eigen::Vector3d(m[0], m[1], m[2]);
     if (std::isfinite(args.plate_distance_mm)) options.zero_distance_mm = args.plate_distance_mm;
+    options.estimate_plate_tilt = !args.fixed_plate_normal;
     std::vector<calib::HeightCapture> captures;
     for (std::size_t i = 0; i < files.size(); ++i) {
       const std::string bytes = io::ReadFileBytes(files[i]);
@@ -350,6 +356,8 @@ void AddCalibrateLaserCommand(CLI::App& calibrate) {
   cmd->add_option("--plate-distance-mm", args->plate_distance_mm,
                   "Distance from the sensor origin to the height-0 plate along the plate normal (default: "
                   "estimated, needs >= 3 heights)");
+  cmd->add_flag("--fixed-plate-normal", args->fixed_plate_normal,
+               "Keep --plate-normal exactly (default: estimate its tilt towards the laser line)");
   cmd->add_option("--stripe-images", args->stripe_glob, "Images of a laser stripe on a chessboard (quoted glob)");
   cmd->add_option("--board", args->board, "chessboard:COLSxROWS:SQUARE_MM (inner corners, mm)");
   cmd->add_option("--laser-color", args->laser_color, "Laser colour in the stripe images: green, red or gray");

@@ -73,18 +73,19 @@ TEST(LaserPlaneCost, PlanePointDistanceMatchesNumericDifferences) {
 }
 
 TEST(LaserPlaneCost, HeightPlaneRayMatchesNumericDifferences) {
+  const Eigen::Vector3d m = Eigen::Vector3d(0, -0.33, -0.94).normalized();
   std::unique_ptr<ceres::CostFunction> cost(HeightPlaneRayCost::Create(
-      Eigen::Vector3d(0.05, 0.04, 1.0).normalized(), Eigen::Vector3d(0, -0.33, -0.94).normalized(),
-      250.0, 0.7));
+      Eigen::Vector3d(0.05, 0.04, 1.0).normalized(), m, m.unitOrthogonal(), 250.0, 0.7));
   double n[3] = {0.0, -0.94, 0.34};
   double d[1] = {-235.0};
   double z[1] = {903.0};
+  double a[1] = {0.01};
   ceres::SphereManifold<3> sphere;
-  std::vector<const ceres::Manifold*> manifolds = {&sphere, nullptr, nullptr};
+  std::vector<const ceres::Manifold*> manifolds = {&sphere, nullptr, nullptr, nullptr};
   ceres::NumericDiffOptions numeric;
   ceres::GradientChecker checker(cost.get(), &manifolds, numeric);
   ceres::GradientChecker::ProbeResults results;
-  const double* params[3] = {n, d, z};
+  const double* params[4] = {n, d, z, a};
   EXPECT_TRUE(checker.Probe(params, 1e-7, &results)) << results.error_log;
 }
 
@@ -252,6 +253,35 @@ TEST(LaserPlaneHeights, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
   EXPECT_LE(inside_d, 76);
   EXPECT_GE(inside_z, 60);
   EXPECT_LE(inside_z, 76);
+}
+
+TEST(LaserPlaneHeights, PlateTiltTowardsTheLineIsEstimated) {
+  // The true plate is tilted by 0.2 deg towards the laser line's direction; the given normal is
+  // the untilted one. Estimating the tilt recovers the plane; keeping m as given does not.
+  SyntheticRig rig;
+  const Eigen::Vector3d m_given = rig.m;
+  const Eigen::Vector3d line = rig.laser_n.cross(rig.m).normalized();
+  const double tilt = 0.2 * kDeg;
+  rig.m = std::cos(tilt) * m_given + std::sin(tilt) * line;
+  std::mt19937_64 rng(11);
+  std::vector<HeightCapture> captures;
+  // 30 peaks of 0.05 px per column: ~0.01 px per column mean, as a sweep gives.
+  for (const double h : {150.0, 250.0, 350.0}) captures.push_back(SyntheticCapture(rig, h, 30, 0.05, rng));
+  HeightPlaneOptions options;
+  options.plate_normal_in_sensor = m_given;
+  const LaserPlaneResult r = CalibrateLaserPlaneFromHeights(rig.camera, captures, options);
+  std::printf("tilt %.5f +- %.5f deg; normal %.5f deg, d %.4f mm\n", r.plate_tilt_deg, r.plate_tilt_sigma_deg,
+              AngleDeg(r.normal, rig.laser_n), r.offset_mm - rig.laser_d);
+  EXPECT_NEAR(std::abs(r.plate_tilt_deg), 0.2, 4 * r.plate_tilt_sigma_deg + 1e-4);
+  EXPECT_LT(AngleDeg(r.normal, rig.laser_n), 0.01);
+  EXPECT_LT(std::abs(r.offset_mm - rig.laser_d), std::max(0.02, 3 * r.offset_sigma_mm));
+  options.estimate_plate_tilt = false;
+  const LaserPlaneResult fixed = CalibrateLaserPlaneFromHeights(rig.camera, captures, options);
+  std::printf("tilt fixed: normal %.5f deg, d %.4f mm, rms %.4f px\n", AngleDeg(fixed.normal, rig.laser_n),
+              fixed.offset_mm - rig.laser_d, fixed.rms_px);
+  // Keeping the wrong m: the residuals hardly show it (the other parameters absorb most of it),
+  // but the plane tilts by a third of the plate's error.
+  EXPECT_GT(AngleDeg(fixed.normal, rig.laser_n), 0.03);
 }
 
 TEST(LaserPlaneHeights, TwoHeightsNeedTheSensorDistance) {
