@@ -526,12 +526,16 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
       if (j != i) rest.insert(captures[j].height_mm);
     }
     LaserPlaneItem& item = result.items[i];
-    if (rest.size() < (estimate ? 3u : 2u)) {
+    if (rest.size() < 2) {
       item.loo_normal_change_deg = item.loo_offset_change_mm = item.loo_max_displacement_mm = kNaN;
       continue;
     }
+    // Two heights left cannot give D0 (nor the tilt): hold them at the full fit's values.
+    const bool hold = estimate && rest.size() < 3;
+    item.loo_zero_distance_held = hold;
     const PlaneFit loo = FitHeights(obs, m, tilt_direction, fit.normal, fit.offset, fit.zero_distance,
-                                    fit.tilt, estimate, estimate_tilt, static_cast<int>(i));
+                                    fit.tilt, estimate && !hold, estimate_tilt && !hold,
+                                    static_cast<int>(i));
     LooChange(fit.normal, fit.offset, loo.normal, loo.offset, all_points, item);
   }
   SummarizeLoo(result);

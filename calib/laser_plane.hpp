@@ -142,6 +142,9 @@ struct LaserPlaneItem {
   double loo_normal_change_deg = 0;
   double loo_offset_change_mm = 0;
   double loo_max_displacement_mm = 0;
+  /// Method (a): the refit without this height held D0 and the plate tilt at the full fit's
+  /// values (the remaining 2 heights cannot estimate them).
+  bool loo_zero_distance_held = false;
 };
 
 /// One observation for plots: which item, the pixel, its 3-D point and its residual.

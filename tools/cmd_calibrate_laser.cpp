@@ -172,6 +172,7 @@ nlohmann::json ResultJson(const calib::LaserPlaneResult& r, const std::string& c
     e["leave_one_out"] = {{"normal_change_deg", Number(it.loo_normal_change_deg)},
                           {"offset_change_mm", Number(it.loo_offset_change_mm)},
                           {"max_displacement_mm", Number(it.loo_max_displacement_mm)}};
+    if (r.method == "heights") e["leave_one_out"]["plate_distance_held"] = it.loo_zero_distance_held;
     items.push_back(e);
   }
   j[r.method == "heights" ? "heights" : "images"] = items;
