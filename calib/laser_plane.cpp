@@ -10,12 +10,14 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <array>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
 
+#include "calib/cost_functions/plane_board_joint.hpp"
 #include "calib/cost_functions/plane_point_distance.hpp"
 #include "calib/internal/laser_geometry.hpp"
 #include "calib/internal/stripe_detection.hpp"
@@ -599,6 +601,8 @@ struct ImagePoints {
   std::vector<Eigen::Vector2d> pixels;
   std::vector<Eigen::Vector3d> rays;
   std::vector<Eigen::Vector3d> points;
+  Eigen::Isometry3d camera_from_board = Eigen::Isometry3d::Identity();
+  std::vector<Eigen::Vector2d> corners_normalized;  // x/z, y/z of the corners' rays
 };
 
 ImagePoints StripePoints(const CameraModel& camera, const StripeObservation& observation,
@@ -606,6 +610,10 @@ ImagePoints StripePoints(const CameraModel& camera, const StripeObservation& obs
   ImagePoints out;
   const Eigen::Isometry3d camera_from_board =
       internal::BoardPose(camera, observation.corners_px, board, &item.reprojection_rms_px);
+  out.camera_from_board = camera_from_board;
+  for (const auto& r : camera.UnprojectMany(observation.corners_px)) {
+    out.corners_normalized.emplace_back(r.x() / r.z(), r.y() / r.z());
+  }
   const Eigen::Vector3d board_normal = camera_from_board.linear().col(2);
   const double board_offset = -board_normal.dot(camera_from_board.translation());
   const std::vector<Eigen::Vector3d> rays = camera.UnprojectMany(observation.stripe_px);
@@ -619,37 +627,113 @@ ImagePoints StripePoints(const CameraModel& camera, const StripeObservation& obs
   return out;
 }
 
-/// Cluster-robust ("sandwich") covariance of (n, d) for r_k = n . p_k + d with the residuals of
-/// one view correlated (they share the view's board-pose error): C = H^-1 M H^-1 G / (G - 1),
-/// H = sum J^T J, M = sum over views of (sum J^T r)(sum J^T r)^T, J = [p^T B, 1] over the
-/// normal's tangent basis B and d (Liang & Zeger 1986). Returned over [n; d] (4x4).
-Eigen::Matrix4d ClusterRobustCovariance(const Eigen::Vector3d& normal, double offset,
-                                        const std::vector<Eigen::Vector3d>& points,
-                                        const std::vector<int>& owner, int clusters) {
-  Eigen::Matrix<double, 3, 2> basis;
-  basis.col(0) = normal.unitOrthogonal();
-  basis.col(1) = normal.cross(basis.col(0));
-  Eigen::Matrix3d hessian = Eigen::Matrix3d::Zero();
-  std::map<int, Eigen::Vector3d> scores;
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    Eigen::Vector3d j;
-    j.head<2>() = basis.transpose() * points[k];
-    j(2) = 1.0;
-    const double r = normal.dot(points[k]) + offset;
-    hessian += j * j.transpose();
-    auto it = scores.try_emplace(owner[k], Eigen::Vector3d::Zero()).first;
-    it->second += j * r;
+/// Zhou & Zhang's joint refinement: laser plane and board poses from the corners (normalized
+/// reprojection, scaled to px / corner sigma) and the stripe rays (distance of ray ∩ board from
+/// the laser plane / stripe sigma). The sigmas are estimated from the separate fits and then
+/// from this fit's own residuals (two passes), so the covariance is in units of the data.
+PlaneFit JointStripeFit(const std::map<int, ImagePoints>& views, const ChessboardSpec& board,
+                        const Eigen::Vector2d& focal_px, const Eigen::Vector3d& n0, double d0,
+                        double corner_sigma_px, double stripe_sigma_mm,
+                        std::map<int, Eigen::Isometry3d>* refined_poses) {
+  PlaneFit fit;
+  Eigen::Vector3d n_start = n0;
+  double d_start = d0;
+  std::map<int, std::array<double, 6>> start;
+  for (const auto& [i, v] : views) {
+    Eigen::AngleAxisd aa(v.camera_from_board.linear());
+    const Eigen::Vector3d w = aa.angle() * aa.axis();
+    const Eigen::Vector3d t = v.camera_from_board.translation();
+    start[i] = {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
   }
-  Eigen::Matrix3d meat = Eigen::Matrix3d::Zero();
-  for (const auto& [view, score] : scores) meat += score * score.transpose();
-  const Eigen::Matrix3d h_inv = hessian.inverse();
-  const Eigen::Matrix3d tangent =
-      h_inv * meat * h_inv * (static_cast<double>(clusters) / std::max(1, clusters - 1));
-  Eigen::Matrix<double, 4, 3> lift = Eigen::Matrix<double, 4, 3>::Zero();
-  lift.topLeftCorner<3, 2>() = basis;
-  lift(3, 2) = 1.0;
-  const Eigen::Matrix4d c = lift * tangent * lift.transpose();
-  return 0.5 * (c + c.transpose());
+  for (int pass = 0; pass < 2; ++pass) {
+    double n[3] = {n_start.x(), n_start.y(), n_start.z()};
+    double d = d_start;
+    std::map<int, std::array<double, 6>> poses = start;
+    ceres::Problem problem;
+    int count = 0;
+    std::vector<ceres::ResidualBlockId> corner_blocks, stripe_blocks;
+    for (const auto& [i, v] : views) {
+      double* pose = poses[i].data();
+      for (int j = 0; j < board.rows; ++j) {
+        for (int c = 0; c < board.cols; ++c) {
+          const std::size_t k = static_cast<std::size_t>(j * board.cols + c);
+          corner_blocks.push_back(problem.AddResidualBlock(
+              BoardCornerCost::Create(Eigen::Vector3d(c * board.square_mm, j * board.square_mm, 0.0),
+                                      v.corners_normalized[k], focal_px / corner_sigma_px),
+              nullptr, pose));
+          count += 2;
+        }
+      }
+      for (const auto& ray : v.rays) {
+        stripe_blocks.push_back(problem.AddResidualBlock(
+            StripeOnBoardCost::Create(ray, 1.0 / stripe_sigma_mm), nullptr, n, &d, pose));
+        ++count;
+      }
+    }
+    problem.SetManifold(n, new ceres::SphereManifold<3>());
+    ceres::Solver::Options options;
+    options.linear_solver_type = ceres::DENSE_SCHUR;
+    options.max_num_iterations = 100;
+    options.function_tolerance = 1e-14;
+    options.parameter_tolerance = 1e-14;
+    options.num_threads = 1;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    fit.converged = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
+    fit.iterations = static_cast<int>(summary.iterations.size());
+    fit.termination = summary.message;
+    fit.normal = Eigen::Vector3d(n[0], n[1], n[2]).normalized();
+    fit.offset = d;
+    // Re-estimate each group's sigma from its residuals (unit-weight residuals ~ N(0, 1) when
+    // the sigma is right); the second pass uses them.
+    const auto group_rms = [&](const std::vector<ceres::ResidualBlockId>& blocks, int per_block) {
+      ceres::Problem::EvaluateOptions eval;
+      eval.residual_blocks = blocks;
+      double cost = 0;
+      problem.Evaluate(eval, &cost, nullptr, nullptr, nullptr);
+      return std::sqrt(2.0 * cost / (static_cast<double>(blocks.size()) * per_block));
+    };
+    const double corner_scale = group_rms(corner_blocks, 2);
+    const double stripe_scale = group_rms(stripe_blocks, 1);
+    ceres::Covariance::Options cov_options;
+    cov_options.algorithm_type = ceres::DENSE_SVD;
+    cov_options.null_space_rank = -1;
+    cov_options.min_reciprocal_condition_number = 1e-14;
+    ceres::Covariance covariance(cov_options);
+    const std::vector<std::pair<const double*, const double*>> blocks = {{n, n}, {n, &d}, {&d, &d}};
+    fit.covariance_ok = false;
+    if (covariance.Compute(blocks, &problem)) {
+      Eigen::Matrix<double, 3, 3, Eigen::RowMajor> cnn;
+      Eigen::Vector3d cnd;
+      double cdd = 0;
+      covariance.GetCovarianceBlock(n, n, cnn.data());
+      covariance.GetCovarianceBlock(n, &d, cnd.data());
+      covariance.GetCovarianceBlock(&d, &d, &cdd);
+      fit.covariance.topLeftCorner<3, 3>() = cnn;
+      fit.covariance.topRightCorner<3, 1>() = cnd;
+      fit.covariance.bottomLeftCorner<1, 3>() = cnd.transpose();
+      fit.covariance(3, 3) = cdd;
+      fit.covariance = 0.5 * (fit.covariance + fit.covariance.transpose()).eval();
+      fit.covariance_ok = fit.covariance.allFinite();
+    }
+    if (refined_poses != nullptr) {
+      refined_poses->clear();
+      for (const auto& [i, p] : poses) {
+        const Eigen::Vector3d w(p[0], p[1], p[2]);
+        Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+        if (w.norm() > 0) pose.linear() = Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix();
+        pose.translation() = Eigen::Vector3d(p[3], p[4], p[5]);
+        (*refined_poses)[i] = pose;
+      }
+    }
+    corner_sigma_px *= corner_scale;
+    stripe_sigma_mm *= stripe_scale;
+    n_start = fit.normal;
+    d_start = fit.offset;
+    (void)count;
+  }
+  internal::OrientPlane(fit.normal, fit.offset);
+  return fit;
 }
 
 PlaneFit FitPoints(const std::vector<Eigen::Vector3d>& points, const std::vector<int>& owner,
@@ -745,6 +829,7 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
   std::vector<Eigen::Vector3d> points, rays;
   std::vector<Eigen::Vector2d> pixels;
   std::vector<int> owner;
+  std::map<int, ImagePoints> views;
   int usable = 0;
   for (std::size_t i = 0; i < images.size(); ++i) {
     const StripeObservation& observation = observations[i];
@@ -764,6 +849,7 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
       item.note = "too few stripe peaks (" + std::to_string(observation.stripe_px.size()) + ")";
     }
     if (!found.points.empty()) {
+      views[static_cast<int>(i)] = found;
       item.used = true;
       item.points = static_cast<int>(found.points.size());
       ++usable;
@@ -808,17 +894,45 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
                               " robust sigmas from the plane were dropped");
     fit = FitPoints(kept_points, kept_owner, fit.normal, fit.offset, -1);
   }
-  // Points of one view share its board-pose error, so the per-point covariance is optimistic;
-  // with >= 4 views use the cluster-robust one (never smaller than the per-point one here).
-  if (usable >= 4) {
-    const Eigen::Matrix4d robust =
-        ClusterRobustCovariance(fit.normal, fit.offset, kept_points, kept_owner, usable);
-    if (robust.allFinite() && robust.trace() > fit.covariance.trace()) fit.covariance = robust;
-  } else {
-    result.warnings.push_back(
-        "covariance from the point scatter only (" + std::to_string(usable) +
-        " views; >= 4 are needed to include the board-pose errors): it is optimistic, use the "
-        "leave-one-out change instead");
+  // Points of one view share its board-pose error, so the covariance of this point fit is
+  // optimistic. Refine plane and board poses jointly (Zhou & Zhang 2005): its covariance carries
+  // the pose uncertainty, and the points are re-intersected with the refined boards.
+  const PlaneFit point_fit = fit;
+  if (options.joint_refinement) {
+    std::map<int, ImagePoints> kept_views;
+    for (auto& [i, v] : views) {
+      ImagePoints kv = v;
+      kv.rays.clear();
+      kv.pixels.clear();
+      kv.points.clear();
+      kept_views[i] = kv;
+    }
+    for (std::size_t k = 0; k < kept_points.size(); ++k) {
+      ImagePoints& kv = kept_views[kept_owner[k]];
+      kv.rays.push_back(kept_rays[k]);
+      kv.pixels.push_back(kept_pixels[k]);
+    }
+    double corner_rms = 0;
+    for (const auto& item : result.items) corner_rms += item.used ? item.reprojection_rms_px / usable : 0.0;
+    const Eigen::Vector2d focal(camera.intrinsics()[0], camera.intrinsics()[1]);
+    std::map<int, Eigen::Isometry3d> refined;
+    double stripe_rms = 0;
+    for (const auto& p : kept_points) stripe_rms += std::pow(fit.normal.dot(p) + fit.offset, 2);
+    stripe_rms = std::sqrt(stripe_rms / static_cast<double>(kept_points.size()));
+    const PlaneFit joint = JointStripeFit(kept_views, board, focal, fit.normal, fit.offset,
+                                          std::max(corner_rms, 0.01), std::max(stripe_rms, 1e-3), &refined);
+    if (joint.converged && joint.covariance_ok) {
+      fit = joint;
+      for (std::size_t k = 0; k < kept_points.size(); ++k) {
+        const Eigen::Isometry3d& pose = refined[kept_owner[k]];
+        const Eigen::Vector3d m = pose.linear().col(2);
+        const auto p = internal::IntersectRayPlane(kept_rays[k], m, -m.dot(pose.translation()));
+        if (p) kept_points[k] = *p;
+      }
+    } else {
+      result.warnings.push_back("the joint refinement of plane and board poses failed (" + joint.termination +
+                                "); the plane and its covariance come from the point fit and are optimistic");
+    }
   }
   FillPlane(fit, result);
   std::vector<double> item_sum(images.size(), 0);
@@ -842,8 +956,9 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
       item.loo_normal_change_deg = item.loo_offset_change_mm = item.loo_max_displacement_mm = kNaN;
       continue;
     }
-    const PlaneFit loo = FitPoints(kept_points, kept_owner, fit.normal, fit.offset, static_cast<int>(i));
-    LooChange(fit.normal, fit.offset, loo.normal, loo.offset, kept_points, item);
+    // Leave-one-out on the point fit (cheap): the change of the plane without this view.
+    const PlaneFit loo = FitPoints(kept_points, kept_owner, point_fit.normal, point_fit.offset, static_cast<int>(i));
+    LooChange(point_fit.normal, point_fit.offset, loo.normal, loo.offset, kept_points, item);
   }
   SummarizeLoo(result);
   // Rays of every image in one plane through the camera centre: the points are on the laser

@@ -30,9 +30,9 @@
 // Units mm, rad (angles in reports: _deg), px. The normal is oriented so that d <= 0 (it points
 // from the sensor origin towards the plane); the point p0 = -d n is the plane's point nearest
 // the sensor origin. Covariance: 4x4 over [n; d] (rank 3), from Ceres at the solution, scaled
-// by the residuals' variance (reduced chi-square); for method (b) with >= 4 views the
-// cluster-robust (sandwich) covariance over views replaces it when larger, since the points of
-// one view share that view's board-pose error (with fewer views a warning says it is optimistic).
+// by the residuals' variance (reduced chi-square); for method (b) from the joint refinement of
+// the plane and the board poses (corners and stripe pixels, each group weighted by the sigma its
+// own residuals give), so it includes the board-pose uncertainty.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -120,6 +120,10 @@ struct StripeOptions {
   int min_peaks_per_image = 30;
   /// As HeightPlaneOptions::min_triangulation_angle_deg. Default 2 deg.
   double min_triangulation_angle_deg = 2.0;
+  /// Refine the plane and all board poses jointly from corners and stripe pixels (Zhou & Zhang
+  /// 2005), so the covariance includes the board-pose uncertainty. Default true; false keeps the
+  /// plane fitted to the stripe points of the PnP boards (its covariance is then optimistic).
+  bool joint_refinement = true;
   /// Plane-fit outliers: points farther than this many robust sigmas are dropped once. Default 4.
   double outlier_sigmas = 4.0;
   /// Throws OptionError naming the field.
