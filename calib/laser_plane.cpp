@@ -897,7 +897,6 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
   // Points of one view share its board-pose error, so the covariance of this point fit is
   // optimistic. Refine plane and board poses jointly (Zhou & Zhang 2005): its covariance carries
   // the pose uncertainty, and the points are re-intersected with the refined boards.
-  const PlaneFit point_fit = fit;
   if (options.joint_refinement) {
     std::map<int, ImagePoints> kept_views;
     for (auto& [i, v] : views) {
@@ -947,6 +946,8 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
   }
   result.points = static_cast<int>(kept_points.size());
   result.rms_mm = std::sqrt(sum / std::max<std::size_t>(1, kept_points.size()));
+  const PlaneFit loo_reference =
+      usable >= 3 ? FitPoints(kept_points, kept_owner, fit.normal, fit.offset, -1) : fit;
   for (std::size_t i = 0; i < result.items.size(); ++i) {
     LaserPlaneItem& item = result.items[i];
     if (!item.used) continue;
@@ -956,9 +957,10 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
       item.loo_normal_change_deg = item.loo_offset_change_mm = item.loo_max_displacement_mm = kNaN;
       continue;
     }
-    // Leave-one-out on the point fit (cheap): the change of the plane without this view.
-    const PlaneFit loo = FitPoints(kept_points, kept_owner, point_fit.normal, point_fit.offset, static_cast<int>(i));
-    LooChange(point_fit.normal, point_fit.offset, loo.normal, loo.offset, kept_points, item);
+    // Leave-one-out on point fits (cheap) over the final points: the change without this view.
+    const PlaneFit loo = FitPoints(kept_points, kept_owner, loo_reference.normal, loo_reference.offset,
+                                   static_cast<int>(i));
+    LooChange(loo_reference.normal, loo_reference.offset, loo.normal, loo.offset, kept_points, item);
   }
   SummarizeLoo(result);
   // Rays of every image in one plane through the camera centre: the points are on the laser
