@@ -136,11 +136,14 @@ void ExpectConsistentPlane(const LaserPlaneResult& r) {
   EXPECT_EQ(used, 6) << r.Summary();
   EXPECT_TRUE(r.converged);
   EXPECT_FALSE(r.ill_conditioned);
-  // JPEG stripe peaks and board poses from 48 corners of a hand-held, slightly bent board:
-  // sub-millimetre residuals and a plane stable to a degree when any one view is left out.
-  EXPECT_LT(r.rms_mm, 1.0) << r.Summary();
-  EXPECT_LT(r.loo_max_normal_change_deg, 2.0) << r.Summary();
-  EXPECT_LT(r.loo_max_offset_change_mm, 20.0) << r.Summary();
+  // JPEG stripe peaks and board poses from 48 corners of a hand-held board. Measured: RMS
+  // 0.29 mm, leave-one-image-out 0.007 deg / 0.025 mm, 1 sigma 0.009 deg / 0.07 mm; the bounds
+  // leave 2x-7x margin (no ground truth: consistency only).
+  EXPECT_LT(r.rms_mm, 0.5) << r.Summary();
+  EXPECT_LT(r.loo_max_normal_change_deg, 0.05) << r.Summary();
+  EXPECT_LT(r.loo_max_offset_change_mm, 0.2) << r.Summary();
+  EXPECT_LT(r.normal_sigma_deg, 0.05) << r.Summary();
+  EXPECT_GT(r.median_triangulation_angle_deg, 3.0);
   std::printf("real stripe plane: %s; LOO max %.3f deg / %.3f mm\n", r.Summary().c_str(),
               r.loo_max_normal_change_deg, r.loo_max_offset_change_mm);
   std::printf("median ray-to-plane angle %.3f deg\n", r.median_triangulation_angle_deg);
