@@ -128,6 +128,52 @@ Eigen::Isometry3d DhChain::BaseFromFlange(std::span<const double> joints_rad) co
 
 std::unique_ptr<KinematicModel> DhChain::Clone() const { return std::make_unique<DhChain>(*this); }
 
+DhParameterKind DhParameterKindAt(int index, int joints) {
+  if (joints <= 0 || index < 0 || index >= NumDhParameters(joints)) {
+    throw InputError("DH parameter index " + std::to_string(index) + " is out of range for a " +
+                     std::to_string(joints) + "-joint chain (0 .. " +
+                     std::to_string(NumDhParameters(joints) - 1) + ")");
+  }
+  return static_cast<DhParameterKind>(index / joints);
+}
+
+std::string DhParameterName(int index, int joints) {
+  static constexpr const char* kNames[] = {"joint_offset_", "a_", "d_", "alpha_"};
+  const DhParameterKind kind = DhParameterKindAt(index, joints);
+  return kNames[static_cast<int>(kind)] + std::to_string(index % joints + 1);
+}
+
+std::vector<double> DhParameterVector(const DhChain& chain) {
+  const std::size_t n = chain.joints().size();
+  std::vector<double> p(4 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const DhJoint& j = chain.joints()[i];
+    p[i] = j.joint_offset_rad;
+    p[n + i] = j.a_mm;
+    p[2 * n + i] = j.d_mm;
+    p[3 * n + i] = j.alpha_rad;
+  }
+  return p;
+}
+
+DhChain WithDhParameters(const DhChain& chain, std::span<const double> parameters) {
+  const std::size_t n = chain.joints().size();
+  if (parameters.size() != 4 * n) {
+    throw InputError("DH parameters: got " + std::to_string(parameters.size()) +
+                     " values, expected " + std::to_string(4 * n) + " (joint offsets, a, d, alpha)");
+  }
+  std::vector<DhJoint> joints = chain.joints();
+  for (std::size_t i = 0; i < n; ++i) {
+    joints[i].joint_offset_rad = parameters[i];
+    joints[i].a_mm = parameters[n + i];
+    joints[i].d_mm = parameters[2 * n + i];
+    joints[i].alpha_rad = parameters[3 * n + i];
+  }
+  // The constructor checks finiteness; the mounts are copied exactly as stored.
+  return DhChain(chain.convention(), std::move(joints), chain.base_from_chain_stored(),
+                 chain.chain_from_flange_stored());
+}
+
 DhChain NominalUr5() {
   constexpr double kHalfPi = std::numbers::pi / 2;
   // Universal Robots, "DH parameters for calculations of kinematics and dynamics" (UR5, CB3).

@@ -17,6 +17,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cmath>
 #include <memory>
 #include <span>
 #include <string>
@@ -107,6 +108,54 @@ class DhChain final : public KinematicModel {
   Eigen::Isometry3d base_from_chain_matrix_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d chain_from_flange_matrix_ = Eigen::Isometry3d::Identity();
 };
+
+/// Which DH quantity a calibration parameter of a chain adjusts (see DhParameterVector).
+enum class DhParameterKind { kJointOffset, kA, kD, kAlpha };
+
+/// Number of calibration parameters of an n-joint chain: 4 n (joint offset, a, d, alpha per
+/// joint), in the order of DhParameterVector.
+inline int NumDhParameters(int joints) { return 4 * joints; }
+/// Kind of calibration parameter `index` (0 <= index < 4 n) of an n-joint chain: indices
+/// [0, n) joint offsets, [n, 2n) a, [2n, 3n) d, [3n, 4n) alpha; joint = index % n.
+DhParameterKind DhParameterKindAt(int index, int joints);
+/// Name of calibration parameter `index`, e.g. "joint_offset_1" (rad), "a_2" (mm), "d_4" (mm),
+/// "alpha_6" (rad); joints counted from 1.
+std::string DhParameterName(int index, int joints);
+/// The chain's calibration parameters as one vector of length 4 n: joint_offset_rad of every
+/// joint, then a_mm, d_mm, alpha_rad (theta_offset_rad, the nominal zero, is not a parameter).
+std::vector<double> DhParameterVector(const DhChain& chain);
+/// A copy of `chain` with its calibration parameters replaced by `parameters` (length 4 n,
+/// order of DhParameterVector); mounts and theta_offset_rad are kept. Throws InputError for a
+/// wrong length or non-finite values.
+DhChain WithDhParameters(const DhChain& chain, std::span<const double> parameters);
+
+/// link_{i-1}_from_link_i of one DH row as rotation and translation, for any scalar type (the
+/// calibration solvers evaluate it with automatic-differentiation jets). Same closed forms as
+/// DhChain::BaseFromFlange (Spong et al. 2006, eq. 3.10; Craig 1986, eq. 3.6).
+template <typename T>
+void DhLinkRotationTranslation(DhConvention convention, const T& a_mm, const T& alpha_rad,
+                               const T& d_mm, const T& theta_rad, Eigen::Matrix<T, 3, 3>* rotation,
+                               Eigen::Matrix<T, 3, 1>* translation) {
+  using std::cos;
+  using std::sin;
+  const T ct = cos(theta_rad), st = sin(theta_rad), ca = cos(alpha_rad), sa = sin(alpha_rad);
+  const T zero(0);
+  if (convention == DhConvention::kStandard) {
+    // clang-format off
+    *rotation << ct, -st * ca,  st * sa,
+                 st,  ct * ca, -ct * sa,
+                 zero, sa,      ca;
+    // clang-format on
+    *translation << a_mm * ct, a_mm * st, d_mm;
+  } else {
+    // clang-format off
+    *rotation << ct,      -st,      zero,
+                 st * ca,  ct * ca, -sa,
+                 st * sa,  ct * sa,  ca;
+    // clang-format on
+    *translation << a_mm, -sa * d_mm, ca * d_mm;
+  }
+}
 
 /// Nominal UR5 (Universal Robots' published standard-DH table, mm):
 /// d1 = 89.159, a2 = -425, a3 = -392.25, d4 = 109.15, d5 = 94.65, d6 = 82.3,

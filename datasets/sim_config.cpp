@@ -11,144 +11,13 @@
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "core/yaml_fields.hpp"
 
 namespace lasercell::datasets {
 
+using yaml::Fields;
+
 namespace {
-
-// Walks one YAML map, reading the fields it knows and rejecting the rest. Field paths in
-// messages are dotted from the file's root ("sensor.camera.fx_px").
-class Fields {
- public:
-  Fields(YAML::Node node, std::string path, const std::string& file)
-      : node_(std::move(node)), path_(std::move(path)), file_(file) {
-    if (node_ && !node_.IsNull() && !node_.IsMap()) {
-      throw Fail(path_.empty() ? "the document" : "field '" + path_ + "'",
-                 "must be a map of fields");
-    }
-  }
-
-  // Sub-map; absent -> an empty walker.
-  Fields Sub(const char* key) {
-    used_.insert(key);
-    return Fields(Child(key), Path(key), file_);
-  }
-
-  void Read(const char* key, double* out) {
-    if (auto n = Take(key)) *out = Scalar<double>(*n, Path(key), "a number");
-  }
-  void Read(const char* key, int* out) {
-    if (auto n = Take(key)) *out = Scalar<int>(*n, Path(key), "an integer");
-  }
-  void Read(const char* key, std::int64_t* out) {
-    if (auto n = Take(key)) *out = Scalar<std::int64_t>(*n, Path(key), "an integer");
-  }
-  void Read(const char* key, std::uint64_t* out) {
-    if (auto n = Take(key)) *out = Scalar<std::uint64_t>(*n, Path(key), "a non-negative integer");
-  }
-  void Read(const char* key, bool* out) {
-    if (auto n = Take(key)) *out = Scalar<bool>(*n, Path(key), "true or false");
-  }
-  void Read(const char* key, std::string* out) {
-    if (auto n = Take(key)) *out = Scalar<std::string>(*n, Path(key), "a string");
-  }
-  void Read(const char* key, std::vector<double>* out, std::size_t exact_size = 0) {
-    auto n = Take(key);
-    if (!n) return;
-    *out = List(*n, Path(key), exact_size);
-  }
-  template <int N>
-  void Read(const char* key, Eigen::Matrix<double, N, 1>* out) {
-    auto n = Take(key);
-    if (!n) return;
-    const std::vector<double> v = List(*n, Path(key), N);
-    for (int i = 0; i < N; ++i) (*out)[i] = v[i];
-  }
-  template <std::size_t N>
-  void Read(const char* key, std::array<double, N>* out) {
-    auto n = Take(key);
-    if (!n) return;
-    const std::vector<double> v = List(*n, Path(key), N);
-    for (std::size_t i = 0; i < N; ++i) (*out)[i] = v[i];
-  }
-  void Read(const char* key, std::vector<Eigen::Vector2d>* out) {
-    auto n = Take(key);
-    if (!n) return;
-    const std::string path = Path(key);
-    if (!n->IsSequence()) throw Fail("field '" + path + "'", "must be a list of [x, y] pairs");
-    out->clear();
-    for (std::size_t i = 0; i < n->size(); ++i) {
-      const std::vector<double> v = List((*n)[i], path + "[" + std::to_string(i) + "]", 2);
-      out->emplace_back(v[0], v[1]);
-    }
-  }
-
-  // Rejects fields not read.
-  void Done() const {
-    if (!node_ || node_.IsNull()) return;
-    for (const auto& entry : node_) {
-      const std::string key = entry.first.as<std::string>();
-      if (used_.count(key) == 0) {
-        std::string known;
-        for (const std::string& k : used_) known += (known.empty() ? "" : ", ") + k;
-        throw Fail("unknown field '" + Path(key.c_str()) + "'",
-                   "(known fields here: " + known + ")");
-      }
-    }
-  }
-
-  // Marks a key as known without reading it (read elsewhere).
-  void Known(const char* key) { used_.insert(key); }
-
- private:
-  OptionError Fail(const std::string& what, const std::string& problem) const {
-    return OptionError(file_ + ": " + what + " " + problem);
-  }
-  std::string Path(const char* key) const { return path_.empty() ? key : path_ + "." + key; }
-  YAML::Node Child(const char* key) const {
-    if (!node_ || node_.IsNull()) return YAML::Node();
-    const YAML::Node& node = node_;  // const lookup never inserts
-    return node[key];
-  }
-  std::optional<YAML::Node> Take(const char* key) {
-    used_.insert(key);
-    YAML::Node n = Child(key);
-    if (!n || n.IsNull()) return std::nullopt;
-    return n;
-  }
-  template <typename T>
-  T Scalar(const YAML::Node& n, const std::string& path, const char* expected) const {
-    if (!n.IsScalar()) throw Fail("field '" + path + "'", std::string("must be ") + expected);
-    try {
-      T value = n.as<T>();
-      if constexpr (std::is_floating_point_v<T>) {
-        if (!std::isfinite(value)) throw YAML::BadConversion(n.Mark());
-      }
-      return value;
-    } catch (const YAML::Exception&) {
-      throw Fail("field '" + path + "'",
-                 std::string("must be ") + expected + " (got '" + n.Scalar() + "')");
-    }
-  }
-  std::vector<double> List(const YAML::Node& n, const std::string& path,
-                           std::size_t exact_size) const {
-    if (!n.IsSequence()) throw Fail("field '" + path + "'", "must be a list of numbers");
-    if (exact_size > 0 && n.size() != exact_size) {
-      throw Fail("field '" + path + "'", "must list exactly " + std::to_string(exact_size) +
-                                             " numbers (got " + std::to_string(n.size()) + ")");
-    }
-    std::vector<double> v;
-    for (std::size_t i = 0; i < n.size(); ++i) {
-      v.push_back(Scalar<double>(n[i], path + "[" + std::to_string(i) + "]", "a number"));
-    }
-    return v;
-  }
-
-  YAML::Node node_;
-  std::string path_;
-  const std::string& file_;
-  std::set<std::string> used_;
-};
 
 std::string Num(double v) { return FormatDouble(v); }
 
@@ -380,26 +249,9 @@ void SimConfig::Check() const {
 }
 
 SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw OptionError(name + ": not valid YAML (" + e.what() + ")");
-  }
   SimConfig c;
-  Fields top(root, "", name);
-  std::string format = "lasercell.sim_config";
-  int version = kSimConfigVersion;
-  top.Read("format", &format);
-  top.Read("version", &version);
-  if (format != "lasercell.sim_config") {
-    throw OptionError(name + ": field 'format' is '" + format +
-                      "', expected 'lasercell.sim_config'");
-  }
-  if (version != kSimConfigVersion) {
-    throw OptionError(name + ": field 'version' is " + std::to_string(version) +
-                      "; this build reads version " + std::to_string(kSimConfigVersion));
-  }
+  Fields top = Fields::Parse(text, name);
+  top.ExpectFormat("lasercell.sim_config", kSimConfigVersion);
   top.Read("seed", &c.seed);
   {
     Fields s = top.Sub("sensor");

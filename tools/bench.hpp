@@ -9,6 +9,8 @@ namespace lasercell::tools {
 
 /// Registers `bench registration` and `bench robustness` (cmd_bench.cpp).
 void AddBenchCommands(CLI::App& app);
+/// Registers `bench peaks` under `bench` (bench_peaks.cpp).
+void AddBenchPeaksCommand(CLI::App& bench);
 
 /// Arguments of `lasercell bench robustness`.
 struct RobustnessBenchArgs {

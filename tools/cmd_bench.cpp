@@ -280,6 +280,8 @@ void AddBenchCommands(CLI::App& app) {
       ->capture_default_str();
   rob->add_option("--json", rargs->json_out, "Also write every trial as JSON");
   rob->callback([rargs] { RunRobustnessBench(*rargs); });
+
+  AddBenchPeaksCommand(*bench);
 }
 
 }  // namespace lasercell::tools

@@ -14,10 +14,10 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "core/yaml_fields.hpp"
 #include "registration/localize_in_cloud.hpp"
 #include "registration/ppf_model.hpp"
 #include "tools/commands.hpp"
-#include "tools/options_yaml.hpp"
 
 namespace lasercell::tools {
 namespace {
@@ -50,54 +50,61 @@ struct LocalizeArgs {
 //   verification: {grid_rows, grid_cols, min_support}, support_distance_relative,
 //   run_icp, icp_rounds, refined_support_distance_relative, refined_min_support
 void ApplyOptionsFile(const std::string& path, LocalizeOptions& o, PpfModelOptions& m) {
-  OptionsReader r(path, "lasercell.localize_options", 1);
-  r.Get("threads", o.threads);
-  r.Get("max_instances", o.max_instances);
-  if (auto p = r.Vector3("viewpoint_mm")) o.viewpoint = registration::Viewpoint::AtPoint(*p);
-  if (auto d = r.Vector3("view_direction")) o.viewpoint = registration::Viewpoint::AlongDirection(*d);
-  if (auto roi = r.Section("roi")) {
+  yaml::Fields r = yaml::Fields::Load(path);
+  r.ExpectFormat("lasercell.localize_options", 1);
+  r.Read("threads", &o.threads);
+  r.Read("max_instances", &o.max_instances);
+  Eigen::Vector3d v;
+  if (r.Read("viewpoint_mm", &v)) o.viewpoint = registration::Viewpoint::AtPoint(v);
+  if (r.Read("view_direction", &v)) o.viewpoint = registration::Viewpoint::AlongDirection(v);
+  if (r.Has("roi")) {
     o.use_roi = true;
-    if (auto v = roi->Vector3("min_mm")) o.roi.min = *v; else roi->Missing("min_mm");
-    if (auto v = roi->Vector3("max_mm")) o.roi.max = *v; else roi->Missing("max_mm");
-    roi->Done();
+    yaml::Fields roi = r.Sub("roi");
+    roi.ReadRequired("min_mm", &o.roi.min);
+    roi.ReadRequired("max_mm", &o.roi.max);
+    roi.Done();
   }
-  r.Get("remove_small_clusters", o.remove_small_clusters);
-  if (auto s = r.Section("model")) {
-    s->Get("sampling_step_relative", m.sampling_step_relative);
-    s->Get("sampling_step_mm", m.sampling_step_mm);
-    s->Get("distance_step_relative", m.distance_step_relative);
-    s->Get("distance_step_mm", m.distance_step_mm);
-    s->Get("angle_step_rad", m.angle_step_rad);
-    s->Get("max_model_points", m.max_model_points);
-    s->Done();
+  r.Read("remove_small_clusters", &o.remove_small_clusters);
+  if (r.Has("model")) {
+    yaml::Fields s = r.Sub("model");
+    s.Read("sampling_step_relative", &m.sampling_step_relative);
+    s.Read("sampling_step_mm", &m.sampling_step_mm);
+    s.Read("distance_step_relative", &m.distance_step_relative);
+    s.Read("distance_step_mm", &m.distance_step_mm);
+    s.Read("angle_step_rad", &m.angle_step_rad);
+    s.Read("max_model_points", &m.max_model_points);
+    s.Done();
   }
-  r.Get("scene_sampling_step_mm", o.scene_sampling_step_mm);
-  if (auto s = r.Section("matching")) {
-    s->Get("reference_stride", o.matching.reference_stride);
-    s->Get("peaks_per_reference", o.matching.peaks_per_reference);
-    s->Get("peak_min_relative", o.matching.peak_min_relative);
-    s->Get("min_votes", o.matching.min_votes);
-    s->Get("spread_features", o.matching.spread_features);
-    s->Get("spread_alpha", o.matching.spread_alpha);
-    s->Done();
+  r.Read("scene_sampling_step_mm", &o.scene_sampling_step_mm);
+  if (r.Has("matching")) {
+    yaml::Fields s = r.Sub("matching");
+    s.Read("reference_stride", &o.matching.reference_stride);
+    s.Read("peaks_per_reference", &o.matching.peaks_per_reference);
+    s.Read("peak_min_relative", &o.matching.peak_min_relative);
+    s.Read("min_votes", &o.matching.min_votes);
+    s.Read("spread_features", &o.matching.spread_features);
+    s.Read("spread_alpha", &o.matching.spread_alpha);
+    s.Done();
   }
-  if (auto s = r.Section("clustering")) {
-    s->Get("rotation_threshold_rad", o.clustering.rotation_threshold_rad);
-    s->Get("max_clusters", o.clustering.max_clusters);
-    s->Done();
+  if (r.Has("clustering")) {
+    yaml::Fields s = r.Sub("clustering");
+    s.Read("rotation_threshold_rad", &o.clustering.rotation_threshold_rad);
+    s.Read("max_clusters", &o.clustering.max_clusters);
+    s.Done();
   }
-  r.Get("cluster_radius_relative", o.cluster_radius_relative);
-  if (auto s = r.Section("verification")) {
-    s->Get("grid_rows", o.verification.grid_rows);
-    s->Get("grid_cols", o.verification.grid_cols);
-    s->Get("min_support", o.verification.min_support);
-    s->Done();
+  r.Read("cluster_radius_relative", &o.cluster_radius_relative);
+  if (r.Has("verification")) {
+    yaml::Fields s = r.Sub("verification");
+    s.Read("grid_rows", &o.verification.grid_rows);
+    s.Read("grid_cols", &o.verification.grid_cols);
+    s.Read("min_support", &o.verification.min_support);
+    s.Done();
   }
-  r.Get("support_distance_relative", o.support_distance_relative);
-  r.Get("run_icp", o.run_icp);
-  r.Get("icp_rounds", o.icp_rounds);
-  r.Get("refined_support_distance_relative", o.refined_support_distance_relative);
-  r.Get("refined_min_support", o.refined_min_support);
+  r.Read("support_distance_relative", &o.support_distance_relative);
+  r.Read("run_icp", &o.run_icp);
+  r.Read("icp_rounds", &o.icp_rounds);
+  r.Read("refined_support_distance_relative", &o.refined_support_distance_relative);
+  r.Read("refined_min_support", &o.refined_min_support);
   r.Done();
 }
 

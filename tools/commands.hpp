@@ -8,6 +8,11 @@ void AddCloudCommands(CLI::App& app);   ///< cloud info, cloud convert
 void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
 void AddLocalizeCommand(CLI::App& app);  ///< localize
 void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
+/// calibrate spheres (under the `calibrate` parent created in main.cpp)
+void AddCalibrateSpheresCommand(CLI::App& calibrate);
+void AddScanCommands(CLI::App& app);  ///< scan triangulate
+/// calibrate joints, calibrate handeye-laser (under the `calibrate` parent given).
+void AddCalibrateJointsCommands(CLI::App& calibrate);
 /// calibrate laser; `calibrate` is the parent subcommand (created once in main.cpp).
 void AddCalibrateLaserCommand(CLI::App& calibrate);
 }  // namespace lasercell::tools

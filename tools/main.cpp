@@ -18,12 +18,14 @@ int main(int argc, char** argv) {
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
   lasercell::tools::AddSimulateCommands(app);
+  lasercell::tools::AddScanCommands(app);
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate", "Calibrate the cell: camera, laser, spheres, hand-eye, joints");
+  calibrate->require_subcommand(1);
+  lasercell::tools::AddCalibrateSpheresCommand(*calibrate);
+  lasercell::tools::AddCalibrateJointsCommands(*calibrate);
+  lasercell::tools::AddCalibrateLaserCommand(*calibrate);
   lasercell::tools::AddBenchCommands(app);
-  {
-    CLI::App* calibrate = app.add_subcommand("calibrate", "Calibrate the cell: camera, laser plane, ...");
-    calibrate->require_subcommand(1);
-    lasercell::tools::AddCalibrateLaserCommand(*calibrate);
-  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -364,3 +364,59 @@ TEST(KinematicsTest, CloneIsDeep) {
 
 }  // namespace
 }  // namespace lasercell
+
+namespace lasercell {
+namespace {
+
+// Calibration parameter access: names, order and a round trip that keeps the mounts exactly.
+TEST(DhParameters, VectorRoundTripKeepsMountsAndNominalZeros) {
+  DhChain chain = NominalUr5();
+  chain.mutable_joints()[1].joint_offset_rad = 0.002;
+  chain.mutable_joints()[4].theta_offset_rad = 0.5;
+  chain.set_chain_from_flange(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 12.5)));
+  std::vector<double> p = DhParameterVector(chain);
+  ASSERT_EQ(p.size(), 24u);
+  EXPECT_EQ(p[1], 0.002);
+  EXPECT_EQ(p[6 + 1], -425.0);   // a_2
+  EXPECT_EQ(p[12 + 0], 89.159);  // d_1
+  EXPECT_EQ(DhParameterName(0, 6), "joint_offset_1");
+  EXPECT_EQ(DhParameterName(7, 6), "a_2");
+  EXPECT_EQ(DhParameterName(15, 6), "d_4");
+  EXPECT_EQ(DhParameterName(23, 6), "alpha_6");
+  p[2] = -0.001;
+  p[12 + 3] += 0.25;
+  const DhChain changed = WithDhParameters(chain, p);
+  EXPECT_EQ(changed.joints()[2].joint_offset_rad, -0.001);
+  EXPECT_EQ(changed.joints()[3].d_mm, 109.15 + 0.25);
+  EXPECT_EQ(changed.joints()[4].theta_offset_rad, 0.5);
+  EXPECT_EQ(changed.chain_from_flange_stored().translation_mm,
+            chain.chain_from_flange_stored().translation_mm);
+  EXPECT_EQ(DhParameterVector(changed), p);
+}
+
+TEST(DhParameters, WrongLengthAndIndexAreRejected) {
+  const DhChain chain = NominalUr5();
+  EXPECT_THAT([&] { WithDhParameters(chain, std::vector<double>(5, 0.0)); },
+              ::testing::ThrowsMessage<InputError>(::testing::HasSubstr("expected 24")));
+  EXPECT_THAT([] { DhParameterName(24, 6); },
+              ::testing::ThrowsMessage<InputError>(::testing::HasSubstr("out of range")));
+}
+
+// The templated link transform (used with autodiff jets by calib) equals the chain's own.
+TEST(DhParameters, TemplatedLinkTransformMatchesTheChain) {
+  for (DhConvention convention : {DhConvention::kStandard, DhConvention::kModified}) {
+    std::vector<DhJoint> rows(1);
+    rows[0] = {12.0, 0.7, -30.0, 0.0, 0.0};
+    const DhChain chain(convention, rows);
+    const double theta = 0.9;
+    Eigen::Matrix3d r;
+    Eigen::Vector3d t;
+    DhLinkRotationTranslation(convention, 12.0, 0.7, -30.0, theta, &r, &t);
+    const Eigen::Isometry3d expected = chain.BaseFromFlange(std::vector<double>{theta});
+    EXPECT_LT((r - expected.linear()).cwiseAbs().maxCoeff(), 1e-15);
+    EXPECT_LT((t - expected.translation()).cwiseAbs().maxCoeff(), 1e-13);
+  }
+}
+
+}  // namespace
+}  // namespace lasercell

@@ -1,0 +1,133 @@
+#pragma once
+// Half-sphere calibration of the sweep frame into the handling robot's base (issue 7, item 2;
+// Skotheim et al., calibration step 3).
+//
+// Frames: `sweep` = the frame the sweep cloud is in; for a linear sweep (triangulation's
+// linear assembly) this is the `sensor` frame at the sweep start, so the result is
+// handling_base_from_sensor valid for that sweep trajectory only. `handling_base`: the handling
+// robot's base, where its controller reports the pointing-tool tip. Units mm, rad.
+//
+// Inputs: sphere centres in the sweep frame with their covariances (FitSphere, scaled by the
+// residual variance) and, per sphere, the handling robot's touch of its top. The top is
+//   top = centre + (radius + tool_tip_radius) * up,
+// where `up` (up_in_handling_base) is the direction against gravity in handling_base. It is
+// known, not estimated: by default +z of handling_base, i.e. the robot stands level (as in the
+// simulated cell and the reference cell); a robot mounted otherwise must state it. A tilt of
+// `up` by a angle shifts every touched centre by r * a sideways (0.44 mm per degree for r = 25):
+// a common shift, absorbed by the translation.
+// So centre_in_handling_base = touch - (r + tip) * up, with covariance sigma_touch^2 I, and a
+// weighted rigid fit (rigid_fit.hpp) of the swept centres to them gives handling_base_from_sweep
+// with its 6x6 covariance. With fitted (free) radii the tops themselves are fitted instead:
+// top_in_sweep = c + (r + tip) R^T up with the joint centre-radius covariance, against the touch
+// points (the radius and the centre height are strongly correlated on a cap seen from above).
+//
+// Correspondence: the touches are labelled, the swept spheres are not. Every injective
+// assignment of the smaller set into the larger is scored by the RMS of a closed-form rigid fit;
+// the best wins if it is consistent (rms <= max_match_rms_mm) and no other assignment is
+// (otherwise: InputError, "ambiguous"). Fewer than 3 matched spheres or collinear spheres:
+// InputError naming the degeneracy.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/rigid_fit.hpp"
+#include "calib/sphere_segmentation.hpp"
+#include "core/frame_graph.hpp"
+#include "core/point_cloud.hpp"
+
+namespace lasercell::calib {
+
+/// One pointing-tool touch of a sphere top, as the handling robot's controller reports it.
+struct SphereTouch {
+  int sphere = 0;  ///< Label of the sphere (from the touches file).
+  Eigen::Vector3d point_in_handling_base = Eigen::Vector3d::Zero();  ///< Tool tip, mm.
+  std::optional<std::vector<double>> joints_rad;  ///< Reported joints, if recorded (rad).
+};
+
+/// Contents of a touches file (format lasercell.touches, version 1; see ParseTouchesYaml).
+struct SphereTouches {
+  std::string robot = "handling_robot";  ///< Robot that touched.
+  std::string frame = "handling_base";   ///< Frame of the points.
+  double stated_sigma_mm = 0.05;         ///< Per-axis 1-sigma of a touch point, mm.
+  std::optional<double> sphere_radius_mm;  ///< Nominal sphere radius, if stated.
+  std::optional<Eigen::Isometry3d> handling_flange_from_tool_tip;  ///< Pointing tool, if stated.
+  std::vector<SphereTouch> touches;
+};
+
+/// Parses a touches file's text; `name` appears in errors. Throws FileError naming the file and
+/// the field: unknown fields, wrong format/version, a frame other than handling_base, values
+/// that are not numbers, fields in other units (`*_m`, `*_deg`, ...), points that look like
+/// metres among millimetres (mixed units), joints that look like degrees, duplicate labels.
+SphereTouches ParseTouchesYaml(const std::string& text, const std::string& name);
+
+/// A sphere found in the sweep.
+struct SweptSphere {
+  Eigen::Vector3d center_in_sweep = Eigen::Vector3d::Zero();  ///< mm.
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();   ///< Of the centre, mm^2.
+  double radius_mm = 0;        ///< Fitted or given radius.
+  double radius_sigma_mm = 0;  ///< 0 when the radius was given.
+  /// Cross-covariance of centre and radius (mm^2; zero when the radius was given).
+  Eigen::Vector3d center_radius_covariance = Eigen::Vector3d::Zero();
+};
+
+/// Options of CalibrateHalfSpheres.
+struct HalfSphereCalibrationOptions {
+  /// Direction against gravity in handling_base (normalized on use; non-zero).
+  Eigen::Vector3d up_in_handling_base = Eigen::Vector3d::UnitZ();
+  double touch_sigma_mm = 0.05;      ///< Per-axis 1-sigma of a touch point (> 0), mm.
+  double tool_tip_radius_mm = 0.0;   ///< Radius of a ball tip (>= 0; 0 = a point tip), mm.
+  /// Largest RMS (mm) of the closed-form fit for an assignment of touches to swept spheres to
+  /// count as consistent (> 0).
+  double max_match_rms_mm = 2.0;
+  RigidFitOptions rigid;  ///< Weighted fit (collinearity threshold, covariance scaling).
+
+  /// Throws OptionError naming the field.
+  void Check() const;
+};
+
+/// One matched sphere.
+struct HalfSphereResidual {
+  int sphere = 0;           ///< Touch label.
+  std::size_t swept = 0;    ///< Index into the swept spheres.
+  Eigen::Vector3d center_in_sweep = Eigen::Vector3d::Zero();
+  Eigen::Vector3d center_in_handling_base = Eigen::Vector3d::Zero();  ///< From the touch.
+  Eigen::Vector3d residual_mm = Eigen::Vector3d::Zero();  ///< touched - T * swept (handling_base).
+  double residual_norm_mm = 0;
+  double mahalanobis = 0;   ///< sqrt(e^T S^-1 e).
+  double radius_mm = 0;     ///< Radius used for the top offset.
+};
+
+/// Outcome of CalibrateHalfSpheres.
+struct HalfSphereCalibrationResult {
+  Eigen::Isometry3d handling_base_from_sweep = Eigen::Isometry3d::Identity();
+  /// 6x6 over [rotvec (rad); translation (mm)], left perturbation (core/frame_graph.hpp).
+  Matrix6d covariance = Matrix6d::Zero();
+  RigidFitResult fit;                        ///< The weighted rigid fit.
+  std::vector<HalfSphereResidual> spheres;   ///< Matched spheres, in touch order.
+  double match_rms_mm = 0;                   ///< Closed-form RMS of the chosen assignment.
+  double runner_up_match_rms_mm = 0;         ///< Of the second best (0 when there is none).
+  std::vector<std::size_t> unmatched_swept;  ///< Swept spheres without a touch.
+  std::vector<int> unmatched_touches;        ///< Touch labels without a swept sphere.
+  std::vector<std::string> warnings;
+
+  /// One line: rms over N spheres, 1-sigma.
+  std::string Summary() const;
+};
+
+/// Calibrates handling_base_from_sweep. Throws InputError for fewer than 3 matchable spheres,
+/// collinear spheres, inconsistent or ambiguous correspondences, bad options.
+HalfSphereCalibrationResult CalibrateHalfSpheres(const std::vector<SweptSphere>& swept,
+                                                 const std::vector<SphereTouch>& touches,
+                                                 const HalfSphereCalibrationOptions& options);
+
+/// Swept spheres from a segmentation (centre covariance and radius from each fit).
+std::vector<SweptSphere> SweptSpheresFrom(const SphereSegmentationResult& segmentation);
+
+/// The static edge handling_base <- sweep_frame with the result's pose and covariance.
+StaticEdge HalfSphereEdge(const HalfSphereCalibrationResult& result,
+                          const std::string& sweep_frame, const EdgeProvenance& provenance);
+
+}  // namespace lasercell::calib

@@ -1,0 +1,231 @@
+// Laser eye-in-hand calibration (issue 7 item 3b): synthetic exact sweeps on the simulator's
+// planned poses, rendered simulator sweeps through the private ray/plane step, bad motions.
+
+#include "calib/laser_hand_eye.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <random>
+
+#include "calib/camera_model.hpp"
+#include "calib/internal/kinematic_profile_points.hpp"
+#include "core/error.hpp"
+#include "core/se3.hpp"
+#include "datasets/robots.hpp"
+#include "datasets/simulate.hpp"
+#include "tests/calib/joint_test_util.hpp"
+#include "triangulation/profile_io.hpp"
+
+namespace lasercell::calib {
+namespace {
+
+using ::testing::HasSubstr;
+using testing::kDeg;
+
+datasets::SimConfig EyeInHandConfig() {
+  datasets::SimConfig config;
+  config.seed = 11;
+  return config;
+}
+
+/// A hand-eye start a few mm / degrees off the truth.
+Eigen::Isometry3d Perturbed(const Eigen::Isometry3d& x) {
+  Eigen::Isometry3d p = x;
+  p.linear() = (Eigen::AngleAxisd(1.5 * kDeg, Eigen::Vector3d(1, -2, 1).normalized()) * x.linear());
+  p.translation() += Eigen::Vector3d(3, -2, 4);
+  return p;
+}
+
+/// Eye-in-hand on one planned pose set: error vs truth and its reported 1 sigma.
+struct HandEyeOutcome {
+  double t_err_mm, r_err_deg;
+  LaserHandEyeResult result;
+};
+
+HandEyeOutcome SolveSynthetic(const datasets::SimConfig& config,
+                              const datasets::PoseSweepOptions& set, int profiles,
+                              double known_centre_sigma_mm = 0,
+                              const std::vector<double>& range_offsets_mm = {}) {
+  testing::PlannedPoses poses = testing::PlanPoses(config, set, 77);
+  if (!range_offsets_mm.empty()) testing::VaryRange(poses, range_offsets_mm);
+  const std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, profiles, 0.05, 5);
+  const Eigen::Isometry3d truth = poses.truth.vision_flange_from_sensor;
+  LaserHandEyeOptions options;
+  options.solver.point_sigma_mm = 0.05;
+  if (known_centre_sigma_mm > 0) {
+    // Centres as the half-sphere calibration would give them: truth + N(0, sigma) per axis.
+    std::mt19937_64 rng(99);
+    std::normal_distribution<double> n(0.0, known_centre_sigma_mm);
+    for (const Eigen::Vector3d& c : poses.centres_in_base) {
+      options.solver.known_centres_in_base.push_back(c + Eigen::Vector3d(n(rng), n(rng), n(rng)));
+    }
+    options.solver.known_centre_sigma_mm = known_centre_sigma_mm;
+  }
+  const LaserHandEyeResult r =
+      CalibrateLaserHandEye(poses.truth.true_vision_robot, Perturbed(truth), sweeps, options);
+  EXPECT_TRUE(r.converged) << r.Summary();
+  // Noise is along the ray; the residual is its component along the sphere normal.
+  EXPECT_LT(r.rms_mm, 0.05);
+  EXPECT_NEAR(r.radius_mm, config.spheres.radius_mm, 0.05);
+  // Error within 4 sigma in the left-perturbation coordinates of the reported covariance.
+  const Vector6d xi = RotationVectorTranslation(truth * r.flange_from_sensor.inverse());
+  for (int k = 0; k < 6; ++k) EXPECT_LT(std::abs(xi[k]), 4 * std::sqrt(r.covariance(k, k))) << k;
+  return {TranslationDistance(r.flange_from_sensor, truth),
+          RotationDistance(r.flange_from_sensor, truth) / kDeg, r};
+}
+
+// Every sweep of the simulator sees its sphere at the laser's stand-off (700 mm), so a
+// rotation of the sensor about that point is seen only through the 25 mm extent of the sphere:
+// the camera centre, 700 mm from the data, is then known to a few tenths of a mm (tests below;
+// known sphere centres do not help, the mode leaves the observed points in place). Sweeping
+// the spheres at three ranges (the sensor moved -100 / 0 / +100 mm along the laser's central
+// ray, so the laser plane stays on the sphere) separates it: 12 poses, sigma 0.05 mm along the
+// ray, true robot model -> within the issue's 0.05 mm / 0.02 deg.
+TEST(LaserHandEye, RecoversTheMountFromSweepsAtThreeRanges) {
+  const datasets::SimConfig config = EyeInHandConfig();
+  const HandEyeOutcome o = SolveSynthetic(config, config.eye_in_hand, 20, 0, {-100, 0, 100});
+  std::printf("laser hand-eye, 12 poses at 3 ranges: %.4f mm, %.5f deg; %s\n", o.t_err_mm,
+              o.r_err_deg, o.result.Summary().c_str());
+  EXPECT_LT(o.t_err_mm, 0.05);
+  EXPECT_LT(o.r_err_deg, 0.02);
+}
+
+// The default eye-in-hand set (12 poses, tilt 5-25 deg, roll +-60 deg, 3 per sphere) sees each
+// sphere's top from nearly the same direction: a rotation of the sensor about the target
+// (hand-eye rx with ty) is weakly observed. Measured, not hidden: the reported 1 sigma says so
+// (hundreds of um), and the error stays within it (checked in SolveSynthetic).
+TEST(LaserHandEye, TwelvePoseSetIsWeakAndSaysSo) {
+  const datasets::SimConfig config = EyeInHandConfig();
+  const HandEyeOutcome o = SolveSynthetic(config, config.eye_in_hand, 20);
+  std::printf("laser hand-eye, 12 poses: %.4f mm, %.5f deg; %s\n", o.t_err_mm, o.r_err_deg,
+              o.result.Summary().c_str());
+  EXPECT_GT(std::sqrt(o.result.covariance.bottomRightCorner<3, 3>().trace()), 0.05);
+}
+
+// The rendered simulator sweeps of the default eye-in-hand set (12 poses, default noise 0.05 px
+// per row) -> private exact ray/plane -> hand-eye with the TRUE robot model. The simulator
+// sweeps every sphere at the same range, so (as above) the camera centre is weakly determined:
+// the error must lie within 4 reported sigma per component, the residual at the noise level.
+TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
+  datasets::SimConfig config = EyeInHandConfig();
+  config.eye_in_hand.profiles = 16;
+  config.capture_planes = config.capture_spheres = config.capture_seats = false;
+  config.capture_trajectory = config.capture_chessboard_images = false;
+  config.capture_laser_line_images = config.write_meshes = false;
+  config.capture_joint_poses = config.capture_touches = false;
+  const std::string dir =
+      (std::filesystem::temp_directory_path() / "lasercell_laser_hand_eye_test").string();
+  datasets::SimulateCell(config, dir, {}, 2);
+  const datasets::CellTruth truth = datasets::MakeCellTruth(config);
+  const CameraModel camera = LoadCameraModel(dir + "/truth/camera.cameramodel");
+  const Eigen::Vector4d plane = truth.sensor.laser.Coefficients();
+  std::vector<SphereSweep> sweeps;
+  for (int i = 0; i < config.eye_in_hand.poses; ++i) {
+    char name[64];
+    std::snprintf(name, sizeof(name), "profiles/eye_in_hand_%02d.lcp", i);
+    const triangulation::ProfileSet set = triangulation::ReadProfiles(dir + "/" + name);
+    SphereSweep s;
+    s.name = name;
+    s.sphere = i % 4;  // records/sphere_sweeps.yaml says the same (the CLI reads it)
+    for (const triangulation::Profile& p : set.profiles) {
+      s.profiles.push_back({p.joints_rad, internal::ProfilePointsOnPlane(
+                                              camera, plane, set.header.first_column, p.row_px)});
+    }
+    sweeps.push_back(std::move(s));
+  }
+  std::filesystem::remove_all(dir);
+  const LaserHandEyeResult r = CalibrateLaserHandEye(
+      truth.true_vision_robot, Perturbed(truth.vision_flange_from_sensor), sweeps, {});
+  ASSERT_TRUE(r.converged) << r.Summary();
+  const double t_err = TranslationDistance(r.flange_from_sensor, truth.vision_flange_from_sensor);
+  const double r_err = RotationDistance(r.flange_from_sensor, truth.vision_flange_from_sensor) / kDeg;
+  std::printf("laser hand-eye rendered (12 poses): %.4f mm, %.5f deg, %s\n", t_err, r_err,
+              r.Summary().c_str());
+  const Vector6d xi =
+      RotationVectorTranslation(truth.vision_flange_from_sensor * r.flange_from_sensor.inverse());
+  for (int k = 0; k < 6; ++k) EXPECT_LT(std::abs(xi[k]), 4 * std::sqrt(r.covariance(k, k))) << k;
+  EXPECT_LT(r.rms_mm, 0.1);
+  EXPECT_NEAR(r.radius_mm, config.spheres.radius_mm, 0.05);
+}
+
+// Monte Carlo: 150 noise draws of a small problem (12 poses at three ranges, 4 profiles, a few
+// points each, sigma 0.1 mm): each of the 6 hand-eye components (left perturbation) lies inside
+// its reported 1 sigma 60-76 % of the time.
+TEST(LaserHandEye, ReportedSigmaCoversTheTruth) {
+  const datasets::SimConfig config = EyeInHandConfig();
+  testing::PlannedPoses poses = testing::PlanPoses(config, config.eye_in_hand, 77);
+  testing::VaryRange(poses, {-100, 0, 100});
+  const Eigen::Isometry3d truth = poses.truth.vision_flange_from_sensor;
+  int inside = 0, total = 0;
+  for (int draw = 0; draw < 150; ++draw) {
+    const std::vector<SphereSweep> sweeps =
+        testing::SyntheticSweeps(poses, 4, 0.1, 7000 + static_cast<std::uint64_t>(draw), 8, 0);
+    LaserHandEyeOptions options;
+    options.solver.point_sigma_mm = 0.1;
+    options.solver.seed_gate_mm = 3;
+    options.solver.max_iterations = 30;
+    const LaserHandEyeResult r =
+        CalibrateLaserHandEye(poses.truth.true_vision_robot, truth, sweeps, options);
+    const Vector6d xi = RotationVectorTranslation(truth * r.flange_from_sensor.inverse());
+    for (int k = 0; k < 6; ++k) {
+      inside += std::abs(xi[k]) <= std::sqrt(r.covariance(k, k));
+      ++total;
+    }
+  }
+  const double fraction = static_cast<double>(inside) / total;
+  std::printf("hand-eye components inside 1 sigma: %.3f of %d\n", fraction, total);
+  EXPECT_GE(fraction, 0.60);
+  EXPECT_LE(fraction, 0.76);
+}
+
+TEST(LaserHandEye, RejectsPureTranslations) {
+  datasets::SimConfig config = EyeInHandConfig();
+  const testing::PlannedPoses poses = testing::PlanPoses(config, config.eye_in_hand, 77);
+  std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, 8, 0.05, 5);
+  // Replace every pose's joints by the first pose's wrist orientation: the nominal IK of
+  // translated copies of pose 0's flange pose.
+  const DhChain& robot = poses.truth.true_vision_robot;
+  const Eigen::Isometry3d f0 = robot.BaseFromFlange(sweeps[0].profiles[0].joints_rad);
+  for (std::size_t i = 0; i < sweeps.size(); ++i) {
+    for (SweptProfile& p : sweeps[i].profiles) {
+      Eigen::Isometry3d target = f0;
+      target.translation() += Eigen::Vector3d(10.0 * i, -5.0 * i, 3.0 * i);
+      const auto q = datasets::SolveIk(robot, target, sweeps[0].profiles[0].joints_rad);
+      ASSERT_TRUE(q.has_value());
+      p.joints_rad = *q;
+    }
+  }
+  try {
+    CalibrateLaserHandEye(robot, poses.truth.vision_flange_from_sensor, sweeps);
+    FAIL() << "pure translations accepted";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("pure translations"));
+  }
+}
+
+TEST(LaserHandEye, RejectsRotationsAboutOneAxis) {
+  datasets::SimConfig config = EyeInHandConfig();
+  const testing::PlannedPoses poses = testing::PlanPoses(config, config.eye_in_hand, 77);
+  std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, 8, 0.05, 5);
+  // Only joint 6 differs between the poses: every relative flange rotation is about flange z.
+  const std::vector<double> q0 = sweeps[0].profiles[0].joints_rad;
+  for (std::size_t i = 0; i < sweeps.size(); ++i) {
+    for (SweptProfile& p : sweeps[i].profiles) {
+      p.joints_rad = q0;
+      p.joints_rad[5] += 0.3 * static_cast<double>(i);
+    }
+  }
+  try {
+    CalibrateLaserHandEye(poses.truth.true_vision_robot, poses.truth.vision_flange_from_sensor,
+                          sweeps);
+    FAIL() << "single-axis rotations accepted";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("about one axis"));
+  }
+}
+
+}  // namespace
+}  // namespace lasercell::calib

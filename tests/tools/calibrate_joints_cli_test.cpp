@@ -1,0 +1,188 @@
+// End-to-end: `lasercell simulate cell` (pose sweeps only) -> `lasercell calibrate joints` and
+// `lasercell calibrate handeye-laser` on the written files; the JSON results are re-read, the
+// updated cell.yaml reads back and rewrites to the same text, and only the robot / hand-eye
+// parts changed.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/frame_graph.hpp"
+#include "core/kinematics.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using ::testing::HasSubstr;
+
+std::string Slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void Spit(const fs::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+}
+
+int RunCli(const std::string& args, std::string* err = nullptr) {
+  const fs::path e = fs::temp_directory_path() / ("lasercell_joints_err_" + std::to_string(::getpid()));
+  const int status = std::system((std::string(LASERCELL_CLI) + " " + args + " >/dev/null 2>" +
+                                  e.string()).c_str());
+  if (err) *err = Slurp(e);
+  fs::remove(e);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/// Simulated pose sweeps, written once for the whole binary.
+class CalibrateJointsCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = fs::temp_directory_path() / ("lasercell_joints_cli_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    Spit(dir_ / "sim.yaml",
+         "format: lasercell.sim_config\nversion: 1\nseed: 5\n"
+         "eye_in_hand: {profiles: 12}\njoint_poses: {profiles: 10}\n"
+         "captures: {planes: false, spheres: false, seats: false, trajectory: false, "
+         "chessboard_images: false, laser_line_images: false, meshes: false}\n");
+    std::string err;
+    ASSERT_EQ(RunCli("simulate cell --quiet --out " + (dir_ / "sim").string() + " --config " +
+                      (dir_ / "sim.yaml").string(), &err), 0) << err;
+    // The laser plane from the truth: n . p + d = 0.
+    const std::string sensor = Slurp(dir_ / "sim/truth/sensor.yaml");
+    std::smatch m;
+    ASSERT_TRUE(std::regex_search(sensor, m, std::regex(
+        R"(normal: \[([^,]+), ([^,]+), ([^\]]+)\]\n  d_mm: ([^\n]+))")));
+    plane_ = std::string(m[1]) + "," + std::string(m[2]) + "," + std::string(m[3]) + "," +
+             std::string(m[4]);
+    // A cell whose vision robot is nominal (joint offsets zeroed): what a user starts from.
+    const std::string truth = Slurp(dir_ / "sim/truth/cell.yaml");
+    Spit(dir_ / "nominal_cell.yaml",
+         std::regex_replace(truth, std::regex(R"(joint_offset_rad: [-0-9.e]+)"),
+                            "joint_offset_rad: 0"));
+  }
+  static void TearDownTestSuite() { fs::remove_all(dir_); }
+
+  static std::string Common(const std::string& cell) {
+    return " --cell " + cell + " --camera " + (dir_ / "sim/truth/camera.cameramodel").string() +
+           " --sweeps " + (dir_ / "sim/records/sphere_sweeps.yaml").string() +
+           " --laser-plane=" + plane_;
+  }
+
+  static fs::path dir_;
+  static std::string plane_;
+};
+fs::path CalibrateJointsCli::dir_;
+std::string CalibrateJointsCli::plane_;
+
+TEST_F(CalibrateJointsCli, JointsUpdatesOnlyTheRobotAndWritesAVersionedJson) {
+  const fs::path cell = dir_ / "joints_cell.yaml";
+  fs::copy_file(dir_ / "nominal_cell.yaml", cell, fs::copy_options::overwrite_existing);
+  const std::string before = Slurp(cell);
+  std::string err;
+  ASSERT_EQ(RunCli("calibrate joints" + Common(cell.string()) + " --json " +
+                    (dir_ / "joints.json").string() + " --report " +
+                    (dir_ / "joints.html").string(), &err), 0) << err;
+  const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "joints.json"));
+  EXPECT_EQ(j["format"], "lasercell.joint_calibration");
+  EXPECT_EQ(j["version"], 1);
+  EXPECT_TRUE(j["converged"].get<bool>());
+  ASSERT_EQ(j["joint_offsets"].size(), 6u);
+  // Sphere centres free: joint 1 is not identifiable and stays at its input value.
+  EXPECT_FALSE(j["joint_offsets"][0]["estimated"].get<bool>());
+  EXPECT_EQ(j["observability"]["unidentifiable"][0]["parameters"][0], "joint_offset_1");
+  // The true offsets (truth/cell.yaml's vision robot) of joints 2..6 are recovered.
+  const lasercell::FrameGraph truth = lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
+  const auto& true_chain = dynamic_cast<const lasercell::DhChain&>(truth.Robot("vision_robot"));
+  for (int k = 1; k < 6; ++k) {
+    const double true_deg = true_chain.joints()[k].joint_offset_rad * 180 / M_PI;
+    EXPECT_NEAR(j["joint_offsets"][k]["offset_deg"].get<double>(), true_deg, 0.005) << k + 1;
+  }
+  // The cell: the vision robot changed, nothing else; it reads back and rewrites identically.
+  const std::string after = Slurp(cell);
+  const lasercell::FrameGraph updated = lasercell::LoadFrameGraph(cell.string());
+  EXPECT_EQ(lasercell::FrameGraphToYaml(updated), after);
+  const lasercell::FrameGraph original =
+      lasercell::FrameGraphFromYaml(before, "nominal_cell.yaml");
+  EXPECT_EQ(updated.static_edges().size(), original.static_edges().size());
+  for (std::size_t e = 0; e < original.static_edges().size(); ++e) {
+    EXPECT_EQ(lasercell::PoseToFileNotation(updated.static_edges()[e].parent_from_child),
+              lasercell::PoseToFileNotation(original.static_edges()[e].parent_from_child));
+  }
+  const auto& chain = dynamic_cast<const lasercell::DhChain&>(updated.Robot("vision_robot"));
+  EXPECT_NEAR(chain.joints()[2].joint_offset_rad * 180 / M_PI,
+              j["joint_offsets"][2]["offset_deg"].get<double>(), 1e-12);
+  EXPECT_NE(Slurp(dir_ / "joints.html").find("<svg"), std::string::npos);
+}
+
+// With the touched sphere tops (records/touches.yaml, 0.05 mm per axis) the centres are known
+// in vision_base through the cell, and joint 1 becomes identifiable: all 6 offsets recovered.
+TEST_F(CalibrateJointsCli, TouchesMakeJointOneIdentifiable) {
+  const fs::path cell = dir_ / "touch_cell.yaml";
+  fs::copy_file(dir_ / "nominal_cell.yaml", cell, fs::copy_options::overwrite_existing);
+  std::string err;
+  ASSERT_EQ(RunCli("calibrate joints" + Common(cell.string()) + " --touches " +
+                       (dir_ / "sim/records/touches.yaml").string() + " --json " +
+                       (dir_ / "touch.json").string(), &err), 0) << err;
+  const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "touch.json"));
+  EXPECT_TRUE(j["observability"]["unidentifiable"].empty());
+  const lasercell::FrameGraph truth = lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
+  const auto& true_chain = dynamic_cast<const lasercell::DhChain&>(truth.Robot("vision_robot"));
+  for (int k = 0; k < 6; ++k) {
+    const double true_deg = true_chain.joints()[k].joint_offset_rad * 180 / M_PI;
+    EXPECT_TRUE(j["joint_offsets"][k]["estimated"].get<bool>());
+    EXPECT_NEAR(j["joint_offsets"][k]["offset_deg"].get<double>(), true_deg, 0.005) << k + 1;
+  }
+}
+
+TEST_F(CalibrateJointsCli, HandEyeLaserUpdatesTheFlangeSensorEdge) {
+  // The true robot model (as after joint calibration) and a perturbed hand-eye start.
+  const fs::path cell = dir_ / "he_cell.yaml";
+  fs::copy_file(dir_ / "sim/truth/cell.yaml", cell, fs::copy_options::overwrite_existing);
+  std::string err;
+  ASSERT_EQ(RunCli("calibrate handeye-laser" + Common(cell.string()) + " --json " +
+                    (dir_ / "he.json").string(), &err), 0) << err;
+  const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "he.json"));
+  EXPECT_EQ(j["format"], "lasercell.laser_hand_eye");
+  EXPECT_EQ(j["version"], 1);
+  const lasercell::FrameGraph truth = lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
+  const Eigen::Isometry3d x_true = truth.Transform("vision_flange", "sensor");
+  const auto& t = j["vision_flange_from_sensor"]["translation_mm"];
+  const Eigen::Vector3d t_est(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
+  // The 12-pose default set sees every sphere at the same range: the camera centre is weakly
+  // determined (calib/laser_hand_eye tests); the error must lie within the reported 4 sigma.
+  const auto& s = j["covariance"]["sigma_translation_mm"];
+  const double sigma = std::hypot(s[0].get<double>(), s[1].get<double>(), s[2].get<double>());
+  EXPECT_LT((t_est - x_true.translation()).norm(), 4 * sigma);
+  EXPECT_GT(sigma, 0.0);
+  const lasercell::FrameGraph updated = lasercell::LoadFrameGraph(cell.string());
+  EXPECT_LT((updated.Transform("vision_flange", "sensor").translation() - t_est).norm(), 1e-9);
+  EXPECT_EQ(lasercell::FrameGraphToYaml(updated), Slurp(cell));
+}
+
+TEST_F(CalibrateJointsCli, MissingLaserPlaneAndUnknownSetAreNamed) {
+  const std::string cam = (dir_ / "sim/truth/camera.cameramodel").string();
+  const std::string sweeps = (dir_ / "sim/records/sphere_sweeps.yaml").string();
+  const std::string cell = (dir_ / "nominal_cell.yaml").string();
+  std::string err;
+  EXPECT_EQ(RunCli("calibrate joints --cell " + cell + " --camera " + cam + " --sweeps " + sweeps,
+                &err), 2);
+  EXPECT_THAT(err, HasSubstr("--laser-plane"));
+  EXPECT_EQ(RunCli("calibrate joints" + Common(cell) + " --set nope", &err), 2);
+  EXPECT_THAT(err, HasSubstr("has no sweep set 'nope'"));
+}
+
+}  // namespace

@@ -1,0 +1,218 @@
+// `lasercell scan triangulate` end to end: a simulated plane sweep written as files, the CLI run
+// as a process, its PLY read back.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "calib/camera_model.hpp"
+#include "core/frame_graph.hpp"
+#include "core/io/file_util.hpp"
+#include "core/io/point_cloud_io.hpp"
+#include "datasets/calibration_captures.hpp"
+#include "datasets/cell.hpp"
+#include "datasets/laser_renderer.hpp"
+#include "datasets/simulate.hpp"
+#include "triangulation/profile_io.hpp"
+
+namespace lasercell::triangulation {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int exit_code = -1;
+  std::string err;
+};
+
+class ScanCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("lasercell_scan_" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    // A 10-profile linear sweep of the white plane at 250 mm, camera and truth files.
+    const datasets::Scene scene = datasets::MakePlaneScene(truth_.layout, height_, {2000, 2000});
+    const datasets::LaserRenderer renderer(scene, truth_.sensor, config_.render);
+    sweep_ = datasets::MakeLinearSweep(config_, truth_.sensor);
+    datasets::SweepTiming timing = config_.timing;
+    timing.profiles = 10;
+    timing.rate_hz = 5;
+    const auto state_at = [&](double t) {
+      datasets::SensorState st;
+      st.scene_from_sensor = sweep_.At(t);
+      return st;
+    };
+    const datasets::SweepResult r = datasets::RenderSweep(renderer, state_at, timing, 3, 0, "", 1);
+    valid_ = r.valid_peaks;
+    WriteProfiles((dir_ / "plane.lcp").string(), r.profiles);
+    io::WriteFileAtomically((dir_ / "camera.cameramodel").string(),
+                            datasets::MrcalCameraModelText(truth_.sensor.camera.intrinsics()));
+    plane_ = truth_.sensor.laser.Coefficients();
+    velocity_ = sweep_.At(0).linear().transpose() * sweep_.velocity_mm_s;
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  CliRun Cli(const std::string& args) const {
+    const fs::path err = dir_ / "stderr.txt";
+    const std::string cmd =
+        std::string(LASERCELL_CLI) + " " + args + " >/dev/null 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    CliRun r;
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream in(err);
+    std::stringstream s;
+    s << in.rdbuf();
+    r.err = s.str();
+    return r;
+  }
+  std::string P(const std::string& f) const { return (dir_ / f).string(); }
+  static std::string Csv(const Eigen::VectorXd& v) {
+    std::ostringstream o;
+    o.precision(17);
+    for (int i = 0; i < v.size(); ++i) o << (i ? "," : "") << v[i];
+    return o.str();
+  }
+  // Every point within 1 mm of the plane (6 sigma of the row noise is < 0.6 mm here: the
+  // sensitivity is ~1.8 mm/px at these depths) and the points of the sweep are all there.
+  void ExpectOnPlane(const std::string& ply) const {
+    const PointCloud cloud = io::ReadPointCloud(ply);
+    EXPECT_EQ(cloud.size(), valid_);
+    EXPECT_TRUE(cloud.HasProfile());
+    EXPECT_TRUE(cloud.HasIntensity());
+    const Eigen::Isometry3d cell_from_sweep = sweep_.At(0);
+    for (const auto& p : cloud.positions) {
+      ASSERT_NEAR((cell_from_sweep * p).z(), height_, 1.0);
+    }
+  }
+
+  fs::path dir_;
+  datasets::SimConfig config_;
+  datasets::CellTruth truth_ = datasets::MakeCellTruth(config_);
+  datasets::LinearSweep sweep_;
+  Eigen::Vector4d plane_;
+  Eigen::Vector3d velocity_;
+  std::size_t valid_ = 0;
+  double height_ = 250.0;
+};
+
+TEST_F(ScanCli, TriangulatesALinearSweepWithAPlaneFromTheCommandLine) {
+  const std::string common = "scan triangulate --camera " + P("camera.cameramodel") +
+                             " --profiles " + P("plane.lcp") + " --t0-ns 1000000000" +
+                             " --velocity-mm-s " + Csv(velocity_) + " --laser-plane=" + Csv(plane_);
+  CliRun r = Cli(common + " --out " + P("fast.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ExpectOnPlane(P("fast.ply"));
+  r = Cli(common + " --exact --out " + P("exact.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ExpectOnPlane(P("exact.ply"));
+}
+
+TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
+  // cell.yaml with the laser_planes section of `lasercell calibrate laser`.
+  std::ostringstream cell;
+  cell.precision(17);
+  const Eigen::Vector3d n = plane_.head<3>();
+  const Eigen::Vector3d p0 = -plane_[3] * n;
+  cell << "format: lasercell.cell\nversion: 1\nframes: [sensor]\nrobots: []\nedges: []\n"
+       << "laser_planes:\n  version: 1\n  planes:\n    laser:\n      frame: sensor\n"
+       << "      normal: [" << n.x() << ", " << n.y() << ", " << n.z() << "]\n"
+       << "      point_mm: [" << p0.x() << ", " << p0.y() << ", " << p0.z() << "]\n";
+  io::WriteFileAtomically(P("cell.yaml"), cell.str());
+  const std::string common = "scan triangulate --camera " + P("camera.cameramodel") +
+                             " --profiles " + P("plane.lcp") + " --t0-ns 1000000000" +
+                             " --velocity-mm-s " + Csv(velocity_);
+  CliRun r = Cli(common + " --cell " + P("cell.yaml") + " --out " + P("cell.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ExpectOnPlane(P("cell.ply"));
+  // The simulator's truth/sensor.yaml.
+  std::ostringstream truth;
+  truth.precision(17);
+  truth << "format: lasercell.sim_sensor\nversion: 1\nlaser_plane_in_sensor:\n  normal: [" << n.x()
+        << ", " << n.y() << ", " << n.z() << "]\n  d_mm: " << plane_[3] << "\n";
+  io::WriteFileAtomically(P("sensor.yaml"), truth.str());
+  r = Cli(common + " --sensor-truth " + P("sensor.yaml") + " --out " + P("truth.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ExpectOnPlane(P("truth.ply"));
+}
+
+TEST_F(ScanCli, RobotSweepIsPosedThroughTheCellFile) {
+  // The simulator's arc sweep over the plane, joints in the profiles; the true cell.yaml plus
+  // the laser_planes section (which the command strips before reading the frame graph).
+  const datasets::Scene scene = datasets::MakePlaneScene(truth_.layout, 150.0, {1500, 1500});
+  const datasets::LaserRenderer renderer(scene, truth_.sensor, config_.render);
+  const datasets::JointTrajectory traj = datasets::MakeArcTrajectory(config_, truth_);
+  datasets::SweepTiming timing = config_.timing;
+  timing.profiles = 8;
+  timing.rate_hz = 7.0 / traj.times_s.back();
+  timing.jitter_s = 0;
+  const auto state_at = [&](double t) {
+    datasets::SensorState st;
+    st.joints_rad = traj.At(t);
+    st.scene_from_sensor = datasets::TrueCellFromSensor(truth_, st.joints_rad);
+    return st;
+  };
+  const datasets::SweepResult r =
+      datasets::RenderSweep(renderer, state_at, timing, 4, 6, "vision_robot", 1);
+  WriteProfiles(P("robot.lcp"), r.profiles);
+  std::ostringstream planes;
+  planes.precision(17);
+  const Eigen::Vector3d n = plane_.head<3>();
+  const Eigen::Vector3d p0 = -plane_[3] * n;
+  planes << "laser_planes:\n  version: 1\n  planes:\n    laser:\n      frame: sensor\n"
+         << "      normal: [" << n.x() << ", " << n.y() << ", " << n.z() << "]\n"
+         << "      point_mm: [" << p0.x() << ", " << p0.y() << ", " << p0.z() << "]\n";
+  io::WriteFileAtomically(P("cell.yaml"), FrameGraphToYaml(truth_.Graph()) + planes.str());
+  const CliRun run =
+      Cli("scan triangulate --camera " + P("camera.cameramodel") + " --profiles " + P("robot.lcp") +
+          " --cell " + P("cell.yaml") + " --frame cell --out " + P("robot.ply"));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const PointCloud cloud = io::ReadPointCloud(P("robot.ply"));
+  EXPECT_EQ(cloud.size(), r.valid_peaks);
+  ASSERT_GT(cloud.size(), 3000u);
+  for (const auto& p : cloud.positions) ASSERT_NEAR(p.z(), 150.0, 1.0);  // see ExpectOnPlane
+}
+
+TEST_F(ScanCli, BadInputExitsTwoWithOneLine) {
+  const std::string base = "scan triangulate --camera " + P("camera.cameramodel") + " --profiles " +
+                           P("plane.lcp") + " --out " + P("x.ply");
+  CliRun r = Cli(base);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no laser plane"), std::string::npos) << r.err;
+  r = Cli(base + " --laser-plane=0,1,0,0");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("passes through the camera centre"), std::string::npos) << r.err;
+  r = Cli(base + " --laser-plane=" + Csv(plane_) + " --velocity-mm-s 1,2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--velocity-mm-s"), std::string::npos) << r.err;
+  r = Cli(base + " --laser-plane=" + Csv(plane_) + " --frame vision_base");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--frame needs --cell"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(P("x.ply")));
+}
+
+TEST_F(ScanCli, BenchPeaksPrintsOneRowPerEstimatorAndSnr) {
+  const std::string out = P("peaks.txt");
+  const int status = std::system(
+      (std::string(LASERCELL_CLI) + " bench peaks --snr 20,50 --images 1 >" + out).c_str());
+  ASSERT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 0);
+  std::ifstream in(out);
+  std::string line;
+  int rows = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("| 20 |", 0) == 0 || line.rfind("| 50 |", 0) == 0) ++rows;
+  }
+  EXPECT_EQ(rows, 6);
+  const CliRun bad = Cli("bench peaks --snr 500");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("saturation"), std::string::npos) << bad.err;
+}
+
+}  // namespace
+}  // namespace lasercell::triangulation

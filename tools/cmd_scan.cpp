@@ -1,0 +1,216 @@
+// `lasercell scan triangulate`: laser profiles (.lcp) + camera model + laser plane -> a sweep
+// point cloud (PLY, binary little-endian) in the sensor frame, the sensor frame at t0 (linear
+// constant-velocity sweep) or a frame of the cell (robot joints in the profiles + cell.yaml).
+//
+// Laser plane, first found of: --laser-plane 'nx,ny,nz,d' (sensor frame, n . p + d = 0, mm);
+// --sensor-truth FILE (the simulator's truth/sensor.yaml: laser_plane_in_sensor {normal,
+// d_mm}); cell.yaml's `laser_planes: {version: 1, planes: {NAME: {frame: sensor, normal,
+// point_mm}}}` section (written by `lasercell calibrate laser`; NAME from --laser, default
+// "laser"). The section is read here with yaml-cpp and stripped before the frame graph is
+// parsed, so this works whether or not core's cell reader knows the section.
+#include <yaml-cpp/yaml.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "calib/camera_model.hpp"
+#include "core/error.hpp"
+#include "core/frame_graph.hpp"
+#include "core/io/file_util.hpp"
+#include "core/io/point_cloud_io.hpp"
+#include "tools/commands.hpp"
+#include "triangulation/profile_io.hpp"
+#include "triangulation/sweep.hpp"
+#include "triangulation/triangulator.hpp"
+
+namespace lasercell::tools {
+namespace {
+
+struct ScanArgs {
+  std::string cell, camera, profiles, out, sensor_truth, frame, laser = "laser";
+  std::vector<double> laser_plane, velocity;
+  long long t0_ns = 0;
+  bool have_t0 = false;
+  bool fast = false, exact = false, quiet = false;
+  int threads = 1;
+};
+
+std::string ReadText(const std::string& path) { return io::ReadFileBytes(path); }
+
+Eigen::Vector3d Vec3(const YAML::Node& node, const std::string& file, const std::string& what) {
+  if (!node || !node.IsSequence() || node.size() != 3) {
+    throw FileError(file, what + " must be a list of 3 numbers");
+  }
+  try {
+    return {node[0].as<double>(), node[1].as<double>(), node[2].as<double>()};
+  } catch (const YAML::Exception&) {
+    throw FileError(file, what + " must hold numbers");
+  }
+}
+
+YAML::Node LoadYaml(const std::string& path) {
+  try {
+    return YAML::Load(ReadText(path));
+  } catch (const YAML::Exception& e) {
+    throw FileError(path, std::string("is not valid YAML: ") + e.what());
+  }
+}
+
+// (n, d) from the simulator's truth/sensor.yaml.
+Eigen::Vector4d PlaneFromSensorTruth(const std::string& path) {
+  const YAML::Node root = LoadYaml(path);
+  if (!root["format"] || root["format"].as<std::string>() != "lasercell.sim_sensor") {
+    throw FileError(path, "is not a simulator sensor truth file (format: lasercell.sim_sensor)");
+  }
+  const YAML::Node plane = root["laser_plane_in_sensor"];
+  if (!plane || !plane["d_mm"]) {
+    throw FileError(path, "has no laser_plane_in_sensor {normal, d_mm}");
+  }
+  const Eigen::Vector3d n = Vec3(plane["normal"], path, "laser_plane_in_sensor.normal");
+  return {n.x(), n.y(), n.z(), plane["d_mm"].as<double>()};
+}
+
+// (n, d) from cell.yaml's laser_planes section, or nothing when the file has none.
+std::optional<Eigen::Vector4d> PlaneFromCell(const YAML::Node& root, const std::string& path,
+                                             const std::string& name) {
+  const YAML::Node section = root["laser_planes"];
+  if (!section) return std::nullopt;
+  const YAML::Node plane = section["planes"] ? section["planes"][name] : YAML::Node();
+  if (!plane) {
+    throw FileError(path, "has no laser plane named '" + name + "' in laser_planes.planes");
+  }
+  const std::string frame = plane["frame"] ? plane["frame"].as<std::string>() : "sensor";
+  if (frame != "sensor") {
+    throw FileError(path, "laser plane '" + name + "' is given in frame '" + frame +
+                              "'; scan triangulate needs it in 'sensor' (the camera frame)");
+  }
+  const Eigen::Vector3d n = Vec3(plane["normal"], path, "laser_planes.planes." + name + ".normal");
+  const Eigen::Vector3d p0 =
+      Vec3(plane["point_mm"], path, "laser_planes.planes." + name + ".point_mm");
+  return Eigen::Vector4d(n.x(), n.y(), n.z(), -n.dot(p0));
+}
+
+void RunTriangulate(const ScanArgs& args) {
+  if (args.fast && args.exact) throw OptionError("--fast and --exact exclude each other");
+  if (!args.velocity.empty() && !args.frame.empty()) {
+    throw OptionError(
+        "--velocity-mm-s (linear sweep) and --frame (robot sweep) exclude each other");
+  }
+  if (!args.velocity.empty() && args.velocity.size() != 3) {
+    throw OptionError("--velocity-mm-s takes three numbers vx,vy,vz (mm/s, sensor frame at t0)");
+  }
+  YAML::Node cell_root;
+  if (!args.cell.empty()) cell_root = LoadYaml(args.cell);
+
+  Eigen::Vector4d plane;
+  std::string plane_source;
+  if (!args.laser_plane.empty()) {
+    if (args.laser_plane.size() != 4) {
+      throw OptionError(
+          "--laser-plane takes four numbers nx,ny,nz,d (n . p + d = 0, sensor frame, mm)");
+    }
+    plane = Eigen::Vector4d(args.laser_plane[0], args.laser_plane[1], args.laser_plane[2],
+                            args.laser_plane[3]);
+    plane_source = "--laser-plane";
+  } else if (!args.sensor_truth.empty()) {
+    plane = PlaneFromSensorTruth(args.sensor_truth);
+    plane_source = args.sensor_truth;
+  } else if (!args.cell.empty()) {
+    const auto p = PlaneFromCell(cell_root, args.cell, args.laser);
+    if (!p) {
+      throw FileError(args.cell,
+                      "has no laser_planes section; run `lasercell calibrate laser` "
+                      "or give --laser-plane nx,ny,nz,d");
+    }
+    plane = *p;
+    plane_source = args.cell;
+  } else {
+    throw OptionError(
+        "no laser plane: give --cell CELL.yaml (with a calibrated laser plane), "
+        "--laser-plane nx,ny,nz,d or --sensor-truth truth/sensor.yaml");
+  }
+
+  const calib::CameraModel camera = calib::LoadCameraModel(args.camera);
+  const triangulation::ProfileSet profiles = triangulation::ReadProfiles(args.profiles);
+  const triangulation::Triangulator tri(camera, plane);
+
+  triangulation::SweepOptions options;
+  options.path = args.exact ? triangulation::TriangulationPath::kExact
+                            : triangulation::TriangulationPath::kFast;
+  options.threads = args.threads;
+  if (args.have_t0) options.t0_ns = args.t0_ns;
+  FrameGraph graph;
+  if (!args.velocity.empty()) {
+    options.motion = triangulation::SweepMotion::kLinear;
+    options.velocity_mm_s = Eigen::Vector3d(args.velocity[0], args.velocity[1], args.velocity[2]);
+  } else if (!args.frame.empty()) {
+    if (args.cell.empty()) throw OptionError("--frame needs --cell CELL.yaml (the frame graph)");
+    options.motion = triangulation::SweepMotion::kRobot;
+    options.target_frame = args.frame;
+    YAML::Node graph_only = YAML::Clone(cell_root);
+    graph_only.remove("laser_planes");
+    std::ostringstream text;
+    text << graph_only << "\n";
+    graph = FrameGraphFromYaml(text.str(), args.cell);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  triangulation::SweepResult result = triangulation::AssembleSweep(
+      profiles, tri, options,
+      options.motion == triangulation::SweepMotion::kRobot ? &graph : nullptr);
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  io::WritePointCloud(args.out, result.cloud);
+  if (!args.quiet) {
+    std::printf("%s; laser plane from %s; %s path, %.1f ms -> %s\n", result.Summary().c_str(),
+                plane_source.c_str(), args.exact ? "exact" : "fast", ms, args.out.c_str());
+  }
+}
+
+}  // namespace
+
+void AddScanCommands(CLI::App& app) {
+  CLI::App* scan = app.add_subcommand("scan", "Turn laser profiles into calibrated 3D sweeps");
+  scan->require_subcommand(1);
+  CLI::App* tri = scan->add_subcommand(
+      "triangulate",
+      "Profiles (.lcp) + camera + laser plane -> point cloud (PLY) in the sensor frame, the "
+      "sensor frame at t0 (--velocity-mm-s) or a cell frame (--frame, robot joints)");
+  auto args = std::make_shared<ScanArgs>();
+  tri->add_option("--camera", args->camera, "Camera model (.cameramodel, mrcal)")->required();
+  tri->add_option("--profiles", args->profiles, "Laser profiles (.lcp)")->required();
+  tri->add_option("--out", args->out, "Output point cloud (.ply binary LE, or .pcd)")->required();
+  tri->add_option("--cell", args->cell,
+                  "cell.yaml: frame graph (for --frame) and laser plane (laser_planes section)");
+  tri->add_option("--laser", args->laser, "Name of the laser plane in cell.yaml")
+      ->capture_default_str();
+  tri->add_option("--laser-plane", args->laser_plane,
+                  "Laser plane nx,ny,nz,d (n . p + d = 0 in the sensor frame, mm; write "
+                  "--laser-plane=... when nx is negative); overrides --cell")
+      ->delimiter(',');
+  tri->add_option("--sensor-truth", args->sensor_truth,
+                  "Laser plane from the simulator's truth/sensor.yaml; overrides --cell");
+  tri->add_option("--velocity-mm-s", args->velocity,
+                  "Linear sweep: sensor velocity vx,vy,vz in mm/s (sensor frame at t0; write "
+                  "--velocity-mm-s=... when vx is negative)")
+      ->delimiter(',');
+  tri->add_option("--frame", args->frame,
+                  "Robot sweep: express points in this cell frame (e.g. vision_base), posing each "
+                  "profile by its joints through cell.yaml");
+  tri->add_option("--t0-ns", args->t0_ns,
+                  "Linear sweep time origin (sensor clock, ns); default: the first profile's")
+      ->each([args](const std::string&) { args->have_t0 = true; });
+  tri->add_flag("--fast", args->fast, "Lookup-table triangulation (default)");
+  tri->add_flag("--exact", args->exact, "mrcal unprojection of every peak");
+  tri->add_option("--threads", args->threads, "Worker threads (0 = all cores)")
+      ->check(CLI::NonNegativeNumber);
+  tri->add_flag("--quiet", args->quiet, "No summary line");
+  tri->callback([args] { RunTriangulate(*args); });
+}
+
+}  // namespace lasercell::tools
