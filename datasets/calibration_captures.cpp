@@ -146,6 +146,8 @@ std::vector<PoseSweep> PlanPoseSweeps(const SimConfig& config, const CellTruth& 
     for (int attempt = 0; attempt < kAttemptsPerPose && !found; ++attempt) {
       PoseSweep p;
       p.sphere = sphere;
+      p.range_offset_mm =
+          options.range_offsets_mm[static_cast<std::size_t>(i) % options.range_offsets_mm.size()];
       // Azimuths stratified over the circle so the tilt axes spread; tilt and roll uniform.
       p.azimuth_deg = 360.0 * (i + rng.Uniform()) / options.poses - 180.0;
       p.tilt_deg = rng.Uniform(options.min_tilt_deg, options.max_tilt_deg);
@@ -162,12 +164,15 @@ std::vector<PoseSweep> PlanPoseSweeps(const SimConfig& config, const CellTruth& 
       const Eigen::Vector3d crossing =
           centers[sphere] - 0.5 * config.spheres.radius_mm * optical_axis;
       const Eigen::Vector3d direction = r_cell_sensor * truth.sensor.laser.normal_in_sensor;
+      // Backing off along the laser's central ray keeps the sphere in the laser plane.
+      const Eigen::Vector3d back_off =
+          -p.range_offset_mm * (r_cell_sensor * truth.sensor.laser.center_in_sensor);
       std::vector<Eigen::Isometry3d> waypoints;
       for (double s : {-0.5, 0.0, 0.5}) {
         Eigen::Isometry3d cell_from_sensor = Eigen::Isometry3d::Identity();
         cell_from_sensor.linear() = r_cell_sensor;
         cell_from_sensor.translation() =
-            crossing - standoff * optical_axis + s * options.sweep_length_mm * direction;
+            crossing - standoff * optical_axis + back_off + s * options.sweep_length_mm * direction;
         waypoints.push_back(cell_from_sensor);
       }
       // Middle waypoint first, from the postures in an order that varies with the pose (so the
@@ -282,6 +287,7 @@ std::string PoseSweepTruthYaml(const SimConfig& config, const CellTruth& truth,
   for (const auto& q : p.trajectory.joints_rad) {
     o << "        - " << PoseToFileNotation(TrueCellFromSensor(truth, q)) << "\n";
   }
+  o << "      range_offset_mm: " << Num(p.range_offset_mm) << "\n";
   o << "      tilt_deg: " << Num(p.tilt_deg) << "\n      azimuth_deg: " << Num(p.azimuth_deg)
     << "\n      roll_deg: " << Num(p.roll_deg) << "\n    sphere: " << p.sphere
     << "\n    sphere_radius_mm: " << Num(config.spheres.radius_mm)

@@ -47,6 +47,7 @@ struct PoseSweep {
   double tilt_deg = 0;         ///< Tilt of the optical axis from the vertical.
   double azimuth_deg = 0;      ///< Direction of the tilt axis in the cell xy plane.
   double roll_deg = 0;         ///< Roll about the vertical.
+  double range_offset_mm = 0;  ///< Sphere this much farther along the laser ray than standard.
   JointTrajectory trajectory;  ///< Commanded (nominal-IK) joints: start, middle, end.
   /// Sensor poses the NOMINAL model promises at the waypoints (what the controller believes).
   std::vector<Eigen::Isometry3d> commanded_cell_from_sensor;

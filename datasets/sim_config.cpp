@@ -68,6 +68,11 @@ void PoseSweepOptions::Check(const std::string& what) const {
     throw OptionError(what + ".profiles must be in [2, 100000] (got " + std::to_string(profiles) +
                       ")");
   }
+  if (range_offsets_mm.empty()) {
+    throw OptionError(what + ".range_offsets_mm must list at least one offset (0: all sweeps at "
+                             "the stand-off)");
+  }
+  for (double r : range_offsets_mm) CheckRange(r, -500.0, 500.0, what + ".range_offsets_mm");
 }
 
 void HandEyeImageOptions::Check(const std::string& what) const {
@@ -430,6 +435,7 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     p.Read("max_roll_deg", &options->max_roll_deg);
     p.Read("sweep_length_mm", &options->sweep_length_mm);
     p.Read("profiles", &options->profiles);
+    p.Read("range_offsets_mm", &options->range_offsets_mm);
     p.Done();
   }
   {
@@ -553,7 +559,7 @@ std::string SimConfigToYaml(const SimConfig& c) {
     o << key << ": {poses: " << p->poses << ", min_tilt_deg: " << Num(p->min_tilt_deg)
       << ", max_tilt_deg: " << Num(p->max_tilt_deg) << ", max_roll_deg: " << Num(p->max_roll_deg)
       << ", sweep_length_mm: " << Num(p->sweep_length_mm) << ", profiles: " << p->profiles
-      << "}\n";
+      << ", range_offsets_mm: " << List(p->range_offsets_mm) << "}\n";
   }
   const HandEyeImageOptions& h = c.hand_eye_images;
   o << "hand_eye_images: {images: " << h.images << ", distance_mm: " << Num(h.distance_mm)

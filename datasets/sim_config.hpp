@@ -33,8 +33,9 @@
 //   images: {exposure, ambient, background_albedo, blur_sigma_px, noise_sigma, vignetting,
 //            edge_samples}
 //   touches: {sigma_mm, tool_length_mm}
-//   eye_in_hand: {poses, min_tilt_deg, max_tilt_deg, max_roll_deg, sweep_length_mm, profiles}
-//   joint_poses: {poses, min_tilt_deg, max_tilt_deg, max_roll_deg, sweep_length_mm, profiles}
+//   eye_in_hand: {poses, min_tilt_deg, max_tilt_deg, max_roll_deg, sweep_length_mm, profiles,
+//                 range_offsets_mm}
+//   joint_poses: {... the same fields}
 //   hand_eye_images: {images, distance_mm, min_tilt_deg, max_tilt_deg, max_roll_deg,
 //                     board_height_mm, board_yaw_deg}
 //   captures: {planes, spheres, seats, trajectory, chessboard_images, laser_line_images,
@@ -73,12 +74,17 @@ struct TouchOptions {
 /// plane normal (joint-space motion between IK waypoints of the NOMINAL robot) over `profiles`
 /// exposures at timing.rate_hz.
 struct PoseSweepOptions {
-  int poses = 12;                 ///< Number of robot poses (sweeps).
+  int poses = 24;                 ///< Number of robot poses (sweeps).
   double min_tilt_deg = 5.0;      ///< Smallest tilt of the optical axis from the vertical, deg.
   double max_tilt_deg = 25.0;     ///< Largest tilt, deg.
   double max_roll_deg = 60.0;     ///< Roll about the vertical, +- deg.
   double sweep_length_mm = 80.0;  ///< Travel of each sweep, mm.
   int profiles = 40;              ///< Exposures per sweep.
+  /// Pose i sees its sphere farther along the laser's central ray by
+  /// range_offsets_mm[i % size] (the sensor backs off along that ray, so the laser plane still
+  /// cuts the sphere): sweeps at several ranges make the camera centre observable in the laser
+  /// eye-in-hand problem (at one range a rotation about the sphere is seen only through it).
+  std::vector<double> range_offsets_mm = {-100.0, 0.0, 100.0};
 
   /// Throws OptionError naming `what` and the field.
   void Check(const std::string& what) const;
@@ -166,7 +172,7 @@ struct SimConfig {
   /// Multi-pose sphere sweeps for eye-in-hand calibration (rotations about several axes).
   PoseSweepOptions eye_in_hand;
   /// >= 50 robot poses, each with a short sphere sweep, for joint-offset identification.
-  PoseSweepOptions joint_poses{50, 5.0, 35.0, 180.0, 60.0, 30};
+  PoseSweepOptions joint_poses{50, 5.0, 35.0, 180.0, 60.0, 30, {-100.0, 0.0, 100.0}};
   /// Chessboard images from the sensor camera on the vision robot (eye-in-hand, issue 7 3a).
   HandEyeImageOptions hand_eye_images;
 

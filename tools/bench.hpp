@@ -12,6 +12,9 @@ void AddBenchCommands(CLI::App& app);
 /// Registers `bench peaks` under `bench` (bench_peaks.cpp).
 void AddBenchPeaksCommand(CLI::App& bench);
 
+/// Registers `bench calibration` under `bench` (bench_calibration.cpp).
+void AddCalibrationBenchCommand(CLI::App& bench);
+
 /// Arguments of `lasercell bench robustness`.
 struct RobustnessBenchArgs {
   int placements = 200;                                  ///< Random model poses per noise level.

@@ -282,6 +282,7 @@ void AddBenchCommands(CLI::App& app) {
   rob->callback([rargs] { RunRobustnessBench(*rargs); });
 
   AddBenchPeaksCommand(*bench);
+  AddCalibrationBenchCommand(*bench);
 }
 
 }  // namespace lasercell::tools

@@ -573,7 +573,8 @@ void AddShared(CLI::App* cmd, JointsArgs& a) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--sphere-radius", a.radius_mm, "Initial sphere radius, mm (0: from the data)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-points", a.max_points, "Points per sweep used (default 300)")
+  cmd->add_option("--max-points", a.max_points,
+                  "Points per sweep used (default " + std::to_string(a.max_points) + ")")
       ->check(CLI::Range(10, 100000));
   cmd->add_option("--output", a.output, "Write the updated cell here (default: --cell in place)");
   cmd->add_option("--report", a.report, "HTML report");
@@ -600,6 +601,8 @@ void AddCalibrateJointsCommands(CLI::App& calibrate) {
                        "taken from several robot poses (robot model held)");
   auto ha = std::make_shared<JointsArgs>();
   ha->set = "eye_in_hand";
+  // Hand-eye has only 6 unknowns (+ spheres): every point helps, and it stays fast (~1 s).
+  ha->max_points = 5000;
   AddShared(he, *ha);
   he->add_option("--set", ha->set, "Sweep set in the list (default eye_in_hand)");
   he->callback([ha] { RunHandEyeLaser(*ha); });

@@ -13,6 +13,10 @@ void AddCalibrateSpheresCommand(CLI::App& calibrate);
 void AddScanCommands(CLI::App& app);  ///< scan triangulate
 /// calibrate joints, calibrate handeye-laser (under the `calibrate` parent given).
 void AddCalibrateJointsCommands(CLI::App& calibrate);
+/// calibrate handeye (cmd_calibrate_handeye.cpp); `calibrate` is the parent subcommand.
+void AddCalibrateHandEyeCommand(CLI::App& calibrate);
+/// calibrate camera (added to the `calibrate` parent subcommand).
+void AddCalibrateCameraCommand(CLI::App& calibrate);
 /// calibrate laser; `calibrate` is the parent subcommand (created once in main.cpp).
 void AddCalibrateLaserCommand(CLI::App& calibrate);
 }  // namespace lasercell::tools

@@ -24,6 +24,8 @@ int main(int argc, char** argv) {
   calibrate->require_subcommand(1);
   lasercell::tools::AddCalibrateSpheresCommand(*calibrate);
   lasercell::tools::AddCalibrateJointsCommands(*calibrate);
+  lasercell::tools::AddCalibrateHandEyeCommand(*calibrate);
+  lasercell::tools::AddCalibrateCameraCommand(*calibrate);
   lasercell::tools::AddCalibrateLaserCommand(*calibrate);
   lasercell::tools::AddBenchCommands(app);
   try {

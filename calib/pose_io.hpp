@@ -1,0 +1,80 @@
+#pragma once
+// Robot pose files for hand-eye calibration: base_from_flange per image, in mm.
+//
+// Formats:
+//  - kuka: the RWHE-Calib / kuka2 text form (Ali et al. 2019): one line per image, 16 numbers
+//    (whitespace or commas), the row-major 4x4 homogeneous base->TCP transform, translation in
+//    METRES (converted to mm here). Blank lines and lines starting with '#' are skipped.
+//  - yaml: lasercell's form (mm):
+//      format: lasercell.robot_poses
+//      version: 1
+//      # base_from_flange of each image, in image order
+//      poses:
+//        - {image: im_01.png, translation_mm: [x, y, z], rotation_wxyz: [w, x, y, z]}
+//    (`image` optional). The simulator's records/hand_eye_images.yaml (format
+//    lasercell.hand_eye_images) holds joints instead; ParseHandEyeImagesRecord reads those and
+//    the caller turns them into poses through the cell's kinematic model.
+//
+// Every reader checks: rotations orthonormal (|R^T R - I| <= 1e-6 for kuka, |q| within 1e-6 of
+// 1 for yaml; the rotation is then re-orthonormalised), translations in mm (all |t| < 5 looks
+// like metres; a mix of |t| < 5 and |t| > 50 looks like mixed units), and throws FileError
+// naming the file, the line/entry and the problem.
+
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+namespace lasercell::calib {
+
+/// Robot poses, one per image.
+struct RobotPoses {
+  std::vector<Eigen::Isometry3d> base_from_flange;  ///< mm.
+  std::vector<std::string> images;  ///< Image names when the file gives them, else empty.
+};
+
+/// Parses the kuka form (metres); `name` appears in errors.
+RobotPoses ParseKukaPoses(const std::string& text, const std::string& name);
+/// Parses the lasercell YAML form (mm); `name` appears in errors.
+RobotPoses ParseYamlPoses(const std::string& text, const std::string& name);
+
+/// records/hand_eye_images.yaml of the simulator: robot name, board and per-image joints.
+struct HandEyeImagesRecord {
+  std::string robot;                            ///< e.g. "vision_robot".
+  int inner_cols = 0, inner_rows = 0;           ///< Inner corners.
+  double square_mm = 0;                         ///< Square size.
+  std::vector<std::string> images;              ///< Relative file names.
+  std::vector<std::vector<double>> joints_rad;  ///< Per image.
+};
+/// Parses records/hand_eye_images.yaml; `name` appears in errors.
+HandEyeImagesRecord ParseHandEyeImagesRecord(const std::string& text, const std::string& name);
+
+/// The lasercell YAML text of poses (round-trips through ParseYamlPoses).
+std::string RobotPosesYaml(const RobotPoses& poses);
+
+/// Checks units of poses in mm: throws FileError(name, ...) when every translation is below
+/// 5 mm ("looks like metres") or when some are below 5 mm and others above 50 mm ("mixed units").
+void CheckPoseUnits(const std::vector<Eigen::Isometry3d>& base_from_flange,
+                    const std::string& name);
+
+/// Chessboard corner detections of several images (the committed form of real data sets, and
+/// `calibrate handeye --corners`). Text: a `# lasercell-chessboard-corners v1` first line, then
+/// `board COLS ROWS SQUARE_MM` (inner corners), `image_size WIDTH HEIGHT`, and one line per
+/// corner `IMAGE_NAME CORNER_INDEX U_PX V_PX` (corner index in OpenCV order, row by row along x;
+/// pixel (0, 0) = centre of the top-left pixel). '#' lines are comments. Images keep file order.
+struct ChessboardDetections {
+  int cols = 0, rows = 0;         ///< Inner corners.
+  double square_mm = 0;           ///< Square size.
+  int width_px = 0, height_px = 0;  ///< Image size.
+  std::vector<std::string> images;  ///< Image names, in order.
+  std::vector<std::vector<Eigen::Vector2d>> corners_px;  ///< Per image, cols * rows corners.
+};
+/// Parses the text above; throws FileError(name, ...) naming the line.
+ChessboardDetections ParseChessboardDetections(const std::string& text, const std::string& name);
+/// Writes the text above (pixels with 4 decimals).
+std::string ChessboardDetectionsText(const ChessboardDetections& detections,
+                                     const std::string& comment = "");
+
+/// Reads a pose file; format "kuka", "yaml" or "auto" (yaml when the text has a `format:` key).
+RobotPoses LoadRobotPoses(const std::string& path, const std::string& format = "auto");
+
+}  // namespace lasercell::calib

@@ -1,0 +1,281 @@
+#include "calib/target_detection.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/aruco/charuco.hpp>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <utility>
+
+#include "core/error.hpp"
+
+namespace lasercell::calib {
+namespace {
+
+cv::aruco::PREDEFINED_DICTIONARY_NAME DictionaryByName(const std::string& name) {
+  static const std::pair<const char*, cv::aruco::PREDEFINED_DICTIONARY_NAME> kNames[] = {
+      {"DICT_4X4_50", cv::aruco::DICT_4X4_50},
+      {"DICT_4X4_100", cv::aruco::DICT_4X4_100},
+      {"DICT_4X4_250", cv::aruco::DICT_4X4_250},
+      {"DICT_4X4_1000", cv::aruco::DICT_4X4_1000},
+      {"DICT_5X5_50", cv::aruco::DICT_5X5_50},
+      {"DICT_5X5_100", cv::aruco::DICT_5X5_100},
+      {"DICT_5X5_250", cv::aruco::DICT_5X5_250},
+      {"DICT_5X5_1000", cv::aruco::DICT_5X5_1000},
+      {"DICT_6X6_50", cv::aruco::DICT_6X6_50},
+      {"DICT_6X6_100", cv::aruco::DICT_6X6_100},
+      {"DICT_6X6_250", cv::aruco::DICT_6X6_250},
+      {"DICT_6X6_1000", cv::aruco::DICT_6X6_1000},
+      {"DICT_7X7_50", cv::aruco::DICT_7X7_50},
+      {"DICT_7X7_100", cv::aruco::DICT_7X7_100},
+      {"DICT_7X7_250", cv::aruco::DICT_7X7_250},
+      {"DICT_7X7_1000", cv::aruco::DICT_7X7_1000},
+      {"DICT_ARUCO_ORIGINAL", cv::aruco::DICT_ARUCO_ORIGINAL},
+      {"DICT_APRILTAG_16h5", cv::aruco::DICT_APRILTAG_16h5},
+      {"DICT_APRILTAG_25h9", cv::aruco::DICT_APRILTAG_25h9},
+      {"DICT_APRILTAG_36h10", cv::aruco::DICT_APRILTAG_36h10},
+      {"DICT_APRILTAG_36h11", cv::aruco::DICT_APRILTAG_36h11},
+  };
+  for (const auto& [n, v] : kNames) {
+    if (name == n) return v;
+  }
+  throw OptionError("BoardSpec.dictionary '" + name +
+                    "' is not an OpenCV ArUco dictionary (DICT_4X4_50 ... DICT_7X7_1000, "
+                    "DICT_ARUCO_ORIGINAL, DICT_APRILTAG_16h5/25h9/36h10/36h11)");
+}
+
+// Smallest distance between grid neighbours (5th percentile, robust to one bad corner), px.
+double SquareSizePx(const std::vector<cv::Point2f>& corners, const std::vector<int>& ids, int nx) {
+  std::vector<double> d;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    for (std::size_t j = 0; j < ids.size(); ++j) {
+      const bool right = ids[j] == ids[i] + 1 && ids[i] % nx != nx - 1;
+      const bool below = ids[j] == ids[i] + nx;
+      if (right || below) d.push_back(cv::norm(corners[i] - corners[j]));
+    }
+  }
+  if (d.empty()) return 0;
+  std::sort(d.begin(), d.end());
+  return d[d.size() / 20];
+}
+
+void Refine(const cv::Mat& gray, std::vector<cv::Point2f>& corners, const std::vector<int>& ids,
+            int nx, const DetectionOptions& options, TargetDetection& out) {
+  out.square_px = SquareSizePx(corners, ids, nx);
+  if (!options.refine || corners.empty()) return;
+  const int half = std::clamp(static_cast<int>(std::floor(options.refine_window_fraction *
+                                                          out.square_px)),
+                              options.min_refine_half_window_px,
+                              options.max_refine_half_window_px);
+  const std::vector<cv::Point2f> before = corners;
+  cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1),
+                   cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+  out.refine_half_window_px = half;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    out.max_refine_shift_px =
+        std::max(out.max_refine_shift_px, static_cast<double>(cv::norm(corners[i] - before[i])));
+  }
+}
+
+void Store(const std::vector<cv::Point2f>& corners, const std::vector<int>& ids,
+           TargetDetection& out) {
+  out.corners_px.clear();
+  for (const cv::Point2f& c : corners) out.corners_px.emplace_back(c.x, c.y);
+  out.corner_ids = ids;
+}
+
+void DetectChessboard(const cv::Mat& gray, const BoardSpec& board, const DetectionOptions& options,
+                      TargetDetection& out) {
+  const cv::Size pattern(board.cols, board.rows);
+  std::vector<cv::Point2f> corners;
+  bool found = cv::findChessboardCornersSB(gray, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE);
+  if (!found) {
+    found = cv::findChessboardCorners(
+        gray, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+  }
+  if (!found) {
+    found = cv::findChessboardCornersSB(gray, pattern, corners,
+                                        cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
+  }
+  if (found && static_cast<int>(corners.size()) == board.NumCorners()) {
+    // The detectors may return a mirrored order (rows or columns reversed), i.e. the board seen
+    // from behind. Reverse the rows of a left-handed grid so every view has the board's z
+    // pointing away from the camera (board x along increasing ids, y down the rows).
+    const cv::Point2f dx = corners[1] - corners[0];
+    const cv::Point2f dy = corners[board.cols] - corners[0];
+    if (dx.x * dy.y - dx.y * dy.x < 0) {
+      for (int r = 0; r < board.rows; ++r) {
+        std::reverse(corners.begin() + r * board.cols, corners.begin() + (r + 1) * board.cols);
+      }
+    }
+    std::vector<int> ids(corners.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int>(i);
+    Refine(gray, corners, ids, board.cols, options, out);
+    Store(corners, ids, out);
+    out.status = DetectionStatus::kFound;
+    out.message = "found " + std::to_string(corners.size()) + " corners (square " +
+                  std::to_string(static_cast<int>(std::lround(out.square_px))) +
+                  " px, refinement half window " + std::to_string(out.refine_half_window_px) +
+                  " px)";
+    return;
+  }
+  out.status = DetectionStatus::kNotFound;
+  out.message = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+                " chessboard (inner corners) found";
+  if (!options.diagnose_board_size) return;
+  // Any chessboard of at least 3x3 inner corners: CALIB_CB_LARGER lets SB grow the grid to the
+  // whole board and reports its size through `meta`.
+  std::vector<cv::Point2f> any;
+  cv::Mat meta;
+  if (cv::findChessboardCornersSB(gray, cv::Size(3, 3), any,
+                                  cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER, meta) &&
+      !meta.empty()) {
+    const int c = meta.cols;
+    const int r = meta.rows;
+    if ((c == board.cols && r == board.rows) || (c == board.rows && r == board.cols)) {
+      out.message += " although a board of that size is visible (blurred, cut off or low "
+                     "contrast?)";
+      return;
+    }
+    out.status = DetectionStatus::kWrongBoardSize;
+    out.message = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+                  " chessboard found, but a " + std::to_string(c) + "x" + std::to_string(r) +
+                  " one (inner corners) is visible: wrong board size in the board spec? (a "
+                  "board partly outside the image also looks smaller)";
+  }
+}
+
+void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionOptions& options,
+                   TargetDetection& out) {
+  const cv::Ptr<cv::aruco::Dictionary> dictionary =
+      cv::aruco::getPredefinedDictionary(DictionaryByName(board.dictionary));
+  const cv::Ptr<cv::aruco::CharucoBoard> charuco = cv::aruco::CharucoBoard::create(
+      board.cols, board.rows, static_cast<float>(board.square_mm),
+      static_cast<float>(board.marker_mm), dictionary);
+  std::vector<std::vector<cv::Point2f>> marker_corners, rejected;
+  std::vector<int> marker_ids;
+  const cv::Ptr<cv::aruco::DetectorParameters> params = cv::aruco::DetectorParameters::create();
+  cv::aruco::detectMarkers(gray, dictionary, marker_corners, marker_ids, params, rejected);
+  if (marker_ids.empty()) {
+    out.status = DetectionStatus::kNotFound;
+    out.message = "no ArUco marker of " + board.dictionary + " found";
+    return;
+  }
+  std::vector<cv::Point2f> corners;
+  std::vector<int> ids;
+  if (cv::aruco::interpolateCornersCharuco(marker_corners, marker_ids, gray, charuco, corners,
+                                           ids) <= 0) {
+    corners.clear();
+    ids.clear();
+  }
+  if (static_cast<int>(ids.size()) < options.min_charuco_corners) {
+    out.status = ids.empty() ? DetectionStatus::kNotFound : DetectionStatus::kTooFewCorners;
+    out.message = std::to_string(marker_ids.size()) + " markers but only " +
+                  std::to_string(ids.size()) + " ChArUco corners (need " +
+                  std::to_string(options.min_charuco_corners) +
+                  "): wrong board size or marker dictionary?";
+    return;
+  }
+  Refine(gray, corners, ids, board.CornersX(), options, out);
+  Store(corners, ids, out);
+  out.status = DetectionStatus::kFound;
+  out.message = "found " + std::to_string(ids.size()) + " of " +
+                std::to_string(board.NumCorners()) + " ChArUco corners (" +
+                std::to_string(marker_ids.size()) + " markers)";
+}
+
+}  // namespace
+
+const char* DetectionStatusName(DetectionStatus status) {
+  switch (status) {
+    case DetectionStatus::kFound: return "found";
+    case DetectionStatus::kUnreadable: return "unreadable";
+    case DetectionStatus::kNotFound: return "not_found";
+    case DetectionStatus::kWrongBoardSize: return "wrong_board_size";
+    case DetectionStatus::kTooFewCorners: return "too_few_corners";
+  }
+  return "unknown";
+}
+
+void DetectionOptions::Check() const {
+  if (!(refine_window_fraction > 0 && refine_window_fraction < 0.5)) {
+    throw OptionError("DetectionOptions.refine_window_fraction must be in (0, 0.5)");
+  }
+  if (min_refine_half_window_px < 1 || max_refine_half_window_px < min_refine_half_window_px) {
+    throw OptionError(
+        "DetectionOptions.min_refine_half_window_px must be >= 1 and <= max_refine_half_window_px");
+  }
+  if (min_charuco_corners < 4) {
+    throw OptionError("DetectionOptions.min_charuco_corners must be >= 4");
+  }
+}
+
+std::optional<GrayImage> DecodeGrayImage(const std::string& bytes) {
+  if (bytes.empty()) return std::nullopt;
+  cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8UC1,
+              const_cast<char*>(bytes.data()));  // imdecode only reads
+  cv::Mat gray;
+  try {
+    gray = cv::imdecode(raw, cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception&) {
+    return std::nullopt;
+  }
+  if (gray.empty() || gray.type() != CV_8UC1) return std::nullopt;
+  GrayImage image;
+  image.width = gray.cols;
+  image.height = gray.rows;
+  image.pixels.resize(static_cast<std::size_t>(gray.cols) * gray.rows);
+  for (int r = 0; r < gray.rows; ++r) {
+    std::copy(gray.ptr<std::uint8_t>(r), gray.ptr<std::uint8_t>(r) + gray.cols,
+              image.pixels.begin() + static_cast<std::ptrdiff_t>(r) * gray.cols);
+  }
+  return image;
+}
+
+TargetDetection DetectTarget(const GrayImage& image, const BoardSpec& board,
+                             const DetectionOptions& options) {
+  board.Check();
+  options.Check();
+  TargetDetection out;
+  out.width = image.width;
+  out.height = image.height;
+  if (image.width <= 0 || image.height <= 0 ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * image.height) {
+    out.status = DetectionStatus::kUnreadable;
+    out.message = "empty image or pixel count does not match its size";
+    return out;
+  }
+  const cv::Mat gray(image.height, image.width, CV_8UC1,
+                     const_cast<std::uint8_t*>(image.pixels.data()));  // read only
+  try {
+    if (board.type == BoardType::kChessboard) {
+      DetectChessboard(gray, board, options, out);
+    } else {
+      DetectCharuco(gray, board, options, out);
+    }
+  } catch (const cv::Exception& e) {
+    out = TargetDetection{};
+    out.width = image.width;
+    out.height = image.height;
+    out.status = DetectionStatus::kNotFound;
+    out.message = std::string("OpenCV failed on this image: ") + e.what();
+  }
+  return out;
+}
+
+TargetDetection DetectTargetInEncodedImage(const std::string& bytes, const BoardSpec& board,
+                                           const DetectionOptions& options) {
+  const std::optional<GrayImage> image = DecodeGrayImage(bytes);
+  if (!image) {
+    board.Check();
+    TargetDetection out;
+    out.status = DetectionStatus::kUnreadable;
+    out.message = bytes.empty() ? "empty file, not an image"
+                                : "not a readable image (JPEG, PNG, TIFF, BMP, ... expected)";
+    return out;
+  }
+  return DetectTarget(*image, board, options);
+}
+
+}  // namespace lasercell::calib

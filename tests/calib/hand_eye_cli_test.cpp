@@ -1,0 +1,177 @@
+// `lasercell calibrate handeye` end to end on the committed kuka2 detections (no images needed):
+// the cell gets only the vision_flange -> sensor edge, the JSON re-reads with its version and
+// poses in the file notation, the report has its plots; bad inputs exit 2 with a named error.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "core/frame_graph.hpp"
+#include "core/io/file_util.hpp"
+#include "calib/pose_io.hpp"
+#include "datasets/calibration_captures.hpp"
+#include "datasets/sensor.hpp"
+#include "datasets/sim_config.hpp"
+#include "datasets/simulate.hpp"
+#include <random>
+
+namespace lasercell {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int code = 0;
+  std::string output;
+};
+
+CliRun RunCli(const std::string& args) {
+  const std::string cmd = std::string(LASERCELL_CLI) + " " + args + " 2>&1";
+  CliRun r;
+  FILE* p = popen(cmd.c_str(), "r");
+  if (!p) return {-1, "popen failed"};
+  char buf[4096];
+  while (std::fgets(buf, sizeof buf, p)) r.output += buf;
+  const int status = pclose(p);
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+class HandEyeCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("lasercell_handeye_cli_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+    FrameGraph g;
+    g.AddFrame("vision_base");
+    StaticEdge e;
+    e.parent = "vision_base";
+    e.child = "vision_flange";
+    e.SetParentFromChild(Eigen::Isometry3d::Identity());
+    g.SetStaticEdge(e);
+    SaveFrameGraph((dir_ / "cell.yaml").string(), g);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string Data(const std::string& f) const {
+    return std::string(LASERCELL_SOURCE_DIR) + "/datasets/real/handeye_kuka2/" + f;
+  }
+  fs::path dir_;
+};
+
+TEST_F(HandEyeCli, Kuka2CornersUpdateOnlyTheFlangeEdgeAndWriteJsonAndReport) {
+  const std::string cell = (dir_ / "cell.yaml").string();
+  const std::string json = (dir_ / "he.json").string();
+  const std::string html = (dir_ / "he.html").string();
+  const CliRun r = RunCli("calibrate handeye --cell " + cell + " --camera " +
+                       Data("camera.cameramodel") + " --corners " + Data("corners.txt") +
+                       " --poses " + Data("RobotPosesVec.txt") +
+                       " --pose-format kuka --json " + json + " --report " + html);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const FrameGraph g = LoadFrameGraph(cell);
+  ASSERT_EQ(g.static_edges().size(), 2u);
+  EXPECT_EQ(g.static_edges()[0].child, "vision_flange");  // untouched
+  EXPECT_LT(g.static_edges()[0].ParentFromChild().translation().norm(), 1e-12);
+  const StaticEdge& he = g.static_edges()[1];
+  EXPECT_EQ(he.parent, "vision_flange");
+  EXPECT_EQ(he.child, "sensor");
+  ASSERT_TRUE(he.covariance.has_value());
+
+  const nlohmann::json j = nlohmann::json::parse(io::ReadFileBytes(json));
+  EXPECT_EQ(j["format"], "lasercell.hand_eye");
+  EXPECT_EQ(j["version"], 1);
+  ASSERT_EQ(j["flange_from_camera"]["translation_mm"].size(), 3u);
+  ASSERT_EQ(j["flange_from_camera"]["rotation_wxyz"].size(), 4u);
+  ASSERT_EQ(j["base_from_board"]["translation_mm"].size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(j["flange_from_camera"]["translation_mm"][k].get<double>(),
+                he.parent_from_child.translation_mm[k], 1e-9);
+  }
+  EXPECT_EQ(j["views"].size(), 28u);
+  EXPECT_EQ(j["axxb"]["motions"].size(), 27u);
+  EXPECT_GT(j["reprojection_rms_px"].get<double>(), 0.0);
+  const std::string page = io::ReadFileBytes(html);
+  EXPECT_NE(page.find("data-plot='Corner residuals, u'"), std::string::npos);
+  EXPECT_NE(page.find("data-plot='AX-XB rotation residual per motion'"), std::string::npos);
+}
+
+TEST_F(HandEyeCli, MismatchedPoseCountIsRejected) {
+  std::istringstream in(io::ReadFileBytes(Data("RobotPosesVec.txt")));
+  std::string line, text;
+  for (int i = 0; i < 27 && std::getline(in, line); ++i) text += line + "\n";
+  const std::string poses = (dir_ / "poses27.txt").string();
+  io::WriteFileAtomically(poses, text);
+  const CliRun r = RunCli("calibrate handeye --cell " + (dir_ / "cell.yaml").string() +
+                       " --camera " + Data("camera.cameramodel") + " --corners " +
+                       Data("corners.txt") + " --poses " + poses + " --pose-format kuka");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("28 images in"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("but 27 poses in"), std::string::npos) << r.output;
+}
+
+TEST_F(HandEyeCli, PosesInMetresGivenAsYamlAreRejected) {
+  const std::string poses = (dir_ / "poses.yaml").string();
+  io::WriteFileAtomically(
+      poses,
+      "format: lasercell.robot_poses\nversion: 1\nposes:\n"
+      "  - {translation_mm: [0.5, 0.1, 0.9], rotation_wxyz: [1, 0, 0, 0]}\n"
+      "  - {translation_mm: [0.6, 0.1, 0.9], rotation_wxyz: [0.9950041652780258, 0.09983341664682815, 0, 0]}\n");
+  const CliRun r = RunCli("calibrate handeye --cell " + (dir_ / "cell.yaml").string() +
+                       " --camera " + Data("camera.cameramodel") + " --corners " +
+                       Data("corners.txt") + " --poses " + poses);
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("look like metres"), std::string::npos) << r.output;
+}
+
+// The simulator's record path: records/hand_eye_images.yaml (commanded joints) through the robot
+// of the true cell.yaml, corners = the plan's true projections + N(0, 0.03 px) as a corners file;
+// the new edge is within the 0.05 mm / 0.02 deg of the true one.
+TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
+  datasets::SimConfig config;
+  const datasets::CellTruth truth = datasets::MakeCellTruth(config);
+  const datasets::ChessboardTarget board = config.chessboard;
+  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
+  const std::string cell = (dir_ / "cell.yaml").string();
+  io::WriteFileAtomically(cell, FrameGraphToYaml(truth.Graph()));
+  io::WriteFileAtomically((dir_ / "camera.cameramodel").string(),
+                          datasets::MrcalCameraModelText(config.sensor.camera));
+  io::WriteFileAtomically((dir_ / "record.yaml").string(),
+                          datasets::HandEyeImagesRecordYaml(board, set));
+  calib::ChessboardDetections det;
+  det.cols = board.squares_x - 1;
+  det.rows = board.squares_y - 1;
+  det.square_mm = board.square_mm;
+  det.width_px = config.sensor.camera.width_px;
+  det.height_px = config.sensor.camera.height_px;
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  for (std::size_t i = 0; i < set.images.size(); ++i) {
+    det.images.push_back(fs::path(datasets::HandEyeImageFile(i)).filename().string());
+    det.corners_px.emplace_back();
+    for (const auto& q : set.images[i].corners_px) {
+      det.corners_px.back().push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
+    }
+  }
+  io::WriteFileAtomically((dir_ / "corners.txt").string(), calib::ChessboardDetectionsText(det));
+  const CliRun r = RunCli("calibrate handeye --cell " + cell + " --camera " +
+                          (dir_ / "camera.cameramodel").string() + " --corners " +
+                          (dir_ / "corners.txt").string() + " --poses " +
+                          (dir_ / "record.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const FrameGraph g = LoadFrameGraph(cell);
+  const Eigen::Isometry3d got = g.Transform("vision_flange", "sensor");
+  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.output;
+  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.output;
+}
+
+}  // namespace
+}  // namespace lasercell
