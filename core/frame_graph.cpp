@@ -5,6 +5,7 @@
 #include "core/frame_graph.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <deque>
 #include <utility>
 
@@ -76,7 +77,8 @@ void StaticEdge::SetParentFromChild(const Eigen::Isometry3d& pose) {
 FrameGraph::FrameGraph(const FrameGraph& other)
     : frames_(other.frames_),
       static_edges_(other.static_edges_),
-      dynamic_edges_(other.dynamic_edges_) {
+      dynamic_edges_(other.dynamic_edges_),
+      laser_planes_(other.laser_planes_) {
   for (const auto& [name, model] : other.robots_) robots_.emplace(name, model->Clone());
 }
 
@@ -126,6 +128,38 @@ void FrameGraph::SetStaticEdge(const StaticEdge& edge) {
   AddFrame(edge.parent);
   AddFrame(edge.child);
   static_edges_.push_back(edge);
+}
+
+void FrameGraph::SetLaserPlane(const std::string& name, const LaserPlaneEntry& plane) {
+  if (!IsLowerSnakeCase(name)) {
+    throw InputError("laser plane name '" + name +
+                     "' is not lower snake case ([a-z][a-z0-9_]*); use e.g. 'laser'");
+  }
+  CheckFrameName(plane.frame);
+  const std::string what = "laser plane '" + name + "'";
+  if (!plane.normal.allFinite() || !plane.point_mm.allFinite()) {
+    throw InputError(what + ": normal or point_mm is not finite; pass finite values");
+  }
+  if (!(std::abs(plane.normal.norm() - 1.0) <= 1e-9)) {
+    throw InputError(what + ": normal has norm " + FormatDouble(plane.normal.norm()) +
+                     "; expected a unit vector (norm within 1e-9 of 1)");
+  }
+  if (plane.covariance) {
+    const Eigen::Matrix4d& c = *plane.covariance;
+    if (!c.allFinite()) {
+      throw InputError(what + " covariance has non-finite entries; pass a finite 4x4 matrix");
+    }
+    const double scale = std::max(1.0, c.cwiseAbs().maxCoeff());
+    if ((c - c.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) {
+      throw InputError(what + " covariance is not symmetric; pass a symmetric 4x4 matrix");
+    }
+  }
+  AddFrame(plane.frame);
+  laser_planes_[name] = plane;
+}
+
+bool FrameGraph::RemoveLaserPlane(const std::string& name) {
+  return laser_planes_.erase(name) > 0;
 }
 
 void FrameGraph::SetDynamicEdge(const DynamicEdge& edge) {

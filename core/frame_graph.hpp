@@ -23,6 +23,17 @@
 //   rewritten in this order). Poses are {translation_mm: [x, y, z], rotation_wxyz: [w, x, y,
 //   z]}; numbers are printed as the shortest text that reads back to the same double; the file
 //   is written atomically. Every tool updates only its own edges, hence only their lines.
+//   Optional last section `laser_planes` (omitted when there are none), versioned on its own:
+//     laser_planes:
+//       version: 1
+//       planes:
+//         laser:
+//           frame: sensor
+//           normal: [nx, ny, nz]
+//           point_mm: [x, y, z]
+//           covariance: [16 numbers, row-major 4x4 over [n; d]]   # optional
+//           provenance: {tool: "...", date: "...", input_digest: "...", residual_summary: "..."}
+//   The plane is n . p + d = 0 in `frame`, d = -n . point_mm (LaserPlaneEntry).
 // Round trip: for any file FrameGraphToYaml wrote, FrameGraphFromYaml then FrameGraphToYaml
 //   gives the identical text, and reading that again gives the identical doubles (static
 //   edges and robots' mounts hold the file's quaternions and translations themselves). So for
@@ -78,6 +89,22 @@ struct DynamicEdge {
   std::string robot;   ///< Robot name, key into JointValues, e.g. "vision_robot".
 };
 
+/// A laser light plane, n . p + d = 0 for points p of `frame` (for a laser-triangulation sensor
+/// the `sensor` frame, i.e. the camera frame). Stored as the cell file holds it: the unit normal
+/// and a point on the plane (p0), both kept exactly as given or read.
+struct LaserPlaneEntry {
+  std::string frame = "sensor";  ///< Frame the plane is expressed in.
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  ///< Unit normal (|n| within 1e-9 of 1).
+  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();  ///< A point of the plane (p0), mm.
+  /// Optional 4x4 covariance over [n (3, unitless); d (mm)] with d = -n . p0 (rank 3: the
+  /// normal is unit), as the calibration estimated it.
+  std::optional<Eigen::Matrix4d> covariance;
+  EdgeProvenance provenance;  ///< Which calibration produced it.
+
+  /// d of n . p + d = 0 (mm): minus the signed distance of the frame origin along n.
+  double OffsetMm() const { return -normal.dot(point_mm); }
+};
+
 /// Joint values (rad) per robot name.
 using JointValues = std::map<std::string, std::vector<double>>;
 
@@ -107,6 +134,15 @@ class FrameGraph {
   void SetDynamicEdge(const DynamicEdge& edge);
   /// Registers (or replaces) the kinematic model of a robot.
   void SetRobot(const std::string& robot, const KinematicModel& model);
+  /// Adds or replaces the laser plane `name` (lower snake case, e.g. "laser"); its frame is added
+  /// when missing. Throws InputError when the name is not lower snake case, the normal is not
+  /// unit (within 1e-9), a value is not finite or the covariance is not symmetric.
+  void SetLaserPlane(const std::string& name, const LaserPlaneEntry& plane);
+  /// Removes a laser plane; returns false when there was none.
+  bool RemoveLaserPlane(const std::string& name);
+  /// Laser planes by name (sorted).
+  const std::map<std::string, LaserPlaneEntry>& laser_planes() const { return laser_planes_; }
+
   /// Removes the edge between a and b (either direction); returns false when there was none.
   bool RemoveEdge(const std::string& a, const std::string& b);
 
@@ -140,7 +176,11 @@ class FrameGraph {
   std::vector<StaticEdge> static_edges_;
   std::vector<DynamicEdge> dynamic_edges_;
   std::map<std::string, std::unique_ptr<KinematicModel>> robots_;
+  std::map<std::string, LaserPlaneEntry> laser_planes_;
 };
+
+/// Version of the optional `laser_planes` section of cell.yaml.
+inline constexpr int kLaserPlanesSectionVersion = 1;
 
 /// Cell-file format name (the `format:` field) and current version.
 inline constexpr const char* kCellFormatName = "lasercell.cell";

@@ -28,8 +28,11 @@ namespace {
 
 // Allowed fields per mapping; anything else is reported as a typo.
 using Fields = std::span<const std::string_view>;
-constexpr std::array<std::string_view, 5> kTopFields = {"format", "version", "frames", "robots",
-                                                        "edges"};
+constexpr std::array<std::string_view, 6> kTopFields = {"format", "version", "frames",
+                                                        "robots", "edges", "laser_planes"};
+constexpr std::array<std::string_view, 2> kLaserSectionFields = {"version", "planes"};
+constexpr std::array<std::string_view, 5> kLaserPlaneFields = {"frame", "normal", "point_mm",
+                                                               "covariance", "provenance"};
 constexpr std::array<std::string_view, 5> kRobotFields = {"model", "convention", "base_from_chain",
                                                           "chain_from_flange", "joints"};
 constexpr std::array<std::string_view, 5> kJointFields = {"a_mm", "alpha_rad", "d_mm",
@@ -107,6 +110,9 @@ class CellReader {
     }
     if (const auto edges = Find(root, "edges"); edges && !edges->IsNull()) {
       ReadEdges(*edges, graph);
+    }
+    if (const auto planes = Find(root, "laser_planes"); planes && !planes->IsNull()) {
+      ReadLaserPlanes(*planes, graph);
     }
     return graph;
   }
@@ -269,6 +275,67 @@ class CellReader {
                                      std::move(rows), base_from_chain, chain_from_flange));
       } catch (const InputError& e) {
         Fail(where + ": " + e.what(), robot);
+      }
+    }
+  }
+
+  EdgeProvenance ProvenanceOf(const YAML::Node& node, const std::string& pw) {
+    ExpectMap(node, pw);
+    CheckKeys(node, kProvenanceFields, pw);
+    const auto text = [&](const char* key) {
+      const auto n = Find(node, key);
+      return n ? Text(*n, pw + " " + key) : std::string();
+    };
+    return {text("tool"), text("date"), text("input_digest"), text("residual_summary")};
+  }
+
+  void ReadLaserPlanes(const YAML::Node& section, FrameGraph& graph) {
+    ExpectMap(section, "laser_planes");
+    CheckKeys(section, kLaserSectionFields, "laser_planes");
+    const YAML::Node version = Require(section, "version", "laser_planes");
+    const std::string text = version.IsScalar() ? version.Scalar() : "";
+    if (text != std::to_string(kLaserPlanesSectionVersion)) {
+      Fail("laser_planes version is " + Kind(version) + "; this lasercell reads version " +
+               std::to_string(kLaserPlanesSectionVersion) +
+               " (use the lasercell that wrote the file)",
+           version);
+    }
+    const YAML::Node planes = Require(section, "planes", "laser_planes");
+    ExpectMap(planes, "laser_planes planes");
+    for (auto it = planes.begin(); it != planes.end(); ++it) {
+      const std::string name = Text(it->first, "a laser plane name");
+      const std::string where = "laser plane '" + name + "'";
+      if (graph.laser_planes().count(name) > 0) {
+        Fail(where + " is listed twice under laser_planes; keep one", it->first);
+      }
+      const YAML::Node node = it->second;
+      ExpectMap(node, where);
+      CheckKeys(node, kLaserPlaneFields, where);
+      LaserPlaneEntry plane;
+      const YAML::Node frame = Require(node, "frame", where);
+      plane.frame = Text(frame, where + " frame");
+      if (!graph.HasFrame(plane.frame)) {
+        Fail(where + ": frame '" + plane.frame +
+                 "' is not listed in frames; add it there or fix the name (frames: " +
+                 Joined(graph.Frames()) + ")",
+             frame);
+      }
+      const auto n = Numbers(Require(node, "normal", where), 3, where + " normal");
+      const auto p = Numbers(Require(node, "point_mm", where), 3, where + " point_mm");
+      plane.normal = Eigen::Vector3d(n[0], n[1], n[2]);
+      plane.point_mm = Eigen::Vector3d(p[0], p[1], p[2]);
+      if (const auto c = Find(node, "covariance")) {
+        const auto values = Numbers(*c, 16, where + " covariance");
+        plane.covariance =
+            Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(values.data());
+      }
+      if (const auto pr = Find(node, "provenance")) {
+        plane.provenance = ProvenanceOf(*pr, where + " provenance");
+      }
+      try {
+        graph.SetLaserPlane(name, plane);
+      } catch (const InputError& e) {
+        Fail(e.what(), node);
       }
     }
   }

@@ -158,6 +158,39 @@ std::string FrameGraphToYaml(const FrameGraph& graph) {
     out += "  - parent: " + NameToken(edge.parent) + "\n    child: " + NameToken(edge.child) +
            "\n    type: dynamic\n    robot: " + NameToken(edge.robot) + "\n";
   }
+  if (!graph.laser_planes().empty()) {
+    out += "laser_planes:\n  version: " + std::to_string(kLaserPlanesSectionVersion) +
+           "\n  planes:\n";
+    for (const auto& [name, plane] : graph.laser_planes()) {
+      const std::string what = "laser plane '" + name + "'";
+      const auto vec = [&](const Eigen::Vector3d& v) {
+        std::string text("[");
+        for (int k = 0; k < 3; ++k) {
+          if (k > 0) text.append(", ");
+          text.append(Number(v(k), what));
+        }
+        text.append("]");
+        return text;
+      };
+      out += "    " + NameToken(name) + ":\n      frame: " + NameToken(plane.frame) +
+             "\n      normal: " + vec(plane.normal) + "\n      point_mm: " + vec(plane.point_mm) +
+             "\n";
+      if (plane.covariance) {
+        out += "      covariance: [";
+        for (int r = 0; r < 4; ++r) {
+          if (r > 0) out += ",\n                   ";
+          for (int c = 0; c < 4; ++c) {
+            out += (c > 0 ? ", " : "") + Number((*plane.covariance)(r, c), what + " covariance");
+          }
+        }
+        out += "]\n";
+      }
+      const EdgeProvenance& p = plane.provenance;
+      out += "      provenance: {tool: " + Quoted(p.tool) + ", date: " + Quoted(p.date) +
+             ", input_digest: " + Quoted(p.input_digest) +
+             ", residual_summary: " + Quoted(p.residual_summary) + "}\n";
+    }
+  }
   return out;
 }
 

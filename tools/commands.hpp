@@ -17,4 +17,6 @@ void AddCalibrateJointsCommands(CLI::App& calibrate);
 void AddCalibrateHandEyeCommand(CLI::App& calibrate);
 /// calibrate camera (added to the `calibrate` parent subcommand).
 void AddCalibrateCameraCommand(CLI::App& calibrate);
+/// calibrate laser; `calibrate` is the parent subcommand (created once in main.cpp).
+void AddCalibrateLaserCommand(CLI::App& calibrate);
 }  // namespace lasercell::tools

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   lasercell::tools::AddCalibrateJointsCommands(*calibrate);
   lasercell::tools::AddCalibrateHandEyeCommand(*calibrate);
   lasercell::tools::AddCalibrateCameraCommand(*calibrate);
+  lasercell::tools::AddCalibrateLaserCommand(*calibrate);
   lasercell::tools::AddBenchCommands(app);
   try {
     app.parse(argc, argv);

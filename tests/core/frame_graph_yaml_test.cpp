@@ -25,6 +25,7 @@ namespace {
 
 using ::testing::AllOf;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using ::testing::StartsWith;
 namespace fs = std::filesystem;
 
@@ -674,6 +675,119 @@ TEST(FrameGraphYamlTest, FailedSavesLeaveTheExistingFileUnchanged) {
   EXPECT_TRUE(fs::is_directory(folder + "/inside"));
   EXPECT_EQ(io::ReadFileBytes(path), original);
   EXPECT_EQ(dir.Entries(), 2u);  // cell.yaml and occupied/
+}
+
+}  // namespace
+}  // namespace lasercell
+
+namespace lasercell {
+namespace {
+
+// ---- Optional laser_planes section -----------------------------------------------------------
+
+FrameGraph CellWithLaserPlane(std::mt19937& rng) {
+  std::normal_distribution<double> g(0.0, 1.0);
+  FrameGraph graph;
+  StaticEdge edge;
+  edge.parent = "vision_flange";
+  edge.child = "sensor";
+  edge.SetParentFromChild(Eigen::Translation3d(12, -95, 160) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  graph.SetStaticEdge(edge);
+  LaserPlaneEntry plane;
+  plane.normal = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+  plane.point_mm = Eigen::Vector3d(g(rng), g(rng), g(rng)) * 300.0;
+  Eigen::Matrix4d a = Eigen::Matrix4d::NullaryExpr([&]() { return g(rng) * 1e-4; });
+  plane.covariance = (a * a.transpose()).eval();
+  plane.provenance = {"lasercell calibrate laser 0.1.0", "2026-11-26T06:00:00Z", "fnv1a64:0123",
+                      "heights: rms 0.002 mm"};
+  graph.SetLaserPlane("laser", plane);
+  return graph;
+}
+
+TEST(FrameGraphYamlLaserPlanes, RoundTripIsBitExact) {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const FrameGraph original = CellWithLaserPlane(rng);
+    const std::string text1 = FrameGraphToYaml(original);
+    const FrameGraph read = FrameGraphFromYaml(text1, "cell.yaml");
+    EXPECT_EQ(FrameGraphToYaml(read), text1);
+    const LaserPlaneEntry& a = original.laser_planes().at("laser");
+    const LaserPlaneEntry& b = read.laser_planes().at("laser");
+    EXPECT_EQ(a.normal, b.normal);  // bit-exact
+    EXPECT_EQ(a.point_mm, b.point_mm);
+    EXPECT_EQ(*a.covariance, *b.covariance);
+    EXPECT_EQ(b.frame, "sensor");
+    EXPECT_EQ(b.provenance.residual_summary, "heights: rms 0.002 mm");
+  }
+}
+
+TEST(FrameGraphYamlLaserPlanes, SectionIsVersionedAndOmittedWhenEmpty) {
+  std::mt19937 rng(6);
+  const std::string text = FrameGraphToYaml(CellWithLaserPlane(rng));
+  EXPECT_THAT(text, HasSubstr("laser_planes:\n  version: 1\n  planes:\n    laser:\n      frame: sensor\n"));
+  FrameGraph empty;
+  empty.AddFrame("sensor");
+  EXPECT_THAT(FrameGraphToYaml(empty), Not(HasSubstr("laser_planes")));
+}
+
+TEST(FrameGraphYamlLaserPlanes, SettingThePlaneLeavesTheRestOfTheFileUnchanged) {
+  std::mt19937 rng(7);
+  FrameGraph graph = CellWithLaserPlane(rng);
+  graph.RemoveLaserPlane("laser");
+  const std::string before = FrameGraphToYaml(graph);
+  graph.SetLaserPlane("laser", CellWithLaserPlane(rng).laser_planes().at("laser"));
+  const std::string after = FrameGraphToYaml(graph);
+  EXPECT_EQ(after.substr(0, before.size()), before);
+}
+
+TEST(FrameGraphYamlLaserPlanes, BadSectionsNameTheProblem) {
+  std::mt19937 rng(8);
+  const std::string v = FrameGraphToYaml(CellWithLaserPlane(rng));
+  const auto replace = [&](const std::string& from, const std::string& to) {
+    std::string s = v;
+    const auto at = s.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return s.replace(at, from.size(), to);
+  };
+  const struct {
+    std::string text;
+    std::string problem;
+  } cases[] = {
+      {replace("  version: 1\n  planes:", "  version: 2\n  planes:"), "laser_planes version is '2'"},
+      {replace("      frame: sensor\n", "      frame: sensor\n      colour: green\n"),
+       "unknown field 'colour' in laser plane 'laser'"},
+      {replace("      frame: sensor\n", "      frame: nowhere\n"), "frame 'nowhere' is not listed in frames"},
+      {replace("      normal: [", "      normal: [2, "), "normal must be a list of 3 numbers"},
+      {replace("  planes:\n", "  extra: 1\n  planes:\n"), "unknown field 'extra' in laser_planes"},
+  };
+  for (const auto& c : cases) {
+    try {
+      FrameGraphFromYaml(c.text, "cell.yaml");
+      ADD_FAILURE() << "accepted: " << c.problem;
+    } catch (const FileError& e) {
+      EXPECT_THAT(e.what(), AllOf(StartsWith("cell.yaml: "), HasSubstr(c.problem)));
+    }
+  }
+  // A non-unit normal.
+  std::string s = v;
+  const auto at = s.find("      normal: [");
+  const auto end = s.find(']', at);
+  s.replace(at, end - at + 1, "      normal: [0, 2, 0]");
+  EXPECT_THROW(FrameGraphFromYaml(s, "cell.yaml"), FileError);
+}
+
+TEST(FrameGraphLaserPlanes, SetLaserPlaneChecksItsInput) {
+  FrameGraph graph;
+  LaserPlaneEntry plane;
+  plane.normal = Eigen::Vector3d(0, 2, 0);
+  EXPECT_THROW(graph.SetLaserPlane("laser", plane), InputError);
+  plane.normal = Eigen::Vector3d::UnitY();
+  EXPECT_THROW(graph.SetLaserPlane("Laser", plane), InputError);
+  graph.SetLaserPlane("laser", plane);
+  EXPECT_TRUE(graph.HasFrame("sensor"));
+  EXPECT_DOUBLE_EQ(graph.laser_planes().at("laser").OffsetMm(), 0.0);
+  const FrameGraph copy = graph;
+  EXPECT_EQ(copy.laser_planes().size(), 1u);
 }
 
 }  // namespace

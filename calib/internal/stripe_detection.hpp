@@ -1,0 +1,41 @@
+#pragma once
+// Private OpenCV helpers of the stripe-on-chessboard laser calibration (calib/laser_plane.cpp):
+// chessboard corners, board pose through the camera model, and one subpixel laser-stripe peak
+// per scan line inside the board region. The camera engineer's calib/target_detection* and the
+// triangulation module's peak detectors will replace these once they land.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/camera_model.hpp"
+#include "calib/laser_plane.hpp"
+
+namespace lasercell::calib::internal {
+
+/// Inner corners (OpenCV order) found by findChessboardCornersSB and refined by cornerSubPix,
+/// or nullopt.
+std::optional<std::vector<Eigen::Vector2d>> FindChessboard(const cv::Mat& gray, int cols, int rows);
+
+/// camera_from_board from corners: rays from the camera model (mrcal unprojection), normalized
+/// to z = 1, then OpenCV solvePnP (iterative LM) with an identity camera matrix; board corner
+/// (i, j) at (i s, j s, 0). `rms_px` gets the reprojection RMS through the camera model.
+Eigen::Isometry3d BoardPose(const CameraModel& camera, const std::vector<Eigen::Vector2d>& corners,
+                            const ChessboardSpec& board, double* rms_px);
+
+/// One peak per scan line (image column, or image row when `along_rows`) of the laser channel
+/// inside `region` (a convex polygon in pixels): the maximum, rejected below the contrast or
+/// when a second maximum is too strong, refined by the centre of gravity of the samples above
+/// half the peak. Returns (column, row) pixels.
+std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser, const std::vector<cv::Point2f>& region,
+                                         bool along_rows, const StripeOptions& options);
+
+/// The laser channel (CV_32F) of an image for the configured colour.
+cv::Mat LaserChannel(const StripeImage& image, const std::string& color);
+/// The image as 8-bit gray.
+cv::Mat GrayOf(const StripeImage& image);
+
+}  // namespace lasercell::calib::internal
