@@ -752,6 +752,24 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
   if (config.capture_planes || config.capture_spheres || config.capture_seats) {
     out.Write("records/linear_sweep.yaml", LinearSweepRecord(sweep, config));
   }
+  if (config.capture_planes) {
+    // What the height fixture provides for `calibrate laser --planes`: the plate heights and the
+    // plate normal in the sensor frame (the plate is level; the sensor's orientation on the
+    // linear axis is known from its mounting). The distance to the plate is NOT recorded: the
+    // calibration estimates it (>= 3 heights).
+    const Eigen::Vector3d up_in_sensor =
+        sweep.cell_from_sensor_start.linear().transpose() * Eigen::Vector3d::UnitZ();
+    std::ostringstream o;
+    o << "format: lasercell.plane_heights\nversion: 1\n"
+      << "# profiles/plane_<i>.lcp sweeps the white plate at heights_mm[i] (along the plate\n"
+      << "# normal, relative to an arbitrary zero).\n"
+      << "heights_mm: [";
+    for (std::size_t i = 0; i < config.plane_heights_mm.size(); ++i) {
+      o << (i ? ", " : "") << Num(config.plane_heights_mm[i]);
+    }
+    o << "]\nplate_normal_in_sensor: " << Vec(up_in_sensor) << "\n";
+    out.Write("records/planes.yaml", o.str());
+  }
   if (config.capture_trajectory) {
     const SeatCapture& seat = seats.front();
     const Scene scene = MakeSeatScene(truth.layout, truth.seat, seat.placement.cell_from_part);

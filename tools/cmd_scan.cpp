@@ -76,37 +76,31 @@ Eigen::Vector4d PlaneFromSensorTruth(const std::string& path) {
   return {n.x(), n.y(), n.z(), plane["d_mm"].as<double>()};
 }
 
-// (n, d) from cell.yaml's laser_planes section, or nothing when the file has none.
-std::optional<Eigen::Vector4d> PlaneFromCell(const YAML::Node& root, const std::string& path,
-                                             const std::string& name) {
-  const YAML::Node section = root["laser_planes"];
-  if (!section) return std::nullopt;
-  const YAML::Node plane = section["planes"] ? section["planes"][name] : YAML::Node();
-  if (!plane) {
-    throw FileError(path, "has no laser plane named '" + name + "' in laser_planes.planes");
+// (n, d) from cell.yaml's laser_planes section (core FrameGraph reads and checks it).
+Eigen::Vector4d PlaneFromCell(const FrameGraph& graph, const std::string& path,
+                              const std::string& name) {
+  const auto it = graph.laser_planes().find(name);
+  if (it == graph.laser_planes().end()) {
+    throw FileError(path, graph.laser_planes().empty()
+                              ? std::string("has no laser_planes section; run `lasercell "
+                                            "calibrate laser` or give --laser-plane nx,ny,nz,d")
+                              : "has no laser plane named '" + name + "' in laser_planes.planes");
   }
-  const std::string frame = plane["frame"] ? plane["frame"].as<std::string>() : "sensor";
-  if (frame != "sensor") {
-    throw FileError(path, "laser plane '" + name + "' is given in frame '" + frame +
+  const LaserPlaneEntry& plane = it->second;
+  if (plane.frame != "sensor") {
+    throw FileError(path, "laser plane '" + name + "' is given in frame '" + plane.frame +
                               "'; scan triangulate needs it in 'sensor' (the camera frame)");
   }
-  const Eigen::Vector3d n = Vec3(plane["normal"], path, "laser_planes.planes." + name + ".normal");
-  const Eigen::Vector3d p0 =
-      Vec3(plane["point_mm"], path, "laser_planes.planes." + name + ".point_mm");
-  return Eigen::Vector4d(n.x(), n.y(), n.z(), -n.dot(p0));
+  return {plane.normal.x(), plane.normal.y(), plane.normal.z(), plane.OffsetMm()};
 }
 
 void RunTriangulate(const ScanArgs& args) {
   if (args.fast && args.exact) throw OptionError("--fast and --exact exclude each other");
-  if (!args.velocity.empty() && !args.frame.empty()) {
-    throw OptionError(
-        "--velocity-mm-s (linear sweep) and --frame (robot sweep) exclude each other");
-  }
   if (!args.velocity.empty() && args.velocity.size() != 3) {
     throw OptionError("--velocity-mm-s takes three numbers vx,vy,vz (mm/s, sensor frame at t0)");
   }
-  YAML::Node cell_root;
-  if (!args.cell.empty()) cell_root = LoadYaml(args.cell);
+  FrameGraph graph;
+  if (!args.cell.empty()) graph = LoadFrameGraph(args.cell);
 
   Eigen::Vector4d plane;
   std::string plane_source;
@@ -122,13 +116,7 @@ void RunTriangulate(const ScanArgs& args) {
     plane = PlaneFromSensorTruth(args.sensor_truth);
     plane_source = args.sensor_truth;
   } else if (!args.cell.empty()) {
-    const auto p = PlaneFromCell(cell_root, args.cell, args.laser);
-    if (!p) {
-      throw FileError(args.cell,
-                      "has no laser_planes section; run `lasercell calibrate laser` "
-                      "or give --laser-plane nx,ny,nz,d");
-    }
-    plane = *p;
+    plane = PlaneFromCell(graph, args.cell, args.laser);
     plane_source = args.cell;
   } else {
     throw OptionError(
@@ -145,30 +133,45 @@ void RunTriangulate(const ScanArgs& args) {
                             : triangulation::TriangulationPath::kFast;
   options.threads = args.threads;
   if (args.have_t0) options.t0_ns = args.t0_ns;
-  FrameGraph graph;
+  if (!args.frame.empty() && args.cell.empty()) {
+    throw OptionError("--frame needs --cell CELL.yaml (the frame graph)");
+  }
+  // A linear sweep placed in a cell frame goes through static edges only (e.g. the
+  // handling_base <- sensor edge of `calibrate spheres`, valid for this sweep trajectory).
+  std::optional<Eigen::Isometry3d> frame_from_sensor_t0;
   if (!args.velocity.empty()) {
     options.motion = triangulation::SweepMotion::kLinear;
     options.velocity_mm_s = Eigen::Vector3d(args.velocity[0], args.velocity[1], args.velocity[2]);
+    if (!args.frame.empty()) {
+      const std::vector<std::string> robots = graph.RobotsOnPath(args.frame, "sensor");
+      if (!robots.empty()) {
+        throw OptionError("--frame " + args.frame + " with --velocity-mm-s: the path from 'sensor' "
+                          "passes robot '" + robots.front() + "'; a linear sweep is placed "
+                          "through static edges only (calibrate spheres writes one)");
+      }
+      frame_from_sensor_t0 = graph.Transform(args.frame, "sensor");
+    }
   } else if (!args.frame.empty()) {
-    if (args.cell.empty()) throw OptionError("--frame needs --cell CELL.yaml (the frame graph)");
     options.motion = triangulation::SweepMotion::kRobot;
     options.target_frame = args.frame;
-    YAML::Node graph_only = YAML::Clone(cell_root);
-    graph_only.remove("laser_planes");
-    std::ostringstream text;
-    text << graph_only << "\n";
-    graph = FrameGraphFromYaml(text.str(), args.cell);
   }
   const auto start = std::chrono::steady_clock::now();
   triangulation::SweepResult result = triangulation::AssembleSweep(
       profiles, tri, options,
       options.motion == triangulation::SweepMotion::kRobot ? &graph : nullptr);
+  if (frame_from_sensor_t0) {
+    for (Eigen::Vector3d& p : result.cloud.positions) p = *frame_from_sensor_t0 * p;
+    for (Eigen::Vector3d& n : result.cloud.normals) n = frame_from_sensor_t0->linear() * n;
+  }
   const double ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   io::WritePointCloud(args.out, result.cloud);
   if (!args.quiet) {
-    std::printf("%s; laser plane from %s; %s path, %.1f ms -> %s\n", result.Summary().c_str(),
-                plane_source.c_str(), args.exact ? "exact" : "fast", ms, args.out.c_str());
+    const std::string placed =
+        frame_from_sensor_t0 ? "; placed in '" + args.frame + "' through static edges" : "";
+    std::printf("%s%s; laser plane from %s; %s path, %.1f ms -> %s\n", result.Summary().c_str(),
+                placed.c_str(), plane_source.c_str(), args.exact ? "exact" : "fast", ms,
+                args.out.c_str());
   }
 }
 
@@ -200,8 +203,9 @@ void AddScanCommands(CLI::App& app) {
                   "--velocity-mm-s=... when vx is negative)")
       ->delimiter(',');
   tri->add_option("--frame", args->frame,
-                  "Robot sweep: express points in this cell frame (e.g. vision_base), posing each "
-                  "profile by its joints through cell.yaml");
+                  "Express points in this cell frame: robot sweep (each profile posed by its joints "
+                  "through cell.yaml, e.g. vision_base), or with --velocity-mm-s a linear sweep "
+                  "placed through static edges (e.g. handling_base after calibrate spheres)");
   tri->add_option("--t0-ns", args->t0_ns,
                   "Linear sweep time origin (sensor clock, ns); default: the first profile's")
       ->each([args](const std::string&) { args->have_t0 = true; });

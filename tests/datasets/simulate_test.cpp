@@ -13,6 +13,7 @@
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "core/yaml_fields.hpp"
 #include "datasets/robots.hpp"
 #include "datasets/sim_config.hpp"
 #include "datasets/stl.hpp"
@@ -318,6 +319,43 @@ TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   EXPECT_NE(io::ReadFileBytes(a + "/profiles/seat_000.lcp"),
             io::ReadFileBytes(c + "/profiles/seat_000.lcp"));
   for (const std::string& d : {a, b, c}) fs::remove_all(d);
+}
+
+TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
+  SimConfig config = SmallConfig();
+  config.capture_seats = config.capture_trajectory = config.capture_eye_in_hand = false;
+  config.capture_joint_poses = config.capture_chessboard_images = false;
+  config.capture_laser_line_images = config.write_meshes = false;
+  const std::string dir = TempDir("records");
+  SimulateCell(config, dir, {}, 2);
+  const CellTruth truth = MakeCellTruth(config);
+  const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
+  yaml::Fields linear = yaml::Fields::Load(dir + "/records/linear_sweep.yaml");
+  linear.ExpectFormat("lasercell.linear_sweep", 1);
+  std::int64_t t0_ns = 0;
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
+  double speed = 0;
+  linear.ReadRequired("t0_ns", &t0_ns);
+  linear.ReadRequired("velocity_mm_s_in_sensor", &v);
+  linear.ReadRequired("speed_mm_s", &speed);
+  linear.Done();
+  EXPECT_EQ(t0_ns, config.timing.start_ns);
+  // The sensor-frame velocity moves the sensor like the true sweep does.
+  const Eigen::Vector3d v_cell = sweep.cell_from_sensor_start.linear() * v;
+  EXPECT_LT((v_cell - sweep.velocity_mm_s).norm(), 1e-9);
+  EXPECT_NEAR(speed, sweep.velocity_mm_s.norm(), 1e-9);
+  yaml::Fields planes = yaml::Fields::Load(dir + "/records/planes.yaml");
+  planes.ExpectFormat("lasercell.plane_heights", 1);
+  std::vector<double> heights;
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+  planes.ReadRequired("heights_mm", &heights);
+  planes.ReadRequired("plate_normal_in_sensor", &normal);
+  planes.Done();
+  EXPECT_EQ(heights, config.plane_heights_mm);
+  EXPECT_NEAR(normal.norm(), 1.0, 1e-12);
+  // It points up, towards the sensor (which looks down).
+  EXPECT_GT((sweep.cell_from_sensor_start.linear() * normal).z(), 0.999999);
+  fs::remove_all(dir);
 }
 
 TEST(Simulate, CaptureSetIsCompleteAndConsistent) {

@@ -115,16 +115,13 @@ TEST_F(ScanCli, TriangulatesALinearSweepWithAPlaneFromTheCommandLine) {
 }
 
 TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
-  // cell.yaml with the laser_planes section of `lasercell calibrate laser`.
-  std::ostringstream cell;
-  cell.precision(17);
-  const Eigen::Vector3d n = plane_.head<3>();
-  const Eigen::Vector3d p0 = -plane_[3] * n;
-  cell << "format: lasercell.cell\nversion: 1\nframes: [sensor]\nrobots: []\nedges: []\n"
-       << "laser_planes:\n  version: 1\n  planes:\n    laser:\n      frame: sensor\n"
-       << "      normal: [" << n.x() << ", " << n.y() << ", " << n.z() << "]\n"
-       << "      point_mm: [" << p0.x() << ", " << p0.y() << ", " << p0.z() << "]\n";
-  io::WriteFileAtomically(P("cell.yaml"), cell.str());
+  // cell.yaml with the laser_planes section of `lasercell calibrate laser` (core's writer).
+  FrameGraph graph;
+  LaserPlaneEntry entry;
+  entry.normal = plane_.head<3>();
+  entry.point_mm = -plane_[3] * entry.normal;
+  graph.SetLaserPlane("laser", entry);
+  io::WriteFileAtomically(P("cell.yaml"), FrameGraphToYaml(graph));
   const std::string common = "scan triangulate --camera " + P("camera.cameramodel") +
                              " --profiles " + P("plane.lcp") + " --t0-ns 1000000000" +
                              " --velocity-mm-s " + Csv(velocity_);
@@ -134,6 +131,7 @@ TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
   // The simulator's truth/sensor.yaml.
   std::ostringstream truth;
   truth.precision(17);
+  const Eigen::Vector3d n = plane_.head<3>();
   truth << "format: lasercell.sim_sensor\nversion: 1\nlaser_plane_in_sensor:\n  normal: [" << n.x()
         << ", " << n.y() << ", " << n.z() << "]\n  d_mm: " << plane_[3] << "\n";
   io::WriteFileAtomically(P("sensor.yaml"), truth.str());
@@ -144,7 +142,7 @@ TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
 
 TEST_F(ScanCli, RobotSweepIsPosedThroughTheCellFile) {
   // The simulator's arc sweep over the plane, joints in the profiles; the true cell.yaml plus
-  // the laser_planes section (which the command strips before reading the frame graph).
+  // a laser_planes section.
   const datasets::Scene scene = datasets::MakePlaneScene(truth_.layout, 150.0, {1500, 1500});
   const datasets::LaserRenderer renderer(scene, truth_.sensor, config_.render);
   const datasets::JointTrajectory traj = datasets::MakeArcTrajectory(config_, truth_);
@@ -161,14 +159,12 @@ TEST_F(ScanCli, RobotSweepIsPosedThroughTheCellFile) {
   const datasets::SweepResult r =
       datasets::RenderSweep(renderer, state_at, timing, 4, 6, "vision_robot", 1);
   WriteProfiles(P("robot.lcp"), r.profiles);
-  std::ostringstream planes;
-  planes.precision(17);
-  const Eigen::Vector3d n = plane_.head<3>();
-  const Eigen::Vector3d p0 = -plane_[3] * n;
-  planes << "laser_planes:\n  version: 1\n  planes:\n    laser:\n      frame: sensor\n"
-         << "      normal: [" << n.x() << ", " << n.y() << ", " << n.z() << "]\n"
-         << "      point_mm: [" << p0.x() << ", " << p0.y() << ", " << p0.z() << "]\n";
-  io::WriteFileAtomically(P("cell.yaml"), FrameGraphToYaml(truth_.Graph()) + planes.str());
+  FrameGraph graph = truth_.Graph();
+  LaserPlaneEntry entry;
+  entry.normal = plane_.head<3>();
+  entry.point_mm = -plane_[3] * entry.normal;
+  graph.SetLaserPlane("laser", entry);
+  io::WriteFileAtomically(P("cell.yaml"), FrameGraphToYaml(graph));
   const CliRun run =
       Cli("scan triangulate --camera " + P("camera.cameramodel") + " --profiles " + P("robot.lcp") +
           " --cell " + P("cell.yaml") + " --frame cell --out " + P("robot.ply"));
@@ -177,6 +173,41 @@ TEST_F(ScanCli, RobotSweepIsPosedThroughTheCellFile) {
   EXPECT_EQ(cloud.size(), r.valid_peaks);
   ASSERT_GT(cloud.size(), 3000u);
   for (const auto& p : cloud.positions) ASSERT_NEAR(p.z(), 150.0, 1.0);  // see ExpectOnPlane
+}
+
+TEST_F(ScanCli, LinearSweepIsPlacedThroughStaticEdges) {
+  // A handling_base <- sensor edge (as `calibrate spheres` writes it) places the linear sweep.
+  FrameGraph graph;
+  LaserPlaneEntry entry;
+  entry.normal = plane_.head<3>();
+  entry.point_mm = -plane_[3] * entry.normal;
+  graph.SetLaserPlane("laser", entry);
+  StaticEdge edge;
+  edge.parent = "handling_base";
+  edge.child = "sensor";
+  const Eigen::Isometry3d hb_from_sensor =
+      Eigen::Translation3d(1500, -20, 900) * Eigen::AngleAxisd(3.0, Eigen::Vector3d(1, 1, 0).normalized());
+  edge.parent_from_child = QuaternionPose::FromIsometry(hb_from_sensor);
+  graph.SetStaticEdge(edge);
+  io::WriteFileAtomically(P("cell.yaml"), FrameGraphToYaml(graph));
+  const std::string common = "scan triangulate --camera " + P("camera.cameramodel") +
+                             " --profiles " + P("plane.lcp") + " --t0-ns 1000000000" +
+                             " --velocity-mm-s " + Csv(velocity_) + " --cell " + P("cell.yaml");
+  CliRun r = Cli(common + " --out " + P("t0.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = Cli(common + " --frame handling_base --out " + P("hb.ply"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const PointCloud t0 = io::ReadPointCloud(P("t0.ply"));
+  const PointCloud hb = io::ReadPointCloud(P("hb.ply"));
+  ASSERT_EQ(t0.size(), hb.size());
+  ASSERT_GT(t0.size(), 1000u);
+  const Eigen::Isometry3d placed = FrameGraphFromYaml(FrameGraphToYaml(graph), "g").Transform(
+      "handling_base", "sensor");
+  for (std::size_t i = 0; i < t0.size(); i += 97) {
+    // Both files hold float32 positions: 2 ulp at ~2 m is ~5e-4 mm.
+    const double ulp = 1.2e-7 * (placed * t0.positions[i]).norm();
+    EXPECT_LT((placed * t0.positions[i] - hb.positions[i]).norm(), 4 * ulp);
+  }
 }
 
 TEST_F(ScanCli, BadInputExitsTwoWithOneLine) {
