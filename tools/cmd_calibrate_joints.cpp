@@ -365,17 +365,29 @@ void AddCorrelation(HtmlReport& report, const Eigen::MatrixXd& cov,
   report.AddTable(header, rows);
 }
 
+// The laser plane: --laser-plane when given, else the cell's calibrated `laser` plane.
+Eigen::Vector4d LaserPlane(const JointsArgs& a, const FrameGraph& graph) {
+  if (!a.laser_plane.empty()) return ParsePlane(a.laser_plane);
+  const auto it = graph.laser_planes().find("laser");
+  if (it == graph.laser_planes().end()) {
+    throw OptionError(a.cell + " has no laser plane 'laser': run `lasercell calibrate laser` "
+                      "first or give --laser-plane nx,ny,nz,d");
+  }
+  if (it->second.frame != a.sensor_frame) {
+    throw OptionError(a.cell + ": laser plane 'laser' is given in frame '" + it->second.frame +
+                      "', expected '" + a.sensor_frame + "'");
+  }
+  const Eigen::Vector3d& n = it->second.normal;
+  return {n.x(), n.y(), n.z(), it->second.OffsetMm()};
+}
+
 void RunJoints(const JointsArgs& a) {
   const FrameGraph graph = LoadFrameGraph(a.cell);
   const RobotInCell robot = FindRobot(graph, a.robot, a.cell);
   const Eigen::Isometry3d x0 = FlangeFromSensor(graph, robot.flange, a.sensor_frame, a.cell);
-  if (a.laser_plane.empty()) {
-    throw OptionError("--laser-plane nx,ny,nz,d is required (cell.yaml does not carry the laser "
-                      "plane yet)");
-  }
   const calib::CameraModel camera = calib::LoadCameraModel(a.camera);
   const std::vector<calib::SphereSweep> sweeps =
-      LoadSweeps(a.sweeps, a.set, camera, ParsePlane(a.laser_plane));
+      LoadSweeps(a.sweeps, a.set, camera, LaserPlane(a, graph));
   calib::JointIdentificationOptions o;
   o.estimate_hand_eye = a.with_handeye;
   o.estimate_dh_deltas = a.dh_deltas;
@@ -493,13 +505,9 @@ void RunHandEyeLaser(const JointsArgs& a) {
   const FrameGraph graph = LoadFrameGraph(a.cell);
   const RobotInCell robot = FindRobot(graph, a.robot, a.cell);
   const Eigen::Isometry3d x0 = FlangeFromSensor(graph, robot.flange, a.sensor_frame, a.cell);
-  if (a.laser_plane.empty()) {
-    throw OptionError("--laser-plane nx,ny,nz,d is required (cell.yaml does not carry the laser "
-                      "plane yet)");
-  }
   const calib::CameraModel camera = calib::LoadCameraModel(a.camera);
   const std::vector<calib::SphereSweep> sweeps =
-      LoadSweeps(a.sweeps, a.set, camera, ParsePlane(a.laser_plane));
+      LoadSweeps(a.sweeps, a.set, camera, LaserPlane(a, graph));
   calib::LaserHandEyeOptions o;
   o.solver.point_sigma_mm = a.point_sigma_mm;
   o.solver.radius_mm = a.radius_mm;
@@ -562,8 +570,8 @@ void AddShared(CLI::App* cmd, JointsArgs& a) {
   cmd->add_option("--sweeps", a.sweeps, "Sphere-sweep list (records/sphere_sweeps.yaml)")
       ->required();
   cmd->add_option("--laser-plane", a.laser_plane,
-                  "Laser plane nx,ny,nz,d in the sensor frame (n.p + d = 0, mm); required "
-                  "until cell.yaml carries it");
+                  "Laser plane nx,ny,nz,d in the sensor frame (n.p + d = 0, mm); default: the "
+                  "cell's calibrated 'laser' plane");
   cmd->add_option("--touches", a.touches,
                   "Sphere tops touched by the handling robot (records/touches.yaml): fixes the "
                   "sphere centres (mapped through the cell), making joint 1 identifiable");

@@ -173,6 +173,42 @@ TEST_F(CalibrateJointsCli, HandEyeLaserUpdatesTheFlangeSensorEdge) {
   EXPECT_EQ(lasercell::FrameGraphToYaml(updated), Slurp(cell));
 }
 
+TEST_F(CalibrateJointsCli, TakesTheLaserPlaneFromTheCellWhenNotGiven) {
+  // The cell's calibrated `laser` plane (what `calibrate laser` writes) replaces --laser-plane.
+  lasercell::FrameGraph graph =
+      lasercell::LoadFrameGraph((dir_ / "nominal_cell.yaml").string());
+  std::vector<double> v;
+  std::stringstream in(plane_);
+  for (std::string item; std::getline(in, item, ',');) v.push_back(std::stod(item));
+  ASSERT_EQ(v.size(), 4u);
+  lasercell::LaserPlaneEntry entry;
+  entry.normal = Eigen::Vector3d(v[0], v[1], v[2]);
+  entry.point_mm = -v[3] * entry.normal;
+  graph.SetLaserPlane("laser", entry);
+  const fs::path cell = dir_ / "cell_with_plane.yaml";
+  Spit(cell, lasercell::FrameGraphToYaml(graph));
+  std::string err;
+  const std::string args = " --cell " + cell.string() + " --camera " +
+                           (dir_ / "sim/truth/camera.cameramodel").string() + " --sweeps " +
+                           (dir_ / "sim/records/sphere_sweeps.yaml").string();
+  ASSERT_EQ(RunCli("calibrate handeye-laser" + args + " --json " +
+                    (dir_ / "he_cellplane.json").string(), &err), 0) << err;
+  // The same as giving the plane on the command line.
+  const fs::path cell2 = dir_ / "cell_with_plane_2.yaml";
+  fs::copy_file(dir_ / "nominal_cell.yaml", cell2, fs::copy_options::overwrite_existing);
+  ASSERT_EQ(RunCli("calibrate handeye-laser" + Common(cell2.string()) + " --json " +
+                    (dir_ / "he_cliplane.json").string(), &err), 0) << err;
+  const nlohmann::json a = nlohmann::json::parse(Slurp(dir_ / "he_cellplane.json"));
+  const nlohmann::json b = nlohmann::json::parse(Slurp(dir_ / "he_cliplane.json"));
+  EXPECT_EQ(a["format"], "lasercell.laser_hand_eye");
+  // Same plane up to rounding (the cell stores a point, d = -n . p0 is recomputed).
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(a["vision_flange_from_sensor"]["translation_mm"][k].get<double>(),
+                b["vision_flange_from_sensor"]["translation_mm"][k].get<double>(), 1e-6);
+  }
+  EXPECT_NEAR(a["residual_rms_mm"].get<double>(), b["residual_rms_mm"].get<double>(), 1e-9);
+}
+
 TEST_F(CalibrateJointsCli, MissingLaserPlaneAndUnknownSetAreNamed) {
   const std::string cam = (dir_ / "sim/truth/camera.cameramodel").string();
   const std::string sweeps = (dir_ / "sim/records/sphere_sweeps.yaml").string();
