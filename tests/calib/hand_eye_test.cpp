@@ -1,6 +1,6 @@
 // Eye-in-hand calibration (calib/hand_eye.hpp) on seeded synthetic views: closed forms, the
 // Ceres refinement against truth and against OpenCV, covariance coverage, degeneracies, and the
-// real kuka2 detections committed in datasets/real/handeye_kuka2.
+// real kuka2 set (read from ../shared/data when present; not bundled: no licence stated).
 #include "calib/hand_eye.hpp"
 
 #include <ceres/ceres.h>
@@ -20,6 +20,7 @@
 #include "core/io/file_util.hpp"
 #include "datasets/calibration_captures.hpp"
 #include "datasets/sim_config.hpp"
+#include "tests/calib/kuka2_data.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -409,17 +410,20 @@ TEST(PoseIo, YamlRoundTrip) {
 namespace lasercell::calib {
 namespace {
 
-// Real data: kuka2 (Ali et al. 2019), the committed corner detections of the 28 images, the
-// intrinsics stand-in (OpenCV calibrateCamera on the same images) and the robot poses (metres).
+// Real data: kuka2 (Ali et al. 2019) from the shared originals (skipped, with the reason, when
+// absent): the corners detected now in the 28 images, the intrinsics stand-in (OpenCV
+// calibrateCamera on the same detections) and the robot poses (metres). Same recipe as the
+// formerly committed derived files, so the same bounds apply.
 // No ground truth: the joint refinement must reproject better than the closed forms and OpenCV
 // PARK (each with its best board pose), and the AX - XB and reprojection residuals stay at the
 // level of a good eye-in-hand set (sub-pixel, a few tenths of a degree).
-TEST(HandEyeReal, Kuka2CommittedDetections) {
-  const std::string dir = LASERCELL_SOURCE_DIR "/datasets/real/handeye_kuka2";
-  const ChessboardDetections det =
-      ParseChessboardDetections(io::ReadFileBytes(dir + "/corners.txt"), "corners.txt");
-  const CameraModel camera = LoadCameraModel(dir + "/camera.cameramodel");
-  const RobotPoses poses = LoadRobotPoses(dir + "/RobotPosesVec.txt", "kuka");
+TEST(HandEyeReal, Kuka2FromSharedImages) {
+  const realdata::Kuka2* kuka2 = realdata::LoadKuka2();
+  if (kuka2 == nullptr) GTEST_SKIP() << realdata::Kuka2Missing();
+  ASSERT_TRUE(kuka2->error.empty()) << kuka2->error;
+  const ChessboardDetections& det = kuka2->detections;
+  const CameraModel& camera = *kuka2->camera;
+  const RobotPoses poses = LoadRobotPoses(kuka2->dir + "/RobotPosesVec.txt", "kuka");
   ASSERT_EQ(det.images.size(), 28u);
   ASSERT_EQ(poses.base_from_flange.size(), 28u);
   const auto board = internal::ChessboardCorners(det.cols, det.rows, det.square_mm);

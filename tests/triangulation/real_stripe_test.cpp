@@ -1,5 +1,7 @@
-// Peak detection on real laser-stripe images (datasets/real/laser_stripe_chessboard: a green
-// line across a planar chessboard, 640 x 480 JPEG). The stripe is vertical (it crosses every image
+// Peak detection on real laser-stripe images (laser_stripe_chessboard of the shared development
+// data, read from ../shared/data or $LASERCELL_SHARED_DATA: no licence stated, so the images are
+// not bundled and the tests skip with a message when the set is absent; a green line across a
+// planar chessboard, 640 x 480 JPEG). The stripe is vertical (it crosses every image
 // row), so the detector runs with peaks_per_row: profile column k = image row k, peak "row" =
 // image column. The laser
 // signal is green minus red (the white and grey board reflect both; the 532 nm line only green).
@@ -17,16 +19,23 @@
 #include <string>
 #include <vector>
 
+#include "tests/shared_data.hpp"
 #include "triangulation/peak_detection.hpp"
 
 namespace lasercell::triangulation {
 namespace {
 
-const std::string kDir = LASERCELL_SOURCE_DIR "/datasets/real/laser_stripe_chessboard/";
+const char kSet[] = "laser_stripe_chessboard";
+
+// Skips the calling test (with the reason) when the shared set is absent.
+#define REQUIRE_STRIPE_IMAGES()                                                 \
+  if (lasercell::shared_data::SharedDataSet(kSet).empty()) {                         \
+    GTEST_SKIP() << lasercell::shared_data::SharedDataMissing(kSet);                 \
+  }
 
 // Green minus red (640 x 480, 8-bit).
 std::vector<std::uint8_t> StripeSignal(const std::string& file, int* w, int* h) {
-  const cv::Mat bgr = cv::imread(kDir + file, cv::IMREAD_COLOR);
+  const cv::Mat bgr = cv::imread(lasercell::shared_data::SharedDataSet(kSet) + "/" + file, cv::IMREAD_COLOR);
   EXPECT_FALSE(bgr.empty()) << file;
   *w = bgr.cols;
   *h = bgr.rows;
@@ -79,6 +88,7 @@ PeakDetectionResult Detect(const Case& c, PeakEstimator estimator) {
 // span) leaves sub-pixel residuals; a detector that jumps between the stripe and the checker
 // edges or JPEG blocks would leave pixel-sized ones.
 TEST(RealStripe, PeaksFollowOneSmoothCurveAcrossTheBoard) {
+  REQUIRE_STRIPE_IMAGES();
   for (const Case& c : kCases) {
     const PeakDetectionResult r = Detect(c, PeakEstimator::kGaussian);
     ASSERT_EQ(r.status.size(), 480u);
@@ -110,6 +120,7 @@ TEST(RealStripe, PeaksFollowOneSmoothCurveAcrossTheBoard) {
 // Below the board the line continues on the floor: a different plane, so the curve has a kink
 // at the board's lower edge (piecewise linear). 4_right.jpg: slope on the board vs the floor.
 TEST(RealStripe, TheLineBendsWhereItLeavesTheBoard) {
+  REQUIRE_STRIPE_IMAGES();
   const PeakDetectionResult r = Detect(kCases[1], PeakEstimator::kGaussian);
   const auto slope = [&](int first, int last) {
     std::vector<double> k, x;
@@ -136,6 +147,7 @@ TEST(RealStripe, TheLineBendsWhereItLeavesTheBoard) {
 
 // The estimators see the same stripe: on the board their rows agree to a fraction of a pixel.
 TEST(RealStripe, EstimatorsAgreeOnTheBoard) {
+  REQUIRE_STRIPE_IMAGES();
   for (const Case& c : kCases) {
     const PeakDetectionResult g = Detect(c, PeakEstimator::kGaussian);
     for (const PeakEstimator e : {PeakEstimator::kCenterOfGravity, PeakEstimator::kBlaisRioux}) {
