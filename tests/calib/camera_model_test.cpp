@@ -3,7 +3,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <memory>
+#include <sstream>
 
 #include "core/error.hpp"
 
@@ -79,6 +83,51 @@ TEST(CameraModel, SplinedModelNameRoundTrips) {
   const CameraModel back = ParseCameraModel(CameraModelText(model), "mem");
   EXPECT_EQ(back.lensmodel(), name);
   EXPECT_EQ(back.intrinsics(), intrinsics);
+}
+
+// mrcal's own Python tools (Debian python3-mrcal, pulled in by the `mrcal` package that
+// scripts/install-deps installs) read the files we write: same lens model, bit-identical
+// intrinsics, and mrcal.project agrees with our projection.
+TEST(CameraModel, MrcalsOwnToolsReadOurFiles) {
+  const CameraModel model = Opencv8();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "lasercell_mrcal_tools_test.cameramodel").string();
+  SaveCameraModel(path, model, "written by lasercell's camera_model_test");
+  const std::string script =
+      "import sys, numpy as np, mrcal\n"
+      "m = mrcal.cameramodel(sys.argv[1])\n"
+      "lens, intr = m.intrinsics()\n"
+      "q = mrcal.project(np.array([120.0, -80.0, 650.0]), lens, intr)\n"
+      "print(lens, m.imagersize()[0], m.imagersize()[1])\n"
+      "print(' '.join(float(x).hex() for x in intr))\n"
+      "print(repr(float(q[0])), repr(float(q[1])))\n";
+  const std::string script_path = path + ".py";
+  std::ofstream(script_path) << script;
+  const std::string command = "/usr/bin/python3 " + script_path + " " + path + " 2>&1";
+  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
+  ASSERT_TRUE(pipe);
+  std::string out;
+  char buffer[4096];
+  while (std::size_t n = std::fread(buffer, 1, sizeof(buffer), pipe.get())) out.append(buffer, n);
+  std::istringstream lines(out);
+  std::string lens;
+  int width = 0, height = 0;
+  lines >> lens >> width >> height;
+  ASSERT_EQ(lens, "LENSMODEL_OPENCV8") << out;
+  EXPECT_EQ(width, 1024);
+  EXPECT_EQ(height, 1024);
+  for (double expected : model.intrinsics()) {
+    std::string hex;
+    lines >> hex;
+    EXPECT_EQ(std::strtod(hex.c_str(), nullptr), expected) << hex;
+  }
+  double u = 0, v = 0;
+  lines >> u >> v;
+  const Eigen::Vector2d q = model.Project(Eigen::Vector3d(120.0, -80.0, 650.0));
+  EXPECT_NEAR(u, q.x(), 1e-9);
+  EXPECT_NEAR(v, q.y(), 1e-9);
+  std::filesystem::remove(path);
+  std::filesystem::remove(script_path);
 }
 
 TEST(CameraModel, BadInputsSayWhatIsWrong) {
