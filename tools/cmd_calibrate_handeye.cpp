@@ -18,7 +18,9 @@
 #include "calib/camera_model.hpp"
 #include "calib/hand_eye.hpp"
 #include "calib/internal/chessboard_cv.hpp"
+#include "calib/board.hpp"
 #include "calib/pose_io.hpp"
+#include "calib/target_detection.hpp"
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/html_report.hpp"
@@ -45,17 +47,15 @@ struct Board {
   double square_mm = 0;
 };
 
-// chessboard:COLSxROWS:SQUARE_MM, inner corners.
+// chessboard:COLSxROWS:SQUARE_MM, inner corners (calib/board.hpp parses and checks it; the
+// hand-eye solver takes full chessboards only).
 Board ParseBoard(const std::string& spec) {
-  Board b;
-  char tail = 0;
-  if (std::sscanf(spec.c_str(), "chessboard:%dx%d:%lf%c", &b.cols, &b.rows, &b.square_mm,
-                  &tail) != 3 ||
-      b.cols < 2 || b.rows < 2 || !(b.square_mm > 0)) {
-    throw OptionError("--board must be chessboard:COLSxROWS:SQUARE_MM (inner corners, mm), not '" +
-                      spec + "'");
+  const calib::BoardSpec board = calib::ParseBoardSpec(spec);
+  if (board.type != calib::BoardType::kChessboard) {
+    throw OptionError("--board: calibrate handeye takes a chessboard:COLSxROWS:SQUARE_MM board, "
+                      "not '" + spec + "'");
   }
-  return b;
+  return {board.CornersX(), board.CornersY(), board.square_mm};
 }
 
 calib::HandEyeMethod ParseMethod(const std::string& name) {
@@ -253,11 +253,18 @@ void Run(const HandEyeArgs& args) {
                        args.poses + " has " + std::to_string(poses.base_from_flange.size()) +
                        " poses; give one pose per image, in sorted image order");
     }
+    const calib::BoardSpec spec = calib::ParseBoardSpec(args.board);
     for (const std::string& f : files) {
-      const auto c = calib::internal::DetectChessboardCornersInFile(f, b.cols, b.rows,
-                                                                    &det.width_px, &det.height_px);
+      // The shared detector (SB, fallback, cornerSubPix sized to the squares, diagnostics).
+      const calib::TargetDetection d = calib::DetectTargetInEncodedImage(io::ReadFileBytes(f), spec);
+      if (d.status == calib::DetectionStatus::kUnreadable) {
+        throw FileError(f, "is not a readable image");
+      }
+      det.width_px = d.width;
+      det.height_px = d.height;
       det.images.push_back(std::filesystem::path(f).filename().string());
-      det.corners_px.push_back(c ? *c : std::vector<Eigen::Vector2d>{});
+      det.corners_px.push_back(d.found() ? d.corners_px : std::vector<Eigen::Vector2d>{});
+      if (!d.found()) std::fprintf(stderr, "calibrate handeye: %s: %s\n", f.c_str(), d.message.c_str());
     }
   }
   if (det.images.size() != poses.base_from_flange.size()) {

@@ -199,5 +199,44 @@ TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
   EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.output;
 }
 
+// The images path of the CLI: the simulator renders the eye-in-hand chessboard images, the
+// shared detector (calib/target_detection) finds the corners, the record's joints pose the
+// flange through the cell's (true) robot -> within the 0.05 mm / 0.02 deg.
+TEST_F(HandEyeCli, SimulatedImagesThroughTheSharedDetector) {
+  datasets::SimConfig config;
+  config.capture_planes = config.capture_spheres = config.capture_seats = false;
+  config.capture_trajectory = config.capture_chessboard_images = false;
+  config.capture_laser_line_images = config.write_meshes = false;
+  config.capture_joint_poses = config.capture_touches = config.capture_eye_in_hand = false;
+  config.capture_hand_eye_images = true;
+  const fs::path sim = dir_ / "sim_images";
+  datasets::SimulateCell(config, sim.string(), {}, 2);
+  const std::string cell = (dir_ / "images_cell.yaml").string();
+  fs::copy_file(sim / "truth/cell.yaml", cell, fs::copy_options::overwrite_existing);
+  const datasets::ChessboardTarget board;
+  const std::string spec = "chessboard:" + std::to_string(board.squares_x - 1) + "x" +
+                           std::to_string(board.squares_y - 1) + ":" +
+                           std::to_string(static_cast<int>(board.square_mm));
+  const CliRun r = RunCli("calibrate handeye --cell " + cell + " --camera " +
+                          (sim / "truth/camera.cameramodel").string() + " --images '" +
+                          (sim / "images").string() + "/hand_eye_*.png' --board " + spec +
+                          " --poses " + (sim / "records/hand_eye_images.yaml").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const datasets::CellTruth truth = datasets::MakeCellTruth(config);
+  const Eigen::Isometry3d got = LoadFrameGraph(cell).Transform("vision_flange", "sensor");
+  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.output;
+  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.output;
+  // An unreadable image is a one-line error naming it.
+  io::WriteFileAtomically((sim / "images/hand_eye_000.png").string(), "not a png");
+  const CliRun bad = RunCli("calibrate handeye --cell " + cell + " --camera " +
+                            (sim / "truth/camera.cameramodel").string() + " --images '" +
+                            (sim / "images").string() + "/hand_eye_*.png' --board " + spec +
+                            " --poses " + (sim / "records/hand_eye_images.yaml").string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.output.find("hand_eye_000.png: is not a readable image"), std::string::npos)
+      << bad.output;
+  fs::remove_all(sim);
+}
+
 }  // namespace
 }  // namespace lasercell
