@@ -95,15 +95,31 @@ TEST(PoseSweeps, EyeInHandPosesAreDistinctAndRotateAboutSeveralAxes) {
   const CellTruth truth = MakeCellTruth(config);
   const std::vector<PoseSweep> plans =
       PlanPoseSweeps(config, truth, config.eye_in_hand, 1234, "SimConfig.eye_in_hand");
-  ASSERT_EQ(plans.size(), 12u);
+  ASSERT_EQ(plans.size(), static_cast<std::size_t>(config.eye_in_hand.poses));
   std::vector<Eigen::Isometry3d> flanges;
   std::vector<int> per_sphere(config.spheres.stand_heights_mm.size(), 0);
-  for (const PoseSweep& p : plans) {
+  const std::vector<double>& offsets = config.eye_in_hand.range_offsets_mm;
+  const std::vector<Eigen::Vector3d> centers = config.spheres.CentersInCell();
+  for (std::size_t i = 0; i < plans.size(); ++i) {
+    const PoseSweep& p = plans[i];
     flanges.push_back(truth.nominal_vision_robot.BaseFromFlange(p.trajectory.joints_rad[1]));
     ++per_sphere[p.sphere];
     EXPECT_GE(p.sphere_columns_at_middle, 30u);
+    // Range offsets cycle; the sphere centre then lies that much farther from the emitter
+    // along the laser's central ray (the mid waypoint, as commanded).
+    EXPECT_EQ(p.range_offset_mm, offsets[i % offsets.size()]);
+    const Eigen::Isometry3d& cell_from_sensor = p.commanded_cell_from_sensor[1];
+    const Eigen::Vector3d c_in_sensor = cell_from_sensor.inverse() * centers[p.sphere];
+    const double along_ray =
+        (c_in_sensor - truth.sensor.laser.origin_in_sensor).dot(truth.sensor.laser.center_in_sensor);
+    const Eigen::Vector3d crossing_in_sensor(0, 0, config.sensor.standoff_mm);
+    const double nominal =
+        (crossing_in_sensor - truth.sensor.laser.origin_in_sensor).dot(truth.sensor.laser.center_in_sensor);
+    EXPECT_NEAR(along_ray - nominal, p.range_offset_mm, 0.5 * config.spheres.radius_mm + 1.0) << i;
   }
-  for (int n : per_sphere) EXPECT_EQ(n, 3);
+  for (int n : per_sphere) {
+    EXPECT_EQ(n, config.eye_in_hand.poses / static_cast<int>(per_sphere.size()));
+  }
   double smallest_deg = 0;
   const Eigen::Vector3d spread = AxisSpread(RelativeAxes(flanges, &smallest_deg));
   EXPECT_GT(smallest_deg, 2.0);  // every pair of poses differs in orientation
@@ -221,7 +237,7 @@ TEST(PoseSweeps, JointPoseSetIsLargeVariedAndEverySweepSeesItsSphereOnTheTruth) 
     }
   }
   EXPECT_EQ(joint_sweeps, 50u);
-  EXPECT_EQ(eye_sweeps, 12u);
+  EXPECT_EQ(eye_sweeps, static_cast<std::size_t>(SimConfig{}.eye_in_hand.poses));
   // Points from noise-free rows posed by the TRUE robot at the recorded joints lie on the true
   // sphere to the float32 precision of the rows; the nominal robot misses by its joint offsets.
   EXPECT_LT(worst_true, 1e-3);
