@@ -27,6 +27,24 @@ namespace lasercell::calib {
 
 namespace {
 
+// Ambient covariance of the unit normal n (SphereManifold) and its cross term with d, from
+// Ceres's tangent-space blocks: C = J C_t J^T with J = dPlus/ddelta at 0. Ceres 2.1's own
+// lifting to the ambient space allocates Eigen matrices across the libceres boundary, which
+// ASan reports as a bad free in the sanitizer build (Debian's libceres vs our instrumented
+// Eigen instantiations); the tangent blocks are plain copies.
+void NormalCovariance(const ceres::Covariance& covariance, const double* n, const double* d,
+                      Eigen::Matrix3d* cnn, Eigen::Vector3d* cnd) {
+  const ceres::SphereManifold<3> sphere;
+  Eigen::Matrix<double, 3, 2, Eigen::RowMajor> j;
+  sphere.PlusJacobian(n, j.data());
+  Eigen::Matrix<double, 2, 2, Eigen::RowMajor> ctt;
+  Eigen::Vector2d ctd;
+  covariance.GetCovarianceBlockInTangentSpace(n, n, ctt.data());
+  covariance.GetCovarianceBlockInTangentSpace(n, d, ctd.data());
+  *cnn = j * ctt * j.transpose();
+  *cnd = j * ctd;
+}
+
 constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
@@ -105,11 +123,10 @@ PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_dista
   if (estimate_zero_distance) blocks.push_back({&z, &z});
   if (estimate_tilt) blocks.push_back({&a, &a});
   if (covariance.Compute(blocks, &problem)) {
-    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> cnn;
+    Eigen::Matrix3d cnn;
     Eigen::Vector3d cnd;
     double cdd = 0;
-    covariance.GetCovarianceBlock(n, n, cnn.data());
-    covariance.GetCovarianceBlock(n, &d, cnd.data());
+    NormalCovariance(covariance, n, &d, &cnn, &cnd);
     covariance.GetCovarianceBlock(&d, &d, &cdd);
     fit.covariance.topLeftCorner<3, 3>() = cnn;
     fit.covariance.topRightCorner<3, 1>() = cnd;
@@ -703,11 +720,10 @@ PlaneFit JointStripeFit(const std::map<int, ImagePoints>& views, const Chessboar
     const std::vector<std::pair<const double*, const double*>> blocks = {{n, n}, {n, &d}, {&d, &d}};
     fit.covariance_ok = false;
     if (covariance.Compute(blocks, &problem)) {
-      Eigen::Matrix<double, 3, 3, Eigen::RowMajor> cnn;
+      Eigen::Matrix3d cnn;
       Eigen::Vector3d cnd;
       double cdd = 0;
-      covariance.GetCovarianceBlock(n, n, cnn.data());
-      covariance.GetCovarianceBlock(n, &d, cnd.data());
+      NormalCovariance(covariance, n, &d, &cnn, &cnd);
       covariance.GetCovarianceBlock(&d, &d, &cdd);
       fit.covariance.topLeftCorner<3, 3>() = cnn;
       fit.covariance.topRightCorner<3, 1>() = cnd;
