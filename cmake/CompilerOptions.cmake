@@ -13,6 +13,11 @@ endfunction()
 
 if(LASERCELL_SANITIZE)
   add_compile_options(-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
+  # Under ASan, Eigen stops trusting glibc's 16-byte malloc alignment (__SANITIZE_ADDRESS__) and
+  # switches to its offset-pointer aligned malloc, while Debian's libceres (not instrumented)
+  # uses plain malloc/free: Eigen objects crossing that boundary (GradientChecker results,
+  # Covariance blocks) are then freed with the wrong function. Keep the two in agreement.
+  add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)
   add_link_options(-fsanitize=address,undefined)
 endif()
 
