@@ -200,6 +200,110 @@ TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
   EXPECT_LT(view_rms[view_rms.size() / 2], 0.05);  // median view
 }
 
+// A second renderer, written independently of ImageRenderer for this test: a plain pinhole ray
+// through each of S x S sub-pixel points, intersected with the board plane, albedo looked up
+// and averaged (no mrcal, no adaptive edge sampling). Only the board's bounding box is sampled.
+cv::Mat RenderPinholeBySupersampling(const ChessboardTarget& board, const CameraIntrinsics& k,
+                                     const Eigen::Isometry3d& camera_from_board,
+                                     const ImageRenderOptions& options, int s,
+                                     const std::vector<cv::Point2f>& corners) {
+  cv::Rect box = cv::boundingRect(corners);
+  const int pad = 2 * static_cast<int>(std::ceil(board.square_mm * k.fx_px /
+                                                 camera_from_board.translation().z()));
+  box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) &
+        cv::Rect(0, 0, k.width_px, k.height_px);
+  cv::Mat image(k.height_px, k.width_px, CV_8UC1,
+                cv::Scalar(options.ambient + options.exposure * options.background_albedo));
+  const Eigen::Isometry3d board_from_camera = camera_from_board.inverse();
+  const Eigen::Vector3d origin = board_from_camera.translation();
+  const double sx = board.squares_x * board.square_mm, sy = board.squares_y * board.square_mm;
+  for (int y = box.y; y < box.y + box.height; ++y) {
+    for (int x = box.x; x < box.x + box.width; ++x) {
+      double sum = 0;
+      for (int j = 0; j < s; ++j) {
+        for (int i = 0; i < s; ++i) {
+          // Pixel (x, y) covers [x - 0.5, x + 0.5) x [y - 0.5, y + 0.5).
+          const double u = x - 0.5 + (i + 0.5) / s, v = y - 0.5 + (j + 0.5) / s;
+          const Eigen::Vector3d ray =
+              board_from_camera.linear() *
+              Eigen::Vector3d((u - k.cx_px) / k.fx_px, (v - k.cy_px) / k.fy_px, 1.0);
+          const Eigen::Vector3d p = origin - (origin.z() / ray.z()) * ray;
+          double albedo = options.background_albedo;
+          if (p.x() >= -board.border_mm && p.x() <= sx + board.border_mm &&
+              p.y() >= -board.border_mm && p.y() <= sy + board.border_mm) {
+            albedo = board.light_albedo;
+            if (p.x() >= 0 && p.x() < sx && p.y() >= 0 && p.y() < sy) {
+              const int cx = static_cast<int>(std::floor(p.x() / board.square_mm));
+              const int cy = static_cast<int>(std::floor(p.y() / board.square_mm));
+              if ((cx + cy) % 2 == 0) albedo = board.dark_albedo;
+            }
+          }
+          sum += albedo;
+        }
+      }
+      image.at<std::uint8_t>(y, x) =
+          cv::saturate_cast<std::uint8_t>(options.ambient + options.exposure * sum / (s * s));
+    }
+  }
+  return image;
+}
+
+// Is findChessboardCornersSB's excess on steep views (see the test above) ours or OpenCV's?
+// Render the same views through a distortion-free camera, without blur or vignetting, with both
+// renderers: if SB's error against the truth is the same on both, it is a property of the
+// detector on an exact image, not of our renderer. Measured (views 3, 7, 2 of seed 17, tilt
+// 35.5 / 29.4 / 11.7 deg, CALIB_CB_ACCURACY): SB RMS vs truth 0.0729 / 0.0478 / 0.0124 px on
+// ours, 0.0730 / 0.0475 / 0.0131 on the independent render; mean error (-0.047, -0.000) vs
+// (-0.048, -0.001) px on the 35.5 deg view. So on an exact image of that view SB is 0.073 px
+// off, above the 0.05, and no renderer can bring it under.
+TEST(CameraImages, AnIndependentRendererGivesFindChessboardCornersSbTheSameCorners) {
+  CameraIntrinsics intrinsics;
+  intrinsics.distortion.fill(0.0);
+  const CameraModel camera{intrinsics};
+  const ImageRenderer renderer(camera);
+  const ChessboardTarget board;
+  ImageRenderOptions options;
+  options.noise_sigma = 0;
+  options.blur_sigma_px = 0;
+  options.vignetting = false;
+  const std::vector<Eigen::Isometry3d> poses =
+      DrawChessboardPoses(board, CameraModel{CameraIntrinsics{}}, 8, 17);
+  const cv::Size pattern(board.squares_x - 1, board.squares_y - 1);
+  for (const std::size_t k : {std::size_t{3}, std::size_t{7}, std::size_t{2}}) {
+    const auto truth = TrueCorners(board, camera, poses[k]);
+    const cv::Mat ours = ToMat(renderer.RenderChessboard(board, poses[k], options, 1));
+    const cv::Mat independent =
+        RenderPinholeBySupersampling(board, intrinsics, poses[k], options, 8, truth);
+    std::vector<cv::Point2f> in_ours, in_independent;
+    ASSERT_TRUE(cv::findChessboardCornersSB(ours, pattern, in_ours, cv::CALIB_CB_ACCURACY));
+    ASSERT_TRUE(cv::findChessboardCornersSB(independent, pattern, in_independent,
+                                            cv::CALIB_CB_ACCURACY));
+    in_ours = AlignToTruth(in_ours, truth, pattern.width, pattern.height);
+    in_independent = AlignToTruth(in_independent, truth, pattern.width, pattern.height);
+    double rms_ours = 0, rms_independent = 0, rms_between = 0;
+    MaxCornerError(in_ours, truth, &rms_ours);
+    MaxCornerError(in_independent, truth, &rms_independent);
+    MaxCornerError(in_ours, in_independent, &rms_between);
+    const auto mean_error = [&](const std::vector<cv::Point2f>& found) {
+      cv::Point2d sum(0, 0);
+      for (std::size_t i = 0; i < truth.size(); ++i) sum += cv::Point2d(found[i] - truth[i]);
+      return sum * (1.0 / static_cast<double>(truth.size()));
+    };
+    const cv::Point2d bias_ours = mean_error(in_ours);
+    const cv::Point2d bias_independent = mean_error(in_independent);
+    // SB's error against the truth, and its systematic part (the mean over the board), are the
+    // same on both renders. Its individual corners do move by ~0.01-0.03 px RMS between them
+    // (and between 8 x 8 and 16 x 16 sub-samples of the independent render alone): SB reacts
+    // to a few gray levels on edge pixels, so corner-by-corner equality is not a fair check.
+    EXPECT_NEAR(rms_ours, rms_independent, 0.005) << "view " << k;
+    EXPECT_LT(cv::norm(bias_ours - bias_independent), 0.005) << "view " << k;
+    std::printf("view %zu tilt %.1f deg: SB rms vs truth %.4f (ours) %.4f (independent); mean "
+                "error (%.4f, %.4f) vs (%.4f, %.4f); corners between renders %.4f px rms\n",
+                k, TiltDeg(poses[k]), rms_ours, rms_independent, bias_ours.x, bias_ours.y,
+                bias_independent.x, bias_independent.y, rms_between);
+  }
+}
+
 TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
   const CameraIntrinsics intrinsics;
   const CameraModel camera{intrinsics};
