@@ -151,6 +151,49 @@ PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& op
   return out.Subset(keep);
 }
 
+std::vector<Eigen::Vector3d> MeshVertexNormals(const TriangleMesh& mesh) {
+  if (mesh.faces.empty()) {
+    throw InputError("mesh normals: the mesh has no faces; give a PLY mesh with faces, or a cloud "
+                     "with normals");
+  }
+  const std::size_t n = mesh.vertices.size();
+  std::vector<Eigen::Vector3d> normals(n, Eigen::Vector3d::Zero());
+  for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+    const Eigen::Vector3i& t = mesh.faces[f];
+    for (int k = 0; k < 3; ++k) {
+      if (t[k] < 0 || static_cast<std::size_t>(t[k]) >= n) {
+        throw InputError("mesh normals: face " + std::to_string(f) + " uses vertex " +
+                         std::to_string(t[k]) + ", but the mesh has " + std::to_string(n) +
+                         " vertices");
+      }
+    }
+    const Eigen::Vector3d& a = mesh.vertices.positions[t[0]];
+    // Twice the face's area along its normal: larger faces weigh more.
+    const Eigen::Vector3d area_normal =
+        (mesh.vertices.positions[t[1]] - a).cross(mesh.vertices.positions[t[2]] - a);
+    for (int k = 0; k < 3; ++k) normals[t[k]] += area_normal;
+  }
+  for (Eigen::Vector3d& v : normals) {
+    const double length = v.norm();
+    v = length > 1e-12 ? Eigen::Vector3d(v / length) : Eigen::Vector3d::Zero();
+  }
+  return normals;
+}
+
+PointCloud WithMeshNormals(const TriangleMesh& mesh, std::size_t* dropped) {
+  std::vector<Eigen::Vector3d> normals = MeshVertexNormals(mesh);
+  std::vector<std::size_t> keep;
+  keep.reserve(normals.size());
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    if (!normals[i].isZero()) keep.push_back(i);
+  }
+  PointCloud out = mesh.vertices;
+  out.normals = std::move(normals);
+  if (dropped) *dropped = out.size() - keep.size();
+  if (keep.size() == out.size()) return out;
+  return out.Subset(keep);
+}
+
 void OrientNormalsTowardViewpoint(PointCloud* cloud, const Viewpoint& viewpoint) {
   LASERCELL_CHECK(cloud->normals.size() == cloud->positions.size(),
                   "OrientNormalsTowardViewpoint needs one normal per point");

@@ -58,6 +58,17 @@ NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOpti
 PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& options,
                                 std::size_t* dropped = nullptr);
 
+/// Vertex normals of a triangle mesh (a CAD model): the area-weighted sum of the normals of
+/// the faces that use the vertex, unit length, oriented by the faces' winding (counter-clockwise
+/// seen from outside gives outward normals). Unlike a PCA fit this keeps the two sides of a thin
+/// shell apart and needs no viewpoint. A vertex no face uses, or whose faces cancel, gets a
+/// zero normal. Throws InputError when the mesh has no faces or a face index is out of range.
+std::vector<Eigen::Vector3d> MeshVertexNormals(const TriangleMesh& mesh);
+
+/// The mesh's vertices with MeshVertexNormals; vertices without a normal are dropped (their
+/// count in *dropped when given).
+PointCloud WithMeshNormals(const TriangleMesh& mesh, std::size_t* dropped = nullptr);
+
 /// Flips every normal to face the sensor (n . (sensor - p) >= 0). Normals must be present.
 void OrientNormalsTowardViewpoint(PointCloud* cloud, const Viewpoint& viewpoint);
 

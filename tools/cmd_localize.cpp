@@ -12,10 +12,12 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/yaml_fields.hpp"
 #include "registration/localize_in_cloud.hpp"
+#include "registration/normals.hpp"
 #include "registration/ppf_model.hpp"
 #include "tools/commands.hpp"
 
@@ -165,6 +167,20 @@ nlohmann::json ResultJson(const LocalizationResult& r, const LocalizeArgs& args,
   return j;
 }
 
+// The model as points with normals: a PLY mesh without normals gets its vertex normals from its
+// faces (outward, both sides of a thin shell kept apart); anything else is read as a cloud
+// (PpfModel::Build estimates normals when absent).
+PointCloud ReadModelCloud(const std::string& path) {
+  if (io::LowerExtension(path) == ".ply") {
+    TriangleMesh mesh = io::ReadPlyMesh(path);
+    if (!mesh.faces.empty() && !mesh.vertices.HasNormals()) {
+      return registration::WithMeshNormals(mesh);
+    }
+    return std::move(mesh.vertices);
+  }
+  return io::ReadPointCloud(path);
+}
+
 void Localize(const LocalizeArgs& args) {
   LocalizeOptions options;
   PpfModelOptions model_options;
@@ -188,9 +204,8 @@ void Localize(const LocalizeArgs& args) {
 
   const auto start = std::chrono::steady_clock::now();
   const bool prebuilt = io::LowerExtension(args.model) == ".ppfm";
-  const PpfModel model =
-      prebuilt ? PpfModel::Load(args.model)
-               : PpfModel::Build(io::ReadPointCloud(args.model), model_options);
+  const PpfModel model = prebuilt ? PpfModel::Load(args.model)
+                                  : PpfModel::Build(ReadModelCloud(args.model), model_options);
   const double model_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!args.save_model.empty()) model.Save(args.save_model);
@@ -198,7 +213,15 @@ void Localize(const LocalizeArgs& args) {
   const PointCloud scene = io::ReadPointCloud(args.scene);
   const LocalizationResult result = registration::LocalizeInCloud(scene, model, options);
   io::WriteFileAtomically(args.out, ResultJson(result, args, model_ms).dump(2) + "\n");
-  if (!args.quiet) std::printf("%s\nwrote %s\n", result.Summary().c_str(), args.out.c_str());
+  if (!args.quiet) {
+    std::printf("%s\n", result.Summary().c_str());
+    // The best pose in cell.yaml's notation, comparable with a frame graph or simulator truth.
+    if (result.found) {
+      std::printf("scene_from_model: %s\n",
+                  PoseToFileNotation(result.candidates.front().scene_from_model).c_str());
+    }
+    std::printf("wrote %s\n", args.out.c_str());
+  }
 }
 
 }  // namespace
@@ -208,8 +231,8 @@ void AddLocalizeCommand(CLI::App& app) {
       "localize", "Find a part model in a scene cloud: PPF voting, clustering, verification, ICP");
   auto args = std::make_shared<LocalizeArgs>();
   cmd->add_option("--model", args->model,
-                  "Part model: PLY/PCD cloud or mesh vertices (normals estimated when absent), "
-                  "or a prebuilt .ppfm model")
+                  "Part model: PLY mesh (vertex normals from its faces), PLY/PCD cloud "
+                  "(normals estimated when absent), or a prebuilt .ppfm model")
       ->required();
   cmd->add_option("--scene", args->scene, "Scene cloud, PLY or PCD (mm)")->required();
   cmd->add_option("--out", args->out, "Result JSON (written atomically)")->required();

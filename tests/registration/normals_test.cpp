@@ -3,9 +3,15 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+#include <numbers>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "core/error.hpp"
+#include "core/io/point_cloud_io.hpp"
 #include "registration_test_util.hpp"
 
 namespace lasercell::registration {
@@ -159,6 +165,108 @@ TEST(NormalsTest, RejectsBadOptionsAndInput) {
   PointCloud nan_cloud;
   nan_cloud.positions = {{0, 0, 0}, {std::nan(""), 0, 0}, {1, 1, 0}};
   EXPECT_THROW(EstimateNormals(nan_cloud, NormalOptions{}), InputError);
+}
+
+// Two 100 x 100 mm sheets 4 mm apart on a 2 mm grid, the top wound counter-clockwise seen from
+// +z, the bottom seen from -z: the two sides of a thin shell, as in a CAD part (the simulated
+// chair seat is 8 mm thick).
+TriangleMesh ThinSlab(int cells, double step_mm, double thickness_mm) {
+  TriangleMesh mesh;
+  const int n = cells + 1;
+  for (int side = 0; side < 2; ++side) {
+    const double z = side == 0 ? thickness_mm / 2 : -thickness_mm / 2;
+    const int base = side * n * n;
+    for (int r = 0; r < n; ++r) {
+      for (int c = 0; c < n; ++c) mesh.vertices.positions.push_back({c * step_mm, r * step_mm, z});
+    }
+    for (int r = 0; r < cells; ++r) {
+      for (int c = 0; c < cells; ++c) {
+        const int a = base + r * n + c, b = a + 1, d = a + n, e = d + 1;
+        if (side == 0) {
+          mesh.faces.push_back({a, b, e});
+          mesh.faces.push_back({a, e, d});
+        } else {
+          mesh.faces.push_back({a, e, b});
+          mesh.faces.push_back({a, d, e});
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+TEST(MeshNormalsTest, TheTwoSidesOfAThinShellPointAwayFromEachOther) {
+  const TriangleMesh slab = ThinSlab(50, 2.0, 4.0);
+  const std::vector<Eigen::Vector3d> normals = MeshVertexNormals(slab);
+  ASSERT_EQ(normals.size(), slab.vertices.size());
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    const double side = slab.vertices.positions[i].z() > 0 ? 1.0 : -1.0;
+    EXPECT_NEAR(normals[i].z(), side, 1e-12) << "vertex " << i;
+  }
+  // A PCA fit over 12 neighbours of this 2 mm grid reaches across the 4 mm gap and loses the
+  // side: with the normal flipped toward a viewpoint above, half the vertices face the wrong way.
+  NormalOptions pca;
+  pca.viewpoint = Viewpoint::AtPoint({50, 50, 1000});
+  const NormalEstimationResult estimated = EstimateNormals(slab.vertices, pca);
+  int wrong_side = 0;
+  for (std::size_t i = 0; i < estimated.normals.size(); ++i) {
+    const double side = slab.vertices.positions[i].z() > 0 ? 1.0 : -1.0;
+    if (estimated.valid[i] && estimated.normals[i].z() * side < 0) ++wrong_side;
+  }
+  EXPECT_GT(wrong_side, static_cast<int>(slab.vertices.size()) / 3);
+}
+
+TEST(MeshNormalsTest, UnusedVerticesAreDroppedAndCounted) {
+  TriangleMesh mesh = ThinSlab(4, 1.0, 1.0);
+  mesh.vertices.positions.push_back({100, 100, 100});  // no face uses it
+  std::size_t dropped = 0;
+  const PointCloud cloud = WithMeshNormals(mesh, &dropped);
+  EXPECT_EQ(dropped, 1u);
+  EXPECT_EQ(cloud.size(), mesh.vertices.size() - 1);
+  ASSERT_TRUE(cloud.HasNormals());
+  for (const Eigen::Vector3d& n : cloud.normals) EXPECT_NEAR(n.norm(), 1.0, 1e-12);
+}
+
+// Real data: the UWA parasaurolophus mesh ships with vertex normals written by VCGLIB
+// (unnormalized, from a processing history we do not know). Ours from its faces must agree
+// with them in side and, for almost every vertex, in direction. Measured: median 2.10 deg, 99th
+// percentile 41 deg (vertices on the thin crest and the feet, where one face more or less
+// turns the normal), 15 of 6700 on the opposite side.
+TEST(MeshNormalsTest, AgreeWithTheNormalsShippedWithTheRealUwaMesh) {
+  const std::string path = test::RealDataFile("uwa", "parasaurolophus_6700.ply");
+  ASSERT_FALSE(path.empty()) << "datasets/real/uwa/parasaurolophus_6700.ply missing";
+  const TriangleMesh mesh = io::ReadPlyMesh(path);
+  ASSERT_FALSE(mesh.faces.empty());
+  const std::vector<Eigen::Vector3d> ours = MeshVertexNormals(mesh);
+  std::vector<double> angles_deg;
+  int opposite = 0;
+  for (std::size_t i = 0; i < ours.size(); ++i) {
+    if (ours[i].isZero()) continue;
+    const double c = std::clamp(ours[i].dot(mesh.vertices.normals[i].normalized()), -1.0, 1.0);
+    if (c < 0) ++opposite;
+    angles_deg.push_back(std::acos(c) * 180.0 / std::numbers::pi);
+  }
+  ASSERT_GT(angles_deg.size(), mesh.vertices.size() * 99 / 100);
+  std::sort(angles_deg.begin(), angles_deg.end());
+  const double median = angles_deg[angles_deg.size() / 2];
+  const double p99 = angles_deg[angles_deg.size() * 99 / 100];
+  std::printf("UWA mesh: %zu vertex normals, median %.4f deg, 99th percentile %.4f deg, %d "
+              "opposite\n",
+              angles_deg.size(), median, p99, opposite);
+  EXPECT_LT(median, 5.0);
+  EXPECT_LT(p99, 60.0);
+  EXPECT_LT(opposite, static_cast<int>(angles_deg.size()) / 200);  // < 0.5 %
+}
+
+TEST(MeshNormalsTest, RejectsAMeshWithoutFacesOrWithABadIndex) {
+  TriangleMesh mesh = ThinSlab(2, 1.0, 1.0);
+  TriangleMesh no_faces = mesh;
+  no_faces.faces.clear();
+  EXPECT_THAT([&] { MeshVertexNormals(no_faces); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("has no faces")));
+  mesh.faces[3] = {0, 1, 999};
+  EXPECT_THAT([&] { MeshVertexNormals(mesh); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("face 3 uses vertex 999")));
 }
 
 }  // namespace
