@@ -113,11 +113,10 @@ inline CommandResult RunCliMerged(const std::string& args) {
 /// Loads the HTML page at `path` in Debian's headless chromium and returns the DOM after its
 /// scripts ran; "" when chromium did not run (scripts/install-deps installs it).
 inline std::string HeadlessChromiumDom(const std::string& path) {
-  return RunCommand(
-             "chromium --headless --no-sandbox --disable-gpu --disable-dev-shm-usage "
-             "--dump-dom 'file://" +
-             path + "' 2>/dev/null")
-      .out;
+  const std::string command =
+      "chromium --headless --no-sandbox --disable-gpu --disable-dev-shm-usage --dump-dom 'file://" +
+      path + "' 2>/dev/null";
+  return RunCommand(command).out;
 }
 
 /// A fresh, empty folder <tmp>/lasercell_<tag>_<test name>_<pid> for the running test (without
