@@ -27,22 +27,48 @@ namespace lasercell::calib {
 
 namespace {
 
-// Ambient covariance of the unit normal n (SphereManifold) and its cross term with d, from
-// Ceres's tangent-space blocks: C = J C_t J^T with J = dPlus/ddelta at 0. Ceres 2.1's own
-// lifting to the ambient space allocates Eigen matrices across the libceres boundary, which
-// ASan reports as a bad free in the sanitizer build (Debian's libceres vs our instrumented
-// Eigen instantiations); the tangent blocks are plain copies.
-void NormalCovariance(const ceres::Covariance& covariance, const double* n, const double* d,
-                      Eigen::Matrix3d* cnn, Eigen::Vector3d* cnd) {
+// Covariance settings shared by the plane fits: dense SVD with a pseudo-inverse, so a
+// degenerate problem gives huge sigmas instead of failing.
+ceres::Covariance::Options PlaneCovarianceOptions() {
+  ceres::Covariance::Options options;
+  options.algorithm_type = ceres::DENSE_SVD;
+  options.null_space_rank = -1;
+  options.min_reciprocal_condition_number = 1e-14;
+  return options;
+}
+
+// The covariance blocks PlaneCovariance reads for the plane {n[3], d}.
+std::vector<std::pair<const double*, const double*>> PlaneCovarianceBlocks(const double* n,
+                                                                           const double* d) {
+  return {{n, n}, {n, d}, {d, d}};
+}
+
+// Ambient 4x4 covariance of the plane {n, d} (n the unit normal on a SphereManifold<3>, then d),
+// scaled by `scale` (the variance of unit weight; 1 when the residuals are already whitened) and
+// symmetrized. The normal blocks come from Ceres's tangent-space blocks: C = J C_t J^T with
+// J = dPlus/ddelta at 0. Ceres 2.1's own lifting to the ambient space allocates Eigen matrices
+// across the libceres boundary, which ASan reports as a bad free in the sanitizer build (Debian's
+// libceres vs our instrumented Eigen instantiations); the tangent blocks are plain copies.
+// `covariance` must have been computed over PlaneCovarianceBlocks(n, d).
+Eigen::Matrix4d PlaneCovariance(const ceres::Covariance& covariance, const double* n,
+                                const double* d, double scale) {
   const ceres::SphereManifold<3> sphere;
   Eigen::Matrix<double, 3, 2, Eigen::RowMajor> j;
   sphere.PlusJacobian(n, j.data());
   Eigen::Matrix<double, 2, 2, Eigen::RowMajor> ctt;
   Eigen::Vector2d ctd;
+  double cdd = 0;
   covariance.GetCovarianceBlockInTangentSpace(n, n, ctt.data());
   covariance.GetCovarianceBlockInTangentSpace(n, d, ctd.data());
-  *cnn = j * ctt * j.transpose();
-  *cnd = j * ctd;
+  covariance.GetCovarianceBlock(d, d, &cdd);
+  const Eigen::Vector3d cnd = j * ctd;
+  Eigen::Matrix4d c;
+  c.topLeftCorner<3, 3>() = j * ctt * j.transpose();
+  c.topRightCorner<3, 1>() = cnd;
+  c.bottomLeftCorner<1, 3>() = cnd.transpose();
+  c(3, 3) = cdd;
+  c *= scale;
+  return 0.5 * (c + c.transpose());
 }
 
 constexpr double kRadToDeg = 180.0 / M_PI;
@@ -77,6 +103,32 @@ struct PlaneFit {
   std::string termination;
 };
 
+/// Solver settings shared by the plane fits: tight tolerances, at most 100 iterations, one thread.
+ceres::Solver::Options PlaneSolverOptions(ceres::LinearSolverType linear_solver) {
+  ceres::Solver::Options options;
+  options.linear_solver_type = linear_solver;
+  options.max_num_iterations = 100;
+  options.function_tolerance = 1e-14;
+  options.parameter_tolerance = 1e-14;
+  options.num_threads = 1;
+  return options;
+}
+
+/// Solves `problem` (whose plane parameter blocks are n[3] and d[1]) and records the outcome and
+/// the solved plane (normal re-normalized) in `fit`; returns Ceres's final cost (half the sum of
+/// squared residuals).
+double SolvePlaneProblem(const ceres::Solver::Options& options, ceres::Problem& problem,
+                         const double* n, const double* d, PlaneFit* fit) {
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  fit->converged = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
+  fit->iterations = static_cast<int>(summary.iterations.size());
+  fit->termination = summary.message;
+  fit->normal = Eigen::Vector3d(n[0], n[1], n[2]).normalized();
+  fit->offset = *d;
+  return summary.final_cost;
+}
+
 /// Adds residual blocks given the parameter blocks (normal[3], offset[1], zero_distance[1],
 /// tilt[1]).
 using AddResiduals = std::function<int(ceres::Problem&, double*, double*, double*, double*)>;
@@ -95,45 +147,20 @@ PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_dista
   problem.SetManifold(n, new ceres::SphereManifold<3>());
   if (problem.HasParameterBlock(&z) && !estimate_zero_distance) problem.SetParameterBlockConstant(&z);
   if (problem.HasParameterBlock(&a) && !estimate_tilt) problem.SetParameterBlockConstant(&a);
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 100;
-  options.function_tolerance = 1e-14;
-  options.parameter_tolerance = 1e-14;
+  ceres::Solver::Options options = PlaneSolverOptions(ceres::DENSE_QR);
   options.gradient_tolerance = 1e-16;
-  options.num_threads = 1;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  fit.converged = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
-  fit.iterations = static_cast<int>(summary.iterations.size());
-  fit.termination = summary.message;
-  fit.normal = Eigen::Vector3d(n[0], n[1], n[2]).normalized();
-  fit.offset = d;
+  const double final_cost = SolvePlaneProblem(options, problem, n, &d, &fit);
   fit.zero_distance = z;
   fit.tilt = a;
   const int dof = count - 3 - (estimate_zero_distance ? 1 : 0) - (estimate_tilt ? 1 : 0);
-  const double sigma2 = dof > 0 ? 2.0 * summary.final_cost / dof : 0.0;
+  const double sigma2 = dof > 0 ? 2.0 * final_cost / dof : 0.0;
 
-  ceres::Covariance::Options cov_options;
-  cov_options.algorithm_type = ceres::DENSE_SVD;
-  cov_options.null_space_rank = -1;  // pseudo-inverse: a degenerate problem gives huge sigmas
-  cov_options.min_reciprocal_condition_number = 1e-14;
-  ceres::Covariance covariance(cov_options);
-  std::vector<std::pair<const double*, const double*>> blocks = {{n, n}, {n, &d}, {&d, &d}};
+  ceres::Covariance covariance(PlaneCovarianceOptions());
+  std::vector<std::pair<const double*, const double*>> blocks = PlaneCovarianceBlocks(n, &d);
   if (estimate_zero_distance) blocks.push_back({&z, &z});
   if (estimate_tilt) blocks.push_back({&a, &a});
   if (covariance.Compute(blocks, &problem)) {
-    Eigen::Matrix3d cnn;
-    Eigen::Vector3d cnd;
-    double cdd = 0;
-    NormalCovariance(covariance, n, &d, &cnn, &cnd);
-    covariance.GetCovarianceBlock(&d, &d, &cdd);
-    fit.covariance.topLeftCorner<3, 3>() = cnn;
-    fit.covariance.topRightCorner<3, 1>() = cnd;
-    fit.covariance.bottomLeftCorner<1, 3>() = cnd.transpose();
-    fit.covariance(3, 3) = cdd;
-    fit.covariance *= sigma2;
-    fit.covariance = 0.5 * (fit.covariance + fit.covariance.transpose()).eval();
+    fit.covariance = PlaneCovariance(covariance, n, &d, sigma2);
     if (estimate_zero_distance) {
       covariance.GetCovarianceBlock(&z, &z, &fit.zero_distance_variance);
       fit.zero_distance_variance *= sigma2;
@@ -688,19 +715,7 @@ PlaneFit JointStripeFit(const std::map<int, ImagePoints>& views, const Chessboar
       }
     }
     problem.SetManifold(n, new ceres::SphereManifold<3>());
-    ceres::Solver::Options options;
-    options.linear_solver_type = ceres::DENSE_SCHUR;
-    options.max_num_iterations = 100;
-    options.function_tolerance = 1e-14;
-    options.parameter_tolerance = 1e-14;
-    options.num_threads = 1;
-    ceres::Solver::Summary summary;
-    ceres::Solve(options, &problem, &summary);
-    fit.converged = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
-    fit.iterations = static_cast<int>(summary.iterations.size());
-    fit.termination = summary.message;
-    fit.normal = Eigen::Vector3d(n[0], n[1], n[2]).normalized();
-    fit.offset = d;
+    SolvePlaneProblem(PlaneSolverOptions(ceres::DENSE_SCHUR), problem, n, &d, &fit);
     // Re-estimate each group's sigma from its residuals (unit-weight residuals ~ N(0, 1) when
     // the sigma is right); the second pass uses them.
     const auto group_rms = [&](const std::vector<ceres::ResidualBlockId>& blocks, int per_block) {
@@ -712,24 +727,11 @@ PlaneFit JointStripeFit(const std::map<int, ImagePoints>& views, const Chessboar
     };
     const double corner_scale = group_rms(corner_blocks, 2);
     const double stripe_scale = group_rms(stripe_blocks, 1);
-    ceres::Covariance::Options cov_options;
-    cov_options.algorithm_type = ceres::DENSE_SVD;
-    cov_options.null_space_rank = -1;
-    cov_options.min_reciprocal_condition_number = 1e-14;
-    ceres::Covariance covariance(cov_options);
-    const std::vector<std::pair<const double*, const double*>> blocks = {{n, n}, {n, &d}, {&d, &d}};
+    ceres::Covariance covariance(PlaneCovarianceOptions());
     fit.covariance_ok = false;
-    if (covariance.Compute(blocks, &problem)) {
-      Eigen::Matrix3d cnn;
-      Eigen::Vector3d cnd;
-      double cdd = 0;
-      NormalCovariance(covariance, n, &d, &cnn, &cnd);
-      covariance.GetCovarianceBlock(&d, &d, &cdd);
-      fit.covariance.topLeftCorner<3, 3>() = cnn;
-      fit.covariance.topRightCorner<3, 1>() = cnd;
-      fit.covariance.bottomLeftCorner<1, 3>() = cnd.transpose();
-      fit.covariance(3, 3) = cdd;
-      fit.covariance = 0.5 * (fit.covariance + fit.covariance.transpose()).eval();
+    if (covariance.Compute(PlaneCovarianceBlocks(n, &d), &problem)) {
+      // Unit-weight residuals (both groups' sigmas re-estimated above): no further scaling.
+      fit.covariance = PlaneCovariance(covariance, n, &d, 1.0);
       fit.covariance_ok = fit.covariance.allFinite();
     }
     if (refined_poses != nullptr) {

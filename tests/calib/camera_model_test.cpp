@@ -2,14 +2,12 @@
 
 #include <gtest/gtest.h>
 
-#include <filesystem>
-#include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <memory>
 #include <sstream>
+#include <string>
 
 #include "core/error.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -61,15 +59,14 @@ TEST(CameraModel, GradientsMatchNumericDifferences) {
 
 TEST(CameraModel, FileRoundTripIsExact) {
   const CameraModel model = Opencv8();
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "lasercell_camera_model_test.cameramodel").string();
+  const test::TestDir dir("camera_model");
+  const std::string path = dir.File("model.cameramodel");
   SaveCameraModel(path, model, "test model\nsecond line");
   const CameraModel back = LoadCameraModel(path);
   EXPECT_EQ(back.lensmodel(), model.lensmodel());
   EXPECT_EQ(back.intrinsics(), model.intrinsics());
   EXPECT_EQ(back.width_px(), 1024);
   EXPECT_EQ(back.height_px(), 1024);
-  std::filesystem::remove(path);
 }
 
 TEST(CameraModel, SplinedModelNameRoundTrips) {
@@ -90,8 +87,8 @@ TEST(CameraModel, SplinedModelNameRoundTrips) {
 // intrinsics, and mrcal.project agrees with our projection.
 TEST(CameraModel, MrcalsOwnToolsReadOurFiles) {
   const CameraModel model = Opencv8();
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "lasercell_mrcal_tools_test.cameramodel").string();
+  const test::TestDir dir("mrcal_tools");
+  const std::string path = dir.File("model.cameramodel");
   SaveCameraModel(path, model, "written by lasercell's camera_model_test");
   const std::string script =
       "import sys, numpy as np, mrcal\n"
@@ -101,14 +98,12 @@ TEST(CameraModel, MrcalsOwnToolsReadOurFiles) {
       "print(lens, m.imagersize()[0], m.imagersize()[1])\n"
       "print(' '.join(float(x).hex() for x in intr))\n"
       "print(repr(float(q[0])), repr(float(q[1])))\n";
-  const std::string script_path = path + ".py";
-  std::ofstream(script_path) << script;
-  const std::string command = "/usr/bin/python3 " + script_path + " " + path + " 2>&1";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
-  ASSERT_TRUE(pipe);
-  std::string out;
-  char buffer[4096];
-  while (std::size_t n = std::fread(buffer, 1, sizeof(buffer), pipe.get())) out.append(buffer, n);
+  const std::string script_path = dir.File("read_model.py");
+  test::Spit(script_path, script);
+  const test::CommandResult python =
+      test::RunCommand("/usr/bin/python3 " + script_path + " " + path + " 2>&1");
+  const std::string& out = python.out;
+  ASSERT_EQ(python.exit_code, 0) << out;
   std::istringstream lines(out);
   std::string lens;
   int width = 0, height = 0;
@@ -126,8 +121,6 @@ TEST(CameraModel, MrcalsOwnToolsReadOurFiles) {
   const Eigen::Vector2d q = model.Project(Eigen::Vector3d(120.0, -80.0, 650.0));
   EXPECT_NEAR(u, q.x(), 1e-9);
   EXPECT_NEAR(v, q.y(), 1e-9);
-  std::filesystem::remove(path);
-  std::filesystem::remove(script_path);
 }
 
 TEST(CameraModel, BadInputsSayWhatIsWrong) {

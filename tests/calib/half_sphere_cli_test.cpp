@@ -2,15 +2,10 @@
 // and the CLI's bad-input paths (exit 2, one line naming the problem).
 #include <gtest/gtest.h>
 
-#include <cstdio>
 #include <algorithm>
-#include <cstdlib>
-#include <sys/wait.h>
-#include <unistd.h>
+#include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 
 #include "core/frame_graph.hpp"
@@ -18,36 +13,20 @@
 #include "core/io/point_cloud_io.hpp"
 #include "core/se3.hpp"
 #include "tests/calib/sphere_sweep_sim.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell::calib {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int code;
-  std::string err;
-};
-
-CliRun Cli(const std::string& args, const fs::path& dir) {
-  const fs::path err = dir / "stderr.txt";
-  const std::string cmd = std::string(LASERCELL_CLI) + " " + args + " > " +
-                          (dir / "stdout.txt").string() + " 2> " + err.string();
-  const int status = std::system(cmd.c_str());
-  std::ifstream in(err);
-  std::stringstream s;
-  s << in.rdbuf();
-  return {WEXITSTATUS(status), s.str()};
-}
+using ::lasercell::test::CommandResult;
+using ::lasercell::test::RunCli;
 
 class CalibrateSpheresCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("lasercell_spheres_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = ::lasercell::test::MakeTestDir("spheres_cli");
     const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
     io::WritePointCloud((dir_ / "sweep.ply").string(), sim.cloud);
     datasets::SimConfig config;
@@ -64,9 +43,7 @@ class CalibrateSpheresCli : public ::testing::Test {
     SaveFrameGraph((dir_ / "cell.yaml").string(), graph);
   }
   // LASERCELL_KEEP_TEST_FILES=1 keeps the folder (sweep, touches, cell, JSON, report) to look at.
-  void TearDown() override {
-    if (std::getenv("LASERCELL_KEEP_TEST_FILES") == nullptr) fs::remove_all(dir_);
-  }
+  void TearDown() override { ::lasercell::test::RemoveTestDir(dir_); }
 
   std::string Args(const std::string& cell = "cell.yaml", const std::string& sweep = "sweep.ply",
                    const std::string& touches = "touches.yaml") const {
@@ -79,9 +56,9 @@ class CalibrateSpheresCli : public ::testing::Test {
 };
 
 TEST_F(CalibrateSpheresCli, WritesTheEdgeTheJsonAndTheReport) {
-  const CliRun run = Cli(Args() + " --report " + (dir_ / "r.html").string() + " --json " +
-                          (dir_ / "r.json").string(), dir_);
-  ASSERT_EQ(run.code, 0) << run.err;
+  const CommandResult run = RunCli(Args() + " --report " + (dir_ / "r.html").string() + " --json " +
+                                   (dir_ / "r.json").string());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
   const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
 
   // JSON: versioned, the pose in the file notation, residuals and 1-sigma.
@@ -130,14 +107,14 @@ TEST_F(CalibrateSpheresCli, WritesTheEdgeTheJsonAndTheReport) {
   EXPECT_NE(html.find("Residual per sphere"), std::string::npos);
 
   // A second run replaces the edge, it does not add one.
-  ASSERT_EQ(Cli(Args(), dir_).code, 0);
+  ASSERT_EQ(RunCli(Args()).exit_code, 0);
   EXPECT_EQ(LoadFrameGraph((dir_ / "cell.yaml").string()).static_edges().size(), 2u);
 }
 
 TEST_F(CalibrateSpheresCli, FreeRadiusFitsTheRadiiAndAgreesWithTheTruth) {
-  const CliRun run = Cli(Args() + " --free-radius --sweep-frame sweep_start --json " +
-                             (dir_ / "f.json").string(), dir_);
-  ASSERT_EQ(run.code, 0) << run.err;
+  const CommandResult run = RunCli(Args() + " --free-radius --sweep-frame sweep_start --json " +
+                                   (dir_ / "f.json").string());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json j = nlohmann::json::parse(io::ReadFileBytes((dir_ / "f.json").string()));
   ASSERT_EQ(j["spheres"].size(), 4u);
   for (const auto& s : j["spheres"]) {
@@ -157,21 +134,21 @@ TEST_F(CalibrateSpheresCli, FreeRadiusFitsTheRadiiAndAgreesWithTheTruth) {
 
 TEST_F(CalibrateSpheresCli, RefusesAnEdgeThatWouldCloseACycle) {
   SaveFrameGraph((dir_ / "truth_cell.yaml").string(), truth_.Graph());
-  const CliRun run = Cli(Args("truth_cell.yaml"), dir_);
-  EXPECT_EQ(run.code, 2);
+  const CommandResult run = RunCli(Args("truth_cell.yaml"));
+  EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("handling_base and 'sensor' are already connected through other edges"),
             std::string::npos) << run.err;
   EXPECT_NE(run.err.find("--sweep-frame"), std::string::npos);
   // With a frame of its own it works.
-  EXPECT_EQ(Cli(Args("truth_cell.yaml") + " --sweep-frame sweep_start", dir_).code, 0);
+  EXPECT_EQ(RunCli(Args("truth_cell.yaml") + " --sweep-frame sweep_start").exit_code, 0);
 }
 
 TEST_F(CalibrateSpheresCli, NoSphereInTheSweepIsAClearError) {
   // The real UWA rs1 scan (no calibration spheres in it).
   fs::copy_file(fs::path(LASERCELL_SOURCE_DIR) / "datasets/real/uwa/rs1_normals.bin.ply",
                 dir_ / "rs1.ply");
-  const CliRun run = Cli(Args("cell.yaml", "rs1.ply"), dir_);
-  EXPECT_EQ(run.code, 2);
+  const CommandResult run = RunCli(Args("cell.yaml", "rs1.ply"));
+  EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("rs1.ply: no sphere of radius 25 mm found"), std::string::npos)
       << run.err;
   EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
@@ -181,16 +158,16 @@ TEST_F(CalibrateSpheresCli, BadTouchesFilesAreClearErrors) {
   std::string text = io::ReadFileBytes((dir_ / "touches.yaml").string());
   io::WriteFileAtomically((dir_ / "t1.yaml").string(),
                           text + "units: m\n");
-  CliRun run = Cli(Args("cell.yaml", "sweep.ply", "t1.yaml"), dir_);
-  EXPECT_EQ(run.code, 2);
+  CommandResult run = RunCli(Args("cell.yaml", "sweep.ply", "t1.yaml"));
+  EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("t1.yaml: line"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("unknown field 'units'"), std::string::npos) << run.err;
   // Only two spheres touched.
   const std::size_t third = text.find("  - sphere: 2");
   ASSERT_NE(third, std::string::npos);
   io::WriteFileAtomically((dir_ / "t2.yaml").string(), text.substr(0, third));
-  run = Cli(Args("cell.yaml", "sweep.ply", "t2.yaml"), dir_);
-  EXPECT_EQ(run.code, 2);
+  run = RunCli(Args("cell.yaml", "sweep.ply", "t2.yaml"));
+  EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("2 sphere touches: at least 3 non-collinear spheres"), std::string::npos)
       << run.err;
   // The cell file is untouched by failed runs.

@@ -4,26 +4,23 @@
 // the cell gets only the vision_flange -> sensor edge, the JSON re-reads with its version and
 // poses in the file notation, the report has its plots; bad inputs exit 2 with a named error.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <cstdio>
-#include <cstdlib>
+#include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <sstream>
 #include <string>
 
+#include "calib/pose_io.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
-#include "calib/pose_io.hpp"
 #include "datasets/calibration_captures.hpp"
 #include "datasets/sensor.hpp"
 #include "datasets/sim_config.hpp"
 #include "datasets/simulate.hpp"
 #include "tests/calib/kuka2_data.hpp"
-#include <random>
+#include "tests/cli_util.hpp"
 
 namespace lasercell {
 namespace {
@@ -38,30 +35,13 @@ namespace fs = std::filesystem;
     ASSERT_TRUE(kuka2_->error.empty()) << kuka2_->error;                             \
   } while (false)
 
-struct CliRun {
-  int code = 0;
-  std::string output;
-};
-
-CliRun RunCli(const std::string& args) {
-  const std::string cmd = std::string(LASERCELL_CLI) + " " + args + " 2>&1";
-  CliRun r;
-  FILE* p = popen(cmd.c_str(), "r");
-  if (!p) return {-1, "popen failed"};
-  char buf[4096];
-  while (std::fgets(buf, sizeof buf, p)) r.output += buf;
-  const int status = pclose(p);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
+using ::lasercell::test::CommandResult;
+using ::lasercell::test::RunCliMerged;
 
 class HandEyeCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("lasercell_handeye_cli_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::create_directories(dir_);
+    dir_ = test::MakeTestDir("handeye_cli");
     FrameGraph g;
     g.AddFrame("vision_base");
     StaticEdge e;
@@ -71,7 +51,7 @@ class HandEyeCli : public ::testing::Test {
     g.SetStaticEdge(e);
     SaveFrameGraph((dir_ / "cell.yaml").string(), g);
   }
-  void TearDown() override { fs::remove_all(dir_); }
+  void TearDown() override { test::RemoveTestDir(dir_); }
 
   // kuka2 input files: the shared RobotPosesVec.txt, and corners.txt / camera.cameramodel
   // written here from the detections computed in the test process (call after REQUIRE_KUKA2).
@@ -96,11 +76,11 @@ TEST_F(HandEyeCli, Kuka2CornersUpdateOnlyTheFlangeEdgeAndWriteJsonAndReport) {
   const std::string cell = (dir_ / "cell.yaml").string();
   const std::string json = (dir_ / "he.json").string();
   const std::string html = (dir_ / "he.html").string();
-  const CliRun r = RunCli("calibrate handeye --cell " + cell + " --camera " +
-                       Data("camera.cameramodel") + " --corners " + Data("corners.txt") +
-                       " --poses " + Data("RobotPosesVec.txt") +
-                       " --pose-format kuka --json " + json + " --report " + html);
-  ASSERT_EQ(r.code, 0) << r.output;
+  const CommandResult r =
+      RunCliMerged("calibrate handeye --cell " + cell + " --camera " + Data("camera.cameramodel") +
+                   " --corners " + Data("corners.txt") + " --poses " + Data("RobotPosesVec.txt") +
+                   " --pose-format kuka --json " + json + " --report " + html);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
   const FrameGraph g = LoadFrameGraph(cell);
   ASSERT_EQ(g.static_edges().size(), 2u);
   EXPECT_EQ(g.static_edges()[0].child, "vision_flange");  // untouched
@@ -135,12 +115,13 @@ TEST_F(HandEyeCli, MismatchedPoseCountIsRejected) {
   for (int i = 0; i < 27 && std::getline(in, line); ++i) text += line + "\n";
   const std::string poses = (dir_ / "poses27.txt").string();
   io::WriteFileAtomically(poses, text);
-  const CliRun r = RunCli("calibrate handeye --cell " + (dir_ / "cell.yaml").string() +
-                       " --camera " + Data("camera.cameramodel") + " --corners " +
-                       Data("corners.txt") + " --poses " + poses + " --pose-format kuka");
-  EXPECT_EQ(r.code, 2) << r.output;
-  EXPECT_NE(r.output.find("28 images in"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("but 27 poses in"), std::string::npos) << r.output;
+  const CommandResult r =
+      RunCliMerged("calibrate handeye --cell " + (dir_ / "cell.yaml").string() + " --camera " +
+                   Data("camera.cameramodel") + " --corners " + Data("corners.txt") + " --poses " +
+                   poses + " --pose-format kuka");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("28 images in"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("but 27 poses in"), std::string::npos) << r.out;
 }
 
 TEST_F(HandEyeCli, PosesInMetresGivenAsYamlAreRejected) {
@@ -151,11 +132,11 @@ TEST_F(HandEyeCli, PosesInMetresGivenAsYamlAreRejected) {
       "format: lasercell.robot_poses\nversion: 1\nposes:\n"
       "  - {translation_mm: [0.5, 0.1, 0.9], rotation_wxyz: [1, 0, 0, 0]}\n"
       "  - {translation_mm: [0.6, 0.1, 0.9], rotation_wxyz: [0.9950041652780258, 0.09983341664682815, 0, 0]}\n");
-  const CliRun r = RunCli("calibrate handeye --cell " + (dir_ / "cell.yaml").string() +
-                       " --camera " + Data("camera.cameramodel") + " --corners " +
-                       Data("corners.txt") + " --poses " + poses);
-  EXPECT_EQ(r.code, 2) << r.output;
-  EXPECT_NE(r.output.find("look like metres"), std::string::npos) << r.output;
+  const CommandResult r = RunCliMerged("calibrate handeye --cell " + (dir_ / "cell.yaml").string() +
+                                       " --camera " + Data("camera.cameramodel") + " --corners " +
+                                       Data("corners.txt") + " --poses " + poses);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find("look like metres"), std::string::npos) << r.out;
 }
 
 // The simulator's record path: records/hand_eye_images.yaml (commanded joints) through the robot
@@ -188,15 +169,15 @@ TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
     }
   }
   io::WriteFileAtomically((dir_ / "corners.txt").string(), calib::ChessboardDetectionsText(det));
-  const CliRun r = RunCli("calibrate handeye --cell " + cell + " --camera " +
-                          (dir_ / "camera.cameramodel").string() + " --corners " +
-                          (dir_ / "corners.txt").string() + " --poses " +
-                          (dir_ / "record.yaml").string());
-  ASSERT_EQ(r.code, 0) << r.output;
+  const CommandResult r =
+      RunCliMerged("calibrate handeye --cell " + cell + " --camera " +
+                   (dir_ / "camera.cameramodel").string() + " --corners " +
+                   (dir_ / "corners.txt").string() + " --poses " + (dir_ / "record.yaml").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
   const FrameGraph g = LoadFrameGraph(cell);
   const Eigen::Isometry3d got = g.Transform("vision_flange", "sensor");
-  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.output;
-  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.output;
+  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.out;
+  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.out;
 }
 
 // The images path of the CLI: the simulator renders the eye-in-hand chessboard images, the
@@ -217,24 +198,26 @@ TEST_F(HandEyeCli, SimulatedImagesThroughTheSharedDetector) {
   const std::string spec = "chessboard:" + std::to_string(board.squares_x - 1) + "x" +
                            std::to_string(board.squares_y - 1) + ":" +
                            std::to_string(static_cast<int>(board.square_mm));
-  const CliRun r = RunCli("calibrate handeye --cell " + cell + " --camera " +
-                          (sim / "truth/camera.cameramodel").string() + " --images '" +
-                          (sim / "images").string() + "/hand_eye_*.png' --board " + spec +
-                          " --poses " + (sim / "records/hand_eye_images.yaml").string());
-  ASSERT_EQ(r.code, 0) << r.output;
+  const CommandResult r =
+      RunCliMerged("calibrate handeye --cell " + cell + " --camera " +
+                   (sim / "truth/camera.cameramodel").string() + " --images '" +
+                   (sim / "images").string() + "/hand_eye_*.png' --board " + spec + " --poses " +
+                   (sim / "records/hand_eye_images.yaml").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
   const Eigen::Isometry3d got = LoadFrameGraph(cell).Transform("vision_flange", "sensor");
-  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.output;
-  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.output;
+  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.out;
+  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.out;
   // An unreadable image is a one-line error naming it.
   io::WriteFileAtomically((sim / "images/hand_eye_000.png").string(), "not a png");
-  const CliRun bad = RunCli("calibrate handeye --cell " + cell + " --camera " +
-                            (sim / "truth/camera.cameramodel").string() + " --images '" +
-                            (sim / "images").string() + "/hand_eye_*.png' --board " + spec +
-                            " --poses " + (sim / "records/hand_eye_images.yaml").string());
-  EXPECT_EQ(bad.code, 2);
-  EXPECT_NE(bad.output.find("hand_eye_000.png: is not a readable image"), std::string::npos)
-      << bad.output;
+  const CommandResult bad =
+      RunCliMerged("calibrate handeye --cell " + cell + " --camera " +
+                   (sim / "truth/camera.cameramodel").string() + " --images '" +
+                   (sim / "images").string() + "/hand_eye_*.png' --board " + spec + " --poses " +
+                   (sim / "records/hand_eye_images.yaml").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.out.find("hand_eye_000.png: is not a readable image"), std::string::npos)
+      << bad.out;
   fs::remove_all(sim);
 }
 

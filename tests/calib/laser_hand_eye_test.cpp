@@ -7,7 +7,6 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <filesystem>
 #include <random>
 
 #include "calib/camera_model.hpp"
@@ -17,6 +16,7 @@
 #include "datasets/robots.hpp"
 #include "datasets/simulate.hpp"
 #include "tests/calib/joint_test_util.hpp"
+#include "tests/cli_util.hpp"
 #include "triangulation/profile_io.hpp"
 
 namespace lasercell::calib {
@@ -120,8 +120,8 @@ TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
   config.capture_trajectory = config.capture_chessboard_images = false;
   config.capture_laser_line_images = config.write_meshes = false;
   config.capture_joint_poses = config.capture_touches = false;
-  const std::string dir =
-      (std::filesystem::temp_directory_path() / "lasercell_laser_hand_eye_test").string();
+  const test::TestDir scratch("laser_hand_eye");
+  const std::string dir = scratch.path().string();
   datasets::SimulateCell(config, dir, {}, 2);
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
   const CameraModel camera = LoadCameraModel(dir + "/truth/camera.cameramodel");
@@ -140,7 +140,6 @@ TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
     }
     sweeps.push_back(std::move(s));
   }
-  std::filesystem::remove_all(dir);
   LaserHandEyeOptions options;
   options.solver.max_points_per_sweep = 5000;  // all points: 6 unknowns, every point helps
   const LaserHandEyeResult r = CalibrateLaserHandEye(

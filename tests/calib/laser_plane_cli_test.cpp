@@ -2,12 +2,9 @@
 // HTML report, the `laser` plane in cell.yaml (only that section changes); bad input exits 2
 // with one line naming the problem.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -17,38 +14,20 @@
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/simulate.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out, err;
-};
+using test::CommandResult;
+using test::RunCli;
 
 class CalibrateLaserCli : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("lasercell_laser_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()) +
-            "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  CliRun Cli(const std::string& args) const {
-    const std::string cmd = std::string(LASERCELL_CLI) + " " + args + " >" + (dir_ / "out.txt").string() +
-                            " 2>" + (dir_ / "err.txt").string();
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = io::ReadFileBytes((dir_ / "out.txt").string());
-    r.err = io::ReadFileBytes((dir_ / "err.txt").string());
-    return r;
-  }
+  void SetUp() override { dir_ = test::MakeTestDir("laser_cli"); }
+  void TearDown() override { test::RemoveTestDir(dir_); }
 
   /// Simulates the white-plane sweeps only; returns the plate normal in the sensor frame.
   std::string SimulatePlanes() const {
@@ -56,7 +35,8 @@ class CalibrateLaserCli : public ::testing::Test {
     std::ofstream(config) << "captures: {planes: true, spheres: false, seats: false, trajectory: false, "
                              "chessboard_images: false, laser_line_images: false, meshes: false, "
                              "touches: false, eye_in_hand: false, joint_poses: false}\n";
-    const CliRun sim = Cli("simulate cell --quiet --out " + (dir_ / "sim").string() + " --config " + config);
+    const CommandResult sim =
+        RunCli("simulate cell --quiet --out " + (dir_ / "sim").string() + " --config " + config);
     EXPECT_EQ(sim.exit_code, 0) << sim.err;
     const datasets::SimConfig defaults;
     const datasets::CellTruth truth = datasets::MakeCellTruth(defaults);
@@ -77,9 +57,10 @@ TEST_F(CalibrateLaserCli, PlanesWriteJsonReportAndOnlyTheCellsLaserPlane) {
   const std::string cell = (dir_ / "cell.yaml").string();
   fs::copy_file(sim + "/truth/cell.yaml", cell);
   const std::string before = io::ReadFileBytes(cell);
-  const CliRun r = Cli("calibrate laser --camera " + sim + "/truth/camera.cameramodel --planes " + sim +
-                    " --heights-mm 150,250,350 --plate-normal=" + m + " --cell " + cell + " --report " +
-                    (dir_ / "laser.html").string() + " --json " + (dir_ / "laser.json").string());
+  const CommandResult r =
+      RunCli("calibrate laser --camera " + sim + "/truth/camera.cameramodel --planes " + sim +
+             " --heights-mm 150,250,350 --plate-normal=" + m + " --cell " + cell + " --report " +
+             (dir_ / "laser.html").string() + " --json " + (dir_ / "laser.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(io::ReadFileBytes((dir_ / "laser.json").string()));
   EXPECT_EQ(j["format"], "lasercell.laser_plane");
@@ -118,21 +99,23 @@ TEST_F(CalibrateLaserCli, BadInputExitsTwoWithOneLine) {
   const std::string sim = (dir_ / "sim").string();
   const std::string base = "calibrate laser --camera " + sim + "/truth/camera.cameramodel --planes " + sim +
                            " --plate-normal=" + m + " --cell " + (dir_ / "cell.yaml").string();
-  CliRun r = Cli(base + " --heights-mm 250,250,250");
+  CommandResult r = RunCli(base + " --heights-mm 250,250,250");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("planes at one height only"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ / "cell.yaml"));
-  r = Cli(base + " --heights-mm 150,250");
+  r = RunCli(base + " --heights-mm 150,250");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--heights-mm is '150,250'; expected 3"), std::string::npos) << r.err;
-  r = Cli("calibrate laser --camera " + sim + "/truth/camera.cameramodel --stripe-images '" + sim +
-          "/nothing*.png' --board chessboard:9x6:40 --cell " + (dir_ / "cell.yaml").string());
+  r = RunCli("calibrate laser --camera " + sim + "/truth/camera.cameramodel --stripe-images '" +
+             sim + "/nothing*.png' --board chessboard:9x6:40 --cell " +
+             (dir_ / "cell.yaml").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("matches no file"), std::string::npos) << r.err;
   // An unreadable image.
   std::ofstream(dir_ / "broken.png") << "not a png";
-  r = Cli("calibrate laser --camera " + sim + "/truth/camera.cameramodel --stripe-images '" +
-          (dir_ / "broken.png").string() + "' --board chessboard:9x6:40 --cell " + (dir_ / "cell.yaml").string());
+  r = RunCli("calibrate laser --camera " + sim + "/truth/camera.cameramodel --stripe-images '" +
+             (dir_ / "broken.png").string() + "' --board chessboard:9x6:40 --cell " +
+             (dir_ / "cell.yaml").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("broken.png: cannot decode the image"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1);

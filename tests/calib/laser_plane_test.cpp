@@ -8,7 +8,6 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
-#include <filesystem>
 #include <map>
 #include <random>
 #include <string>
@@ -21,6 +20,7 @@
 #include "core/error.hpp"
 #include "datasets/camera_images.hpp"
 #include "datasets/simulate.hpp"
+#include "tests/cli_util.hpp"
 #include "triangulation/profile_io.hpp"
 
 namespace lasercell::calib {
@@ -47,14 +47,6 @@ void TruthPlane(const datasets::LaserPlane& laser, Eigen::Vector3d* n, double* d
 
 double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) / kDeg;
-}
-
-std::string TempDir(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() /
-                   ("lasercell_laser_plane_" + name + "_" + std::to_string(::getpid()));
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  return dir.string();
 }
 
 // ---- Cost functors --------------------------------------------------------------------------
@@ -130,7 +122,8 @@ datasets::SimConfig PlanesOnlyConfig() {
 
 TEST(LaserPlaneHeights, SimulatedSweepsGiveTheTruePlaneAndSensorDistance) {
   const datasets::SimConfig config = PlanesOnlyConfig();
-  const std::string dir = TempDir("sim");
+  const test::TestDir scratch("laser_plane_sim");
+  const std::string dir = scratch.path().string();
   datasets::SimulateCell(config, dir, {}, 1);
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
   const datasets::LinearSweep sweep = datasets::MakeLinearSweep(config, truth.sensor);
@@ -151,7 +144,6 @@ TEST(LaserPlaneHeights, SimulatedSweepsGiveTheTruePlaneAndSensorDistance) {
     }
     captures.push_back(std::move(c));
   }
-  std::filesystem::remove_all(dir);
   const LaserPlaneResult r = CalibrateLaserPlaneFromHeights(SimCamera(config.sensor.camera), captures, options);
   Eigen::Vector3d n_true;
   double d_true = 0;

@@ -2,12 +2,12 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 
 #include "core/error.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell::io {
 namespace {
@@ -15,15 +15,11 @@ namespace {
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-fs::path TempDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / (name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+using ::lasercell::test::TestDir;
 
 TEST(FileUtilTest, AtomicWriteReplacesAndReadsBack) {
-  const fs::path dir = TempDir("lasercell_fileutil");
+  const TestDir scratch("fileutil");
+  const fs::path& dir = scratch.path();
   const std::string path = (dir / "a.bin").string();
   std::string bytes("abc\0def", 7);
   WriteFileAtomically(path, bytes);
@@ -33,7 +29,6 @@ TEST(FileUtilTest, AtomicWriteReplacesAndReadsBack) {
   int entries = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++entries;
   EXPECT_EQ(entries, 1) << "temporary file left behind";
-  fs::remove_all(dir);
 }
 
 TEST(FileUtilTest, WriteIntoMissingFolderFailsClearly) {
@@ -57,7 +52,8 @@ TEST(FileUtilTest, ReadMissingOrDirectoryFailsClearly) {
 }
 
 TEST(FileUtilTest, MappedFileSeesTheBytesAndFailsClearly) {
-  const fs::path dir = TempDir("lasercell_mapped");
+  const TestDir scratch("mapped");
+  const fs::path& dir = scratch.path();
   const std::string path = (dir / "m.bin").string();
   WriteFileAtomically(path, std::string("xyz\0w", 5));
   {
@@ -75,7 +71,6 @@ TEST(FileUtilTest, MappedFileSeesTheBytesAndFailsClearly) {
   } catch (const FileError& e) {
     EXPECT_THAT(e.what(), HasSubstr("missing.ply: cannot open"));
   }
-  fs::remove_all(dir);
 }
 
 TEST(FileUtilTest, LowerExtension) {

@@ -4,7 +4,6 @@
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <charconv>
 #include <cstring>
@@ -19,6 +18,7 @@
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell {
 namespace {
@@ -579,27 +579,6 @@ TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {
   EXPECT_THAT(ReadError(Replace(v, "version: 1", "version: 7")), HasSubstr("(line 2)"));
 }
 
-/// A per-test scratch folder under the system temp folder, removed afterwards.
-class ScratchDir {
- public:
-  ScratchDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("lasercell_fg_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~ScratchDir() { fs::remove_all(path_); }
-  std::string File(const std::string& name) const { return (path_ / name).string(); }
-  std::size_t Entries() const {
-    return static_cast<std::size_t>(
-        std::distance(fs::directory_iterator(path_), fs::directory_iterator()));
-  }
-
- private:
-  fs::path path_;
-};
-
 class NoFileFormModel final : public KinematicModel {
  public:
   int NumJoints() const override { return 0; }
@@ -613,7 +592,7 @@ class NoFileFormModel final : public KinematicModel {
 };
 
 TEST(FrameGraphYamlTest, SaveAndLoadRoundTripThroughFiles) {
-  const ScratchDir dir;
+  const test::TestDir dir("fg");
   const std::string path = dir.File("cell.yaml");
   SaveFrameGraph(path, ExampleCell());
   EXPECT_EQ(io::ReadFileBytes(path), kExampleText);
@@ -635,7 +614,7 @@ TEST(FrameGraphYamlTest, SaveAndLoadRoundTripThroughFiles) {
 }
 
 TEST(FrameGraphYamlTest, FailedSavesLeaveTheExistingFileUnchanged) {
-  const ScratchDir dir;
+  const test::TestDir dir("fg");
   const std::string path = dir.File("cell.yaml");
   const std::string original = "format: lasercell.cell\nversion: 1\nframes: [kept]\n";
   io::WriteFileAtomically(path, original);

@@ -2,15 +2,12 @@
 
 #include <gtest/gtest.h>
 
-#include <array>
-#include <cstdio>
-#include <filesystem>
-#include <memory>
 #include <regex>
 #include <string>
 
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell::report {
 namespace {
@@ -55,45 +52,29 @@ TEST(HtmlReport, RejectsRaggedTables) {
   EXPECT_THROW(report.AddTable({"a", "b"}, {{"1"}}), InternalError);
 }
 
-// Runs Debian's chromium headless on the page and returns the DOM after its scripts ran.
-std::string DumpDom(const std::string& path) {
-  const std::string command = "chromium --headless --no-sandbox --disable-gpu --disable-dev-shm-usage "
-                              "--dump-dom 'file://" + path + "' 2>/dev/null";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
-  if (!pipe) return {};
-  std::string out;
-  std::array<char, 4096> buffer{};
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe.get())) {
-    out.append(buffer.data(), n);
-  }
-  return out;
-}
-
-std::string TempPath(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / name).string();
-}
+using test::HeadlessChromiumDom;
 
 TEST(HtmlReport, LoadsInHeadlessChromiumWithPlotsAndNoScriptErrors) {
-  const std::string path = TempPath("lasercell_report_test.html");
+  const test::TestDir dir("report");
+  const std::string path = dir.File("report.html");
   WriteHtmlReport(path, FullReport());
-  const std::string dom = DumpDom(path);
+  const std::string dom = HeadlessChromiumDom(path);
   ASSERT_FALSE(dom.empty()) << "chromium did not run (scripts/install-deps installs it)";
   EXPECT_NE(dom.find("data-report-ready=\"1\""), std::string::npos) << dom.substr(0, 400);
   EXPECT_NE(dom.find("data-plots=\"5\""), std::string::npos);
   EXPECT_EQ(dom.find("data-report-errors"), std::string::npos);
-  std::filesystem::remove(path);
 }
 
 TEST(HtmlReport, HeadlessCheckDetectsAScriptError) {
   // The check above must be able to fail: a page whose script throws is reported.
   std::string html = FullReport().Html();
   html.insert(html.find("</body>"), "<script>undefinedFunction();</script>");
-  const std::string path = TempPath("lasercell_report_error_test.html");
+  const test::TestDir dir("report_error");
+  const std::string path = dir.File("report.html");
   io::WriteFileAtomically(path, html);
-  const std::string dom = DumpDom(path);
+  const std::string dom = HeadlessChromiumDom(path);
   ASSERT_FALSE(dom.empty());
   EXPECT_NE(dom.find("data-report-errors"), std::string::npos);
-  std::filesystem::remove(path);
 }
 
 }  // namespace

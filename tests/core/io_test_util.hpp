@@ -146,26 +146,4 @@ void ExpectCorruptionsRejectedCleanly(const std::string& bytes, Parse&& parse, i
   }
 }
 
-/// A fresh folder under the system temp dir, removed at scope end.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string name = std::string("lasercell_io_") + info->test_suite_name() + "_" + info->name() +
-                       "_" + std::to_string(std::random_device{}());
-    std::replace(name.begin(), name.end(), '/', '_');  // parameterized tests: "Suite/Test/0"
-    path_ = std::filesystem::temp_directory_path() / name;
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  /// Path of a file inside the folder.
-  std::string File(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  std::filesystem::path path_;
-};
-
 }  // namespace lasercell::io::test

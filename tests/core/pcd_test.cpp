@@ -7,6 +7,7 @@
 
 #include "core/io/lzf.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "tests/cli_util.hpp"
 #include "tests/core/io_test_util.hpp"
 
 namespace lasercell::io {
@@ -83,7 +84,7 @@ TEST(PcdRoundTrip, BinaryAndAsciiAllAttributes) {
 }
 
 TEST(PcdRoundTrip, ThroughFileWithPlainCloud) {
-  test::TempDir dir;
+  const ::lasercell::test::TestDir dir("io");
   PointCloud cloud;
   cloud.positions = {{1.5, -2.25, 3}, {400, 500, 600.125}};
   const std::string path = dir.File("plain.PCD");  // extension is case-insensitive

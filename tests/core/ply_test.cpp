@@ -10,6 +10,7 @@
 
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "tests/cli_util.hpp"
 #include "tests/core/io_test_util.hpp"
 
 namespace lasercell::io {
@@ -69,7 +70,7 @@ TEST_P(PlyRoundTripTest, DoublePositionsAreExact) {
 }
 
 TEST_P(PlyRoundTripTest, MeshThroughFile) {
-  test::TempDir dir;
+  const ::lasercell::test::TestDir dir("io");
   TriangleMesh mesh;
   mesh.vertices.positions = {{0, 0, 0}, {10, 0, 0}, {10, 10, 0}, {0, 10, 0.5}};
   mesh.faces = {{0, 1, 2}, {0, 2, 3}};
@@ -116,7 +117,7 @@ TEST(PlyWrite, HeaderNamesFormatGridAndTypes) {
 }
 
 TEST(PlyWrite, RejectsInvalidCloudAndLeavesNoFile) {
-  test::TempDir dir;
+  const ::lasercell::test::TestDir dir("io");
   PointCloud cloud;
   cloud.positions = {{1, 2, 3}, {kNan, 0, 0}};
   const std::string path = dir.File("bad.ply");
@@ -369,7 +370,7 @@ TEST(PlyRead, CrLfHeaderAndGridComment) {
 }
 
 TEST(PlyRead, UnitHintForMetresOnly) {
-  test::TempDir dir;
+  const ::lasercell::test::TestDir dir("io");
   PointCloud metres;
   metres.positions = {{0, 0, 0}, {0.3, 0.1, 0.05}};
   WritePointCloud(dir.File("m.ply"), metres);

@@ -1,7 +1,6 @@
 #include "datasets/calibration_captures.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/rng.hpp"
+#include "tests/cli_util.hpp"
 #include "triangulation/profile_io.hpp"
 
 #include <opencv2/calib3d.hpp>
@@ -24,13 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-
-std::string TempDir(const std::string& name) {
-  const fs::path p =
-      fs::temp_directory_path() / ("lasercell_calcap_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
 
 TEST(Touches, AreWithinNoiseOfTheTrueSphereTopsAndTheirJointsReachThem) {
   SimConfig config;
@@ -202,7 +195,8 @@ TEST(PoseSweeps, JointPoseSetIsLargeVariedAndEverySweepSeesItsSphereOnTheTruth) 
   config.capture_planes = config.capture_spheres = config.capture_seats = false;
   config.capture_trajectory = config.capture_chessboard_images = false;
   config.capture_laser_line_images = config.write_meshes = false;
-  const std::string dir = TempDir("joints");
+  const test::TestDir scratch("calcap_joints");
+  const std::string dir = scratch.path().string();
   const SimulationReport report = SimulateCell(config, dir, {}, 2);
   const CellTruth truth = MakeCellTruth(config);
   const std::vector<Eigen::Vector3d> centers = config.spheres.CentersInCell();
@@ -264,7 +258,6 @@ TEST(PoseSweeps, JointPoseSetIsLargeVariedAndEverySweepSeesItsSphereOnTheTruth) 
   EXPECT_EQ(touches.find("true"), std::string::npos);
   EXPECT_NE(io::ReadFileBytes(dir + "/truth/touches.yaml").find("sphere_center_in_handling_base"),
             std::string::npos);
-  fs::remove_all(dir);
 }
 
 // Eye-in-hand chessboard images: the recorded joints, posed by the TRUE robot chain, put the
@@ -331,7 +324,8 @@ TEST(HandEyeImages, CaptureWritesRecordsAndTruth) {
   config.capture_touches = config.capture_eye_in_hand = config.capture_joint_poses = false;
   config.capture_hand_eye_images = true;
   config.hand_eye_images.images = 3;  // small: the renderer is slow under ASan
-  const std::string dir = TempDir("hand_eye");
+  const test::TestDir scratch("calcap_hand_eye");
+  const std::string dir = scratch.path().string();
   SimulateCell(config, dir, {}, 2);
   const std::string records = io::ReadFileBytes(dir + "/records/hand_eye_images.yaml");
   const std::string truth = io::ReadFileBytes(dir + "/truth/hand_eye_images.yaml");
@@ -354,7 +348,6 @@ TEST(HandEyeImages, CaptureWritesRecordsAndTruth) {
   std::vector<cv::Point2f> found;
   EXPECT_TRUE(cv::findChessboardCornersSB(
       image, cv::Size(config.chessboard.squares_x - 1, config.chessboard.squares_y - 1), found));
-  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 #include "datasets/simulate.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -17,6 +16,7 @@
 #include "datasets/robots.hpp"
 #include "datasets/sim_config.hpp"
 #include "datasets/stl.hpp"
+#include "tests/cli_util.hpp"
 #include "triangulation/profile_io.hpp"
 
 namespace lasercell::datasets {
@@ -24,13 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 constexpr double kDeg = std::numbers::pi / 180.0;
-
-std::string TempDir(const std::string& name) {
-  const fs::path p = fs::temp_directory_path() /
-                     ("lasercell_sim_" + std::to_string(::getpid()) + "_" + name);
-  fs::remove_all(p);
-  return p.string();
-}
 
 // Message of the OptionError `f` throws ("" when none).
 template <typename F>
@@ -183,7 +176,8 @@ TEST(SimConfig, ErrorsNameTheField) {
 }
 
 TEST(SimConfig, LoadingAMissingFileIsAFileError) {
-  EXPECT_THROW(LoadSimConfig(TempDir("missing") + "/sim.yaml"), FileError);
+  const test::TestDir empty("sim_missing");
+  EXPECT_THROW(LoadSimConfig(empty.File("sim.yaml")), FileError);
 }
 
 TEST(SeatPlacement, DrawsCoverTableOneRangesAndRestOnThePallet) {
@@ -301,7 +295,8 @@ TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   config.render.reflection_probability = 0.5;  // ghosts draw random numbers too
   config.render.speckle_sigma_px = 0.08;       // and speckle
   config.render.speckle_intensity_sigma = 0.2;
-  const std::string a = TempDir("a"), b = TempDir("b"), c = TempDir("c");
+  const test::TestDir scratch("sim_seeds");
+  const std::string a = scratch.File("a"), b = scratch.File("b"), c = scratch.File("c");
   const SimulationReport ra = SimulateCell(config, a, {}, 1);
   const SimulationReport rb = SimulateCell(config, b, {}, 2);
   ASSERT_EQ(ra.files, rb.files);
@@ -318,7 +313,6 @@ TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   const SimulationReport rc = SimulateCell(config, c, {}, 2);
   EXPECT_NE(io::ReadFileBytes(a + "/profiles/seat_000.lcp"),
             io::ReadFileBytes(c + "/profiles/seat_000.lcp"));
-  for (const std::string& d : {a, b, c}) fs::remove_all(d);
 }
 
 TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
@@ -326,7 +320,8 @@ TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
   config.capture_seats = config.capture_trajectory = config.capture_eye_in_hand = false;
   config.capture_joint_poses = config.capture_chessboard_images = false;
   config.capture_laser_line_images = config.write_meshes = false;
-  const std::string dir = TempDir("records");
+  const test::TestDir scratch("sim_records");
+  const std::string dir = scratch.path().string();
   SimulateCell(config, dir, {}, 2);
   const CellTruth truth = MakeCellTruth(config);
   const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
@@ -355,12 +350,12 @@ TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
   EXPECT_NEAR(normal.norm(), 1.0, 1e-12);
   // It points up, towards the sensor (which looks down).
   EXPECT_GT((sweep.cell_from_sensor_start.linear() * normal).z(), 0.999999);
-  fs::remove_all(dir);
 }
 
 TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   const SimConfig config = SmallConfig();
-  const std::string dir = TempDir("set");
+  const test::TestDir scratch("sim_set");
+  const std::string dir = scratch.path().string();
   std::vector<std::string> stages;
   const SimulationReport report =
       SimulateCell(config, dir, [&](std::string_view stage, double) { stages.emplace_back(stage); });
@@ -421,8 +416,8 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   // ... and the same mesh as binary STL.
   EXPECT_EQ(ReadStlMesh(dir + "/models/seat.stl").faces.size(), truth.seat.part.mesh.faces.size());
   // The config written back reproduces the same config.
-  EXPECT_EQ(SimConfigToYaml(LoadSimConfig(dir + "/truth/sim_config.yaml")), SimConfigToYaml(config));
-  fs::remove_all(dir);
+  EXPECT_EQ(SimConfigToYaml(LoadSimConfig(dir + "/truth/sim_config.yaml")),
+            SimConfigToYaml(config));
 }
 
 TEST(Simulate, ASensorThatSeesNothingIsAnErrorNotAnEmptySet) {
@@ -431,17 +426,18 @@ TEST(Simulate, ASensorThatSeesNothingIsAnErrorNotAnEmptySet) {
   config.capture_spheres = config.capture_seats = config.capture_trajectory = false;
   config.capture_eye_in_hand = config.capture_joint_poses = false;
   config.albedo.floor = 0.0;  // and the floor is black
-  const std::string dir = TempDir("nothing");
+  const test::TestDir scratch("sim_nothing");
+  const std::string dir = scratch.path().string();
   const std::string e = OptionErrorMessage([&] { SimulateCell(config, dir); });
   EXPECT_NE(e.find("capture 'plane_0'"), std::string::npos) << e;
   EXPECT_NE(e.find("sees nothing"), std::string::npos) << e;
   EXPECT_NE(e.find("SimConfig.planes.heights_mm[0]"), std::string::npos) << e;
-  fs::remove_all(dir);
 }
 
 TEST(Simulate, SeatScenesMatchTheCellSetForTheSameSeed) {
   const SimConfig config = SmallConfig();
-  const std::string cell = TempDir("cellset"), seats = TempDir("seatset");
+  const test::TestDir scratch("sim_sets");
+  const std::string cell = scratch.File("cellset"), seats = scratch.File("seatset");
   SimConfig only_seats = config;
   only_seats.capture_planes = only_seats.capture_spheres = only_seats.capture_trajectory = false;
   only_seats.capture_chessboard_images = only_seats.capture_laser_line_images = false;
@@ -453,8 +449,6 @@ TEST(Simulate, SeatScenesMatchTheCellSetForTheSameSeed) {
   EXPECT_EQ(io::ReadFileBytes(cell + "/profiles/seat_001.lcp"),
             io::ReadFileBytes(seats + "/profiles/seat_001.lcp"));
   EXPECT_THROW(SimulateSeats(config, 0, seats), OptionError);
-  fs::remove_all(cell);
-  fs::remove_all(seats);
 }
 
 
@@ -467,7 +461,8 @@ TEST(Simulate, NoiseFreeProfilesTriangulateOntoTheTruth) {
   config.capture_spheres = config.capture_seats = config.capture_trajectory = false;
   config.capture_eye_in_hand = config.capture_joint_poses = false;
   config.timing.jitter_s = 1e-3;  // irregular exposures: poses must follow the timestamps
-  const std::string dir = TempDir("chain");
+  const test::TestDir scratch("sim_chain");
+  const std::string dir = scratch.path().string();
   SimulateCell(config, dir, {}, 2);
   const CellTruth truth = MakeCellTruth(config);
   const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
@@ -493,7 +488,6 @@ TEST(Simulate, NoiseFreeProfilesTriangulateOntoTheTruth) {
   EXPECT_GT(on_floor, 12 * 50);
   // float32 rows (<= 6e-5 px) at ~0.6 mm/px, plus ns timestamp rounding: well below 1e-3 mm.
   EXPECT_LT(worst, 1e-3);
-  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 #include "datasets/stl.hpp"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cstring>
 #include <filesystem>
@@ -10,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/chair_seat.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell::datasets {
 namespace {
@@ -17,15 +17,13 @@ namespace {
 TEST(Stl, SeatMeshRoundTripsThroughABinaryStlFile) {
   const ChairSeat seat = MakeChairSeat({});
   const TriangleMesh& mesh = seat.part.mesh;
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("lasercell_stl_" + std::to_string(::getpid()) + ".stl"))
-                               .string();
+  const test::TestDir dir("stl");
+  const std::string path = dir.File("seat.stl");
   WriteStlMesh(path, mesh);
   const std::string bytes = io::ReadFileBytes(path);
   EXPECT_EQ(bytes.size(), 84 + 50 * mesh.faces.size());
   EXPECT_NE(bytes.rfind("solid", 0), 0u);  // not mistaken for ASCII STL
   const TriangleMesh back = ReadStlMesh(path);
-  std::filesystem::remove(path);
   ASSERT_EQ(back.faces.size(), mesh.faces.size());
   // Same triangles, same winding, to float32 precision; shared vertices are merged again.
   double worst = 0;

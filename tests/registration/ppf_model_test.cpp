@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "registration/ppf_feature.hpp"
 #include "registration_test_util.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell::registration {
 namespace {
@@ -148,7 +149,8 @@ TEST(PpfModelTest, SerializeRoundTripAndFiles) {
   EXPECT_TRUE(std::equal(loaded.Lookup(key).begin(), loaded.Lookup(key).end(), model.Lookup(key).begin(),
                          [](const PpfPairEntry& a, const PpfPairEntry& b) { return a.reference == b.reference && a.plane_angle == b.plane_angle; }));
 
-  const std::string path = (std::filesystem::temp_directory_path() / "lasercell_ppf_model_test.lcppf").string();
+  const ::lasercell::test::TestDir dir("ppf_model");
+  const std::string path = dir.File("model.lcppf");
   model.Save(path);
   EXPECT_EQ(PpfModel::Load(path).Serialize(), bytes);
   std::filesystem::remove(path);

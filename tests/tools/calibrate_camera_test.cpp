@@ -3,56 +3,33 @@
 // image, wrong board size, too few views, no matching file).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
-#include <array>
 #include <cmath>
 #include <cstdio>
-#include <memory>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 
+#include "tests/cli_util.hpp"
+
+// In lasercell::test: the shared helpers of tests/cli_util.hpp (RunCli, Slurp, ...) by name.
+namespace lasercell::test {
 namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 class CalibrateCameraCli : public ::testing::Test {
  protected:
-  struct Run {
-    int exit_code = -1;
-    std::string out, err;
-  };
   void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           (std::string("lasercell_calcam_") + info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
+    dir_ = MakeTestDir("calcam");
     fs::create_directories(dir_ / "images");
   }
-  void TearDown() override { fs::remove_all(dir_); }
+  void TearDown() override { RemoveTestDir(dir_); }
 
-  Run Exec(const std::string& args) const {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = std::string(LASERCELL_CLI) + " calibrate camera " + args + " >" +
-                            out.string() + " 2>" + err.string();
-    const int status = std::system(cmd.c_str());
-    Run r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = Slurp(out);
-    r.err = Slurp(err);
-    return r;
+  static CommandResult Exec(const std::string& args) {
+    return RunCli("calibrate camera " + args);
   }
   // Copies left<NN>.jpg into dir_/images.
   void CopyImages(std::initializer_list<int> numbers) const {
@@ -77,7 +54,8 @@ class CalibrateCameraCli : public ::testing::Test {
 TEST_F(CalibrateCameraCli, OpenCvSamplesMatchOpenCvsResultAndJsonReadsBack) {
   const std::string all = "--images '" + std::string(LASERCELL_SOURCE_DIR) +
                           "/datasets/real/opencv_chessboard/left*.jpg'";
-  const Run r = Exec(all + " --board chessboard:9x6:25 --model opencv5 --fix-aspect " + Outputs());
+  const CommandResult r =
+      Exec(all + " --board chessboard:9x6:25 --model opencv5 --fix-aspect " + Outputs());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "cam.json"));
   EXPECT_EQ(j["format"], "lasercell.camera_calibration");
@@ -106,8 +84,8 @@ TEST_F(CalibrateCameraCli, OpenCvSamplesMatchOpenCvsResultAndJsonReadsBack) {
 TEST_F(CalibrateCameraCli, ReportLoadsInHeadlessChromiumWithItsPlots) {
   CopyImages({1, 3, 4, 5, 6, 7, 8});
   const fs::path html = dir_ / "cam.html";
-  const Run r = Exec(Images() + " --board chessboard:9x6:25 --report " + html.string() + " " +
-                     Outputs());
+  const CommandResult r =
+      Exec(Images() + " --board chessboard:9x6:25 --report " + html.string() + " " + Outputs());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string page = Slurp(html);
   for (const char* plot : {"Residual norm of the inlier corners", "Residual vectors over the image",
@@ -116,16 +94,7 @@ TEST_F(CalibrateCameraCli, ReportLoadsInHeadlessChromiumWithItsPlots) {
                            "Projection uncertainty (1 sigma"}) {
     EXPECT_THAT(page, HasSubstr(plot));
   }
-  const std::string command = "chromium --headless --no-sandbox --disable-gpu "
-                              "--disable-dev-shm-usage --dump-dom 'file://" + html.string() +
-                              "' 2>/dev/null";
-  std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(command.c_str(), "r"), pclose);
-  ASSERT_TRUE(pipe);
-  std::string dom;
-  std::array<char, 4096> buffer{};
-  while (std::size_t n = std::fread(buffer.data(), 1, buffer.size(), pipe.get())) {
-    dom.append(buffer.data(), n);
-  }
+  const std::string dom = HeadlessChromiumDom(html.string());
   ASSERT_FALSE(dom.empty()) << "chromium did not run (scripts/install-deps installs it)";
   EXPECT_THAT(dom, HasSubstr("data-report-ready=\"1\""));
   EXPECT_THAT(dom, HasSubstr("data-plots=\"6\""));
@@ -135,7 +104,7 @@ TEST_F(CalibrateCameraCli, ReportLoadsInHeadlessChromiumWithItsPlots) {
 TEST_F(CalibrateCameraCli, UnreadableImageIsRejectedWithItsReason) {
   CopyImages({1, 3, 4, 5, 6, 7});
   std::ofstream(dir_ / "images" / "left99.jpg") << "not a jpeg";
-  const Run r = Exec(Images() + " --board chessboard:9x6:25 " + Outputs());
+  const CommandResult r = Exec(Images() + " --board chessboard:9x6:25 " + Outputs());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "cam.json"));
   EXPECT_EQ(j["images_used"], 6);
@@ -149,7 +118,7 @@ TEST_F(CalibrateCameraCli, UnreadableImageIsRejectedWithItsReason) {
 
 TEST_F(CalibrateCameraCli, WrongBoardSizeIsAnErrorNamingTheSuspectedSize) {
   CopyImages({1, 3, 4});
-  const Run r = Exec(Images() + " --board chessboard:9x7:25 " + Outputs());
+  const CommandResult r = Exec(Images() + " --board chessboard:9x7:25 " + Outputs());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("found in 0 of 3 images"));
   EXPECT_THAT(r.err, HasSubstr("wrong board size"));
@@ -158,14 +127,14 @@ TEST_F(CalibrateCameraCli, WrongBoardSizeIsAnErrorNamingTheSuspectedSize) {
 
 TEST_F(CalibrateCameraCli, TooFewViewsIsAnError) {
   CopyImages({1, 3});
-  const Run r = Exec(Images() + " --board chessboard:9x6:25 " + Outputs());
+  const CommandResult r = Exec(Images() + " --board chessboard:9x6:25 " + Outputs());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("found in 2 of 2 images, need at least 3"));
   EXPECT_FALSE(fs::exists(dir_ / "cam.cameramodel"));
 }
 
 TEST_F(CalibrateCameraCli, GlobMatchingNothingAndBadOptionsAreErrors) {
-  Run r = Exec(Images() + " --board chessboard:9x6:25 " + Outputs());
+  CommandResult r = Exec(Images() + " --board chessboard:9x6:25 " + Outputs());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("matches no file"));
   CopyImages({1});
@@ -178,3 +147,4 @@ TEST_F(CalibrateCameraCli, GlobMatchingNothingAndBadOptionsAreErrors) {
 }
 
 }  // namespace
+}  // namespace lasercell::test

@@ -4,63 +4,38 @@
 // parts changed.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
-#include <fstream>
+#include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "core/frame_graph.hpp"
 #include "core/kinematics.hpp"
+#include "tests/cli_util.hpp"
 
+// In lasercell::test: the shared helpers of tests/cli_util.hpp (RunCli, Slurp, ...) by name.
+namespace lasercell::test {
 namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void Spit(const fs::path& p, const std::string& text) {
-  std::ofstream out(p, std::ios::binary);
-  out << text;
-}
-
-int RunCli(const std::string& args, std::string* err = nullptr) {
-  const fs::path e = fs::temp_directory_path() / ("lasercell_joints_err_" + std::to_string(::getpid()));
-  const int status = std::system((std::string(LASERCELL_CLI) + " " + args + " >/dev/null 2>" +
-                                  e.string()).c_str());
-  if (err) *err = Slurp(e);
-  fs::remove(e);
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
 /// Simulated pose sweeps, written once for the whole binary.
 class CalibrateJointsCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = fs::temp_directory_path() / ("lasercell_joints_cli_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = MakeTestDir("joints_cli");
     Spit(dir_ / "sim.yaml",
          "format: lasercell.sim_config\nversion: 1\nseed: 5\n"
          "eye_in_hand: {profiles: 12}\njoint_poses: {profiles: 10}\n"
          "captures: {planes: false, spheres: false, seats: false, trajectory: false, "
          "chessboard_images: false, laser_line_images: false, meshes: false}\n");
-    std::string err;
-    ASSERT_EQ(RunCli("simulate cell --quiet --out " + (dir_ / "sim").string() + " --config " +
-                      (dir_ / "sim.yaml").string(), &err), 0) << err;
+    const CommandResult run = RunCli("simulate cell --quiet --out " + (dir_ / "sim").string() +
+                                     " --config " + (dir_ / "sim.yaml").string());
+    ASSERT_EQ(run.exit_code, 0) << run.err;
     // The laser plane from the truth: n . p + d = 0.
     const std::string sensor = Slurp(dir_ / "sim/truth/sensor.yaml");
     std::smatch m;
@@ -74,7 +49,7 @@ class CalibrateJointsCli : public ::testing::Test {
          std::regex_replace(truth, std::regex(R"(joint_offset_rad: [-0-9.e]+)"),
                             "joint_offset_rad: 0"));
   }
-  static void TearDownTestSuite() { fs::remove_all(dir_); }
+  static void TearDownTestSuite() { RemoveTestDir(dir_); }
 
   static std::string Common(const std::string& cell) {
     return " --cell " + cell + " --camera " + (dir_ / "sim/truth/camera.cameramodel").string() +
@@ -92,10 +67,10 @@ TEST_F(CalibrateJointsCli, JointsUpdatesOnlyTheRobotAndWritesAVersionedJson) {
   const fs::path cell = dir_ / "joints_cell.yaml";
   fs::copy_file(dir_ / "nominal_cell.yaml", cell, fs::copy_options::overwrite_existing);
   const std::string before = Slurp(cell);
-  std::string err;
-  ASSERT_EQ(RunCli("calibrate joints" + Common(cell.string()) + " --json " +
-                    (dir_ / "joints.json").string() + " --report " +
-                    (dir_ / "joints.html").string(), &err), 0) << err;
+  const CommandResult run =
+      RunCli("calibrate joints" + Common(cell.string()) + " --json " +
+             (dir_ / "joints.json").string() + " --report " + (dir_ / "joints.html").string());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "joints.json"));
   EXPECT_EQ(j["format"], "lasercell.joint_calibration");
   EXPECT_EQ(j["version"], 1);
@@ -133,10 +108,10 @@ TEST_F(CalibrateJointsCli, JointsUpdatesOnlyTheRobotAndWritesAVersionedJson) {
 TEST_F(CalibrateJointsCli, TouchesMakeJointOneIdentifiable) {
   const fs::path cell = dir_ / "touch_cell.yaml";
   fs::copy_file(dir_ / "nominal_cell.yaml", cell, fs::copy_options::overwrite_existing);
-  std::string err;
-  ASSERT_EQ(RunCli("calibrate joints" + Common(cell.string()) + " --touches " +
-                       (dir_ / "sim/records/touches.yaml").string() + " --json " +
-                       (dir_ / "touch.json").string(), &err), 0) << err;
+  const CommandResult run = RunCli("calibrate joints" + Common(cell.string()) + " --touches " +
+                                   (dir_ / "sim/records/touches.yaml").string() + " --json " +
+                                   (dir_ / "touch.json").string());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "touch.json"));
   EXPECT_TRUE(j["observability"]["unidentifiable"].empty());
   const lasercell::FrameGraph truth = lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
@@ -152,9 +127,9 @@ TEST_F(CalibrateJointsCli, HandEyeLaserUpdatesTheFlangeSensorEdge) {
   // The true robot model (as after joint calibration) and a perturbed hand-eye start.
   const fs::path cell = dir_ / "he_cell.yaml";
   fs::copy_file(dir_ / "sim/truth/cell.yaml", cell, fs::copy_options::overwrite_existing);
-  std::string err;
-  ASSERT_EQ(RunCli("calibrate handeye-laser" + Common(cell.string()) + " --json " +
-                    (dir_ / "he.json").string(), &err), 0) << err;
+  const CommandResult run = RunCli("calibrate handeye-laser" + Common(cell.string()) + " --json " +
+                                   (dir_ / "he.json").string());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "he.json"));
   EXPECT_EQ(j["format"], "lasercell.laser_hand_eye");
   EXPECT_EQ(j["version"], 1);
@@ -187,17 +162,18 @@ TEST_F(CalibrateJointsCli, TakesTheLaserPlaneFromTheCellWhenNotGiven) {
   graph.SetLaserPlane("laser", entry);
   const fs::path cell = dir_ / "cell_with_plane.yaml";
   Spit(cell, lasercell::FrameGraphToYaml(graph));
-  std::string err;
   const std::string args = " --cell " + cell.string() + " --camera " +
                            (dir_ / "sim/truth/camera.cameramodel").string() + " --sweeps " +
                            (dir_ / "sim/records/sphere_sweeps.yaml").string();
-  ASSERT_EQ(RunCli("calibrate handeye-laser" + args + " --json " +
-                    (dir_ / "he_cellplane.json").string(), &err), 0) << err;
+  CommandResult run =
+      RunCli("calibrate handeye-laser" + args + " --json " + (dir_ / "he_cellplane.json").string());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
   // The same as giving the plane on the command line.
   const fs::path cell2 = dir_ / "cell_with_plane_2.yaml";
   fs::copy_file(dir_ / "nominal_cell.yaml", cell2, fs::copy_options::overwrite_existing);
-  ASSERT_EQ(RunCli("calibrate handeye-laser" + Common(cell2.string()) + " --json " +
-                    (dir_ / "he_cliplane.json").string(), &err), 0) << err;
+  run = RunCli("calibrate handeye-laser" + Common(cell2.string()) + " --json " +
+               (dir_ / "he_cliplane.json").string());
+  ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json a = nlohmann::json::parse(Slurp(dir_ / "he_cellplane.json"));
   const nlohmann::json b = nlohmann::json::parse(Slurp(dir_ / "he_cliplane.json"));
   EXPECT_EQ(a["format"], "lasercell.laser_hand_eye");
@@ -213,12 +189,14 @@ TEST_F(CalibrateJointsCli, MissingLaserPlaneAndUnknownSetAreNamed) {
   const std::string cam = (dir_ / "sim/truth/camera.cameramodel").string();
   const std::string sweeps = (dir_ / "sim/records/sphere_sweeps.yaml").string();
   const std::string cell = (dir_ / "nominal_cell.yaml").string();
-  std::string err;
-  EXPECT_EQ(RunCli("calibrate joints --cell " + cell + " --camera " + cam + " --sweeps " + sweeps,
-                &err), 2);
-  EXPECT_THAT(err, HasSubstr("--laser-plane"));
-  EXPECT_EQ(RunCli("calibrate joints" + Common(cell) + " --set nope", &err), 2);
-  EXPECT_THAT(err, HasSubstr("has no sweep set 'nope'"));
+  CommandResult run =
+      RunCli("calibrate joints --cell " + cell + " --camera " + cam + " --sweeps " + sweeps);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("--laser-plane"));
+  run = RunCli("calibrate joints" + Common(cell) + " --set nope");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("has no sweep set 'nope'"));
 }
 
 }  // namespace
+}  // namespace lasercell::test

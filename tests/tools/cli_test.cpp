@@ -2,58 +2,26 @@
 // one-line error messages naming the file, and that failed commands write nothing.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
 #include "core/io/point_cloud_io.hpp"
+#include "tests/cli_util.hpp"
 
+// In lasercell::test: the shared helpers of tests/cli_util.hpp (RunCli, Slurp, ...) by name.
+namespace lasercell::test {
 namespace {
 
 namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string out;
-  std::string err;
-};
-
-std::string Slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 class CliTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           (std::string("lasercell_cli_") + info->name() + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  RunResult Run(const std::string& args) const {
-    const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-    const std::string cmd = std::string(LASERCELL_CLI) + " " + args + " >" + out.string() +
-                            " 2>" + err.string();
-    const int status = std::system(cmd.c_str());
-    RunResult r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = Slurp(out);
-    r.err = Slurp(err);
-    return r;
-  }
+  void SetUp() override { dir_ = MakeTestDir("cli"); }
+  void TearDown() override { RemoveTestDir(dir_); }
 
   static std::string Data(const std::string& rel) {
     return std::string(LASERCELL_SOURCE_DIR) + "/datasets/" + rel;
@@ -69,26 +37,26 @@ int CountLines(const std::string& s) {
 }
 
 TEST_F(CliTest, VersionAndHelp) {
-  RunResult r = Run("--version");
+  CommandResult r = RunCli("--version");
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_THAT(r.out, HasSubstr("lasercell " LASERCELL_VERSION));
   for (const char* cmd : {"--help", "cloud --help", "cloud info --help", "cloud convert --help",
                           "frames --help", "frames show --help", "frames get --help"}) {
-    r = Run(cmd);
+    r = RunCli(cmd);
     EXPECT_EQ(r.exit_code, 0) << cmd;
     EXPECT_THAT(r.out, HasSubstr("Usage")) << cmd;
   }
 }
 
 TEST_F(CliTest, NoSubcommandIsBadInput) {
-  RunResult r = Run("");
+  CommandResult r = RunCli("");
   EXPECT_EQ(r.exit_code, 2);
-  r = Run("cloud frobnicate");
+  r = RunCli("cloud frobnicate");
   EXPECT_EQ(r.exit_code, 2);
 }
 
 TEST_F(CliTest, CloudInfoOnRealPly) {
-  const RunResult r = Run("cloud info " + Data("real/uwa/parasaurolophus_6700.ply"));
+  const CommandResult r = RunCli("cloud info " + Data("real/uwa/parasaurolophus_6700.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("points: 6700"));
   EXPECT_THAT(r.out, HasSubstr("fields: x y z nx ny nz"));
@@ -98,7 +66,8 @@ TEST_F(CliTest, CloudInfoOnRealPly) {
 }
 
 TEST_F(CliTest, CloudInfoOnOrganizedPcdReportsGridAndMetres) {
-  const RunResult r = Run("cloud info " + Data("real/pcl/milk_cartoon_all_small_clorox.pcd"));
+  const CommandResult r =
+      RunCli("cloud info " + Data("real/pcl/milk_cartoon_all_small_clorox.pcd"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("organized: yes, 480 rows x 640 columns"));
   EXPECT_THAT(r.out, HasSubstr("metres"));
@@ -107,9 +76,10 @@ TEST_F(CliTest, CloudInfoOnOrganizedPcdReportsGridAndMetres) {
 TEST_F(CliTest, ConvertPlyToPcdAndBackKeepsPoints) {
   const std::string pcd = (dir_ / "model.pcd").string();
   const std::string ply = (dir_ / "model.ply").string();
-  RunResult r = Run("cloud convert " + Data("real/uwa/parasaurolophus_6700.ply") + " " + pcd);
+  CommandResult r =
+      RunCli("cloud convert " + Data("real/uwa/parasaurolophus_6700.ply") + " " + pcd);
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = Run("cloud convert " + pcd + " " + ply);
+  r = RunCli("cloud convert " + pcd + " " + ply);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto original = lasercell::io::ReadPointCloud(Data("real/uwa/parasaurolophus_6700.ply"));
   const auto back = lasercell::io::ReadPointCloud(ply);
@@ -123,7 +93,7 @@ TEST_F(CliTest, ConvertPlyToPcdAndBackKeepsPoints) {
 
 TEST_F(CliTest, ConvertScalesMetresToMillimetres) {
   const std::string out = (dir_ / "bun0_mm.ply").string();
-  RunResult r = Run("cloud convert --scale 1000 " + Data("real/pcl/bun0.pcd") + " " + out);
+  CommandResult r = RunCli("cloud convert --scale 1000 " + Data("real/pcl/bun0.pcd") + " " + out);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto metres = lasercell::io::ReadPointCloud(Data("real/pcl/bun0.pcd"));
   const auto mm = lasercell::io::ReadPointCloud(out);
@@ -132,7 +102,7 @@ TEST_F(CliTest, ConvertScalesMetresToMillimetres) {
 }
 
 TEST_F(CliTest, MissingFileIsOneLineExitTwo) {
-  const RunResult r = Run("cloud info " + (dir_ / "nope.ply").string());
+  const CommandResult r = RunCli("cloud info " + (dir_ / "nope.ply").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(CountLines(r.err), 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("nope.ply"));
@@ -143,7 +113,7 @@ TEST_F(CliTest, CorruptInputWritesNothing) {
   std::ofstream(bad) << "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
                         "property float y\nproperty float z\nend_header\n1 2 3\n";
   const fs::path out = dir_ / "out.pcd";
-  const RunResult r = Run("cloud convert " + bad.string() + " " + out.string());
+  const CommandResult r = RunCli("cloud convert " + bad.string() + " " + out.string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(CountLines(r.err), 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("bad.ply"));
@@ -155,27 +125,29 @@ TEST_F(CliTest, CorruptInputWritesNothing) {
 }
 
 TEST_F(CliTest, ConvertRejectsUnknownOutputTypeAndBadScale) {
-  RunResult r = Run("cloud convert " + Data("real/pcl/bun4.pcd") + " " + (dir_ / "x.xyz").string());
+  CommandResult r =
+      RunCli("cloud convert " + Data("real/pcl/bun4.pcd") + " " + (dir_ / "x.xyz").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("x.xyz"));
-  r = Run("cloud convert --scale -3 " + Data("real/pcl/bun4.pcd") + " " + (dir_ / "x.ply").string());
+  r = RunCli("cloud convert --scale -3 " + Data("real/pcl/bun4.pcd") + " " +
+             (dir_ / "x.ply").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("--scale"));
 }
 
 TEST_F(CliTest, FramesShowAndGetOnExampleCell) {
   const std::string cell = Data("demo/cell.yaml");
-  RunResult r = Run("frames show " + cell);
+  CommandResult r = RunCli("frames show " + cell);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("vision_flange"));
   EXPECT_THAT(r.out, HasSubstr("sensor"));
   EXPECT_THAT(r.out, HasSubstr("by: "));
-  r = Run("frames get " + cell + " --to vision_flange --from sensor");
+  r = RunCli("frames get " + cell + " --to vision_flange --from sensor");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("vision_flange_from_sensor: {translation_mm: ["));
   EXPECT_THAT(r.out, HasSubstr("rotation_wxyz: ["));
   // Through the UR5's dynamic edge: all-zero joints.
-  r = Run("frames get " + cell + " --to vision_base --from vision_flange --joints 0,0,0,0,0,0");
+  r = RunCli("frames get " + cell + " --to vision_base --from vision_flange --joints 0,0,0,0,0,0");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   // UR5 at zero joints: flange at (a2 + a3, -(d4 + d6), d1 - d5) mm.
   const auto at = r.out.find("translation_mm: [");
@@ -189,13 +161,13 @@ TEST_F(CliTest, FramesShowAndGetOnExampleCell) {
 
 TEST_F(CliTest, FramesGetErrors) {
   const std::string cell = Data("demo/cell.yaml");
-  RunResult r = Run("frames get " + cell + " --to nowhere --from sensor");
+  CommandResult r = RunCli("frames get " + cell + " --to nowhere --from sensor");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("nowhere"));
-  r = Run("frames get " + cell + " --to vision_base --from sensor");  // joints needed
+  r = RunCli("frames get " + cell + " --to vision_base --from sensor");  // joints needed
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("vision_robot"));
-  r = Run("frames get " + cell + " --to vision_base --from sensor --joints 0,0,x");
+  r = RunCli("frames get " + cell + " --to vision_base --from sensor --joints 0,0,x");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("--joints"));
 }
@@ -203,7 +175,7 @@ TEST_F(CliTest, FramesGetErrors) {
 TEST_F(CliTest, BadCellFileIsOneLineExitTwo) {
   const fs::path cell = dir_ / "cell.yaml";
   std::ofstream(cell) << "format: lasercell.cell\nversion: 99\nframes: []\nedges: []\n";
-  const RunResult r = Run("frames show " + cell.string());
+  const CommandResult r = RunCli("frames show " + cell.string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(CountLines(r.err), 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("cell.yaml"));
@@ -213,8 +185,9 @@ TEST_F(CliTest, BadCellFileIsOneLineExitTwo) {
 
 TEST_F(CliTest, LocalizeFindsTheParasaurolophusInRs1) {
   const std::string out = (dir_ / "result.json").string();
-  const RunResult r = Run("localize --model " + Data("real/uwa/parasaurolophus_6700.bin.ply") +
-                          " --scene " + Data("real/uwa/rs1_normals.bin.ply") + " --out " + out);
+  const CommandResult r =
+      RunCli("localize --model " + Data("real/uwa/parasaurolophus_6700.bin.ply") + " --scene " +
+             Data("real/uwa/rs1_normals.bin.ply") + " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(Slurp(out));
   EXPECT_EQ(j["format"], "lasercell.localization");
@@ -233,11 +206,14 @@ TEST_F(CliTest, LocalizeFindsTheParasaurolophusInRs1) {
 TEST_F(CliTest, LocalizeWithoutThePartIsFoundFalseExitZero) {
   // The milk carton scene (PCL, converted to mm) holds no parasaurolophus.
   const std::string scene = (dir_ / "milk_scene_mm.ply").string();
-  ASSERT_EQ(Run("cloud convert --scale 1000 " + Data("real/pcl/milk_cartoon_all_small_clorox.pcd") +
-                " " + scene).exit_code, 0);
+  ASSERT_EQ(RunCli("cloud convert --scale 1000 " +
+                   Data("real/pcl/milk_cartoon_all_small_clorox.pcd") + " " + scene)
+                .exit_code,
+            0);
   const std::string out = (dir_ / "result.json").string();
-  const RunResult r = Run("localize --model " + Data("real/uwa/parasaurolophus_6700.bin.ply") +
-                          " --scene " + scene + " --out " + out);
+  const CommandResult r =
+      RunCli("localize --model " + Data("real/uwa/parasaurolophus_6700.bin.ply") + " --scene " +
+             scene + " --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(Slurp(out));
   EXPECT_FALSE(j["found"].get<bool>());
@@ -251,20 +227,20 @@ TEST_F(CliTest, LocalizeBadOptionsAreOneLineExitTwoAndWriteNothing) {
   const std::string out = (dir_ / "result.json").string();
   const std::string base = "localize --model " + Data("real/uwa/parasaurolophus_6700.bin.ply") +
                            " --scene " + Data("real/uwa/rs1_normals.bin.ply") + " --out " + out;
-  RunResult r = Run(base + " --options " + opts.string());
+  CommandResult r = RunCli(base + " --options " + opts.string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(CountLines(r.err), 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("matching.refrence_stride"));
   std::ofstream(opts, std::ios::trunc) << "matching:\n  reference_stride: -1\n";
-  r = Run(base + " --options " + opts.string());
+  r = RunCli(base + " --options " + opts.string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
   std::ofstream(opts, std::ios::trunc) << "model: {angle_step_rad: -0.1}\n";
-  r = Run(base + " --options " + opts.string());
+  r = RunCli(base + " --options " + opts.string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("angle_step_rad"));
-  r = Run(base + " --max-instances 0");
+  r = RunCli(base + " --max-instances 0");
   EXPECT_EQ(r.exit_code, 2);
-  r = Run(base + " --viewpoint 1,2");
+  r = RunCli(base + " --viewpoint 1,2");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_FALSE(fs::exists(out));
 }
@@ -273,12 +249,13 @@ TEST_F(CliTest, LocalizeSavesAndReusesAPrebuiltModel) {
   const std::string model = (dir_ / "para.ppfm").string();
   const std::string out1 = (dir_ / "r1.json").string(), out2 = (dir_ / "r2.json").string();
   const std::string scene = Data("real/uwa/rs1_normals.bin.ply");
-  RunResult r = Run("localize --quiet --threads 1 --model " +
-                    Data("real/uwa/parasaurolophus_6700.bin.ply") + " --scene " + scene +
-                    " --out " + out1 + " --save-model " + model);
+  CommandResult r = RunCli("localize --quiet --threads 1 --model " +
+                           Data("real/uwa/parasaurolophus_6700.bin.ply") + " --scene " + scene +
+                           " --out " + out1 + " --save-model " + model);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(r.out.empty());
-  r = Run("localize --quiet --threads 1 --model " + model + " --scene " + scene + " --out " + out2);
+  r = RunCli("localize --quiet --threads 1 --model " + model + " --scene " + scene + " --out " +
+             out2);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto a = nlohmann::json::parse(Slurp(out1)), b = nlohmann::json::parse(Slurp(out2));
   EXPECT_EQ(a["candidates"][0]["scene_from_model"], b["candidates"][0]["scene_from_model"]);
@@ -286,9 +263,9 @@ TEST_F(CliTest, LocalizeSavesAndReusesAPrebuiltModel) {
 
 TEST_F(CliTest, SimulateSeatIsDeterministicAndReadable) {
   const fs::path a = dir_ / "a", b = dir_ / "b";
-  RunResult r = Run("simulate seat --quiet --placements 1 --seed 7 --out " + a.string());
+  CommandResult r = RunCli("simulate seat --quiet --placements 1 --seed 7 --out " + a.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = Run("simulate seat --quiet --placements 1 --seed 7 --threads 1 --out " + b.string());
+  r = RunCli("simulate seat --quiet --placements 1 --seed 7 --threads 1 --out " + b.string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   int files = 0;
   for (const auto& entry : fs::recursive_directory_iterator(a)) {
@@ -299,7 +276,8 @@ TEST_F(CliTest, SimulateSeatIsDeterministicAndReadable) {
   }
   EXPECT_GE(files, 5);
   // The truth cell file is readable by the frames tools.
-  r = Run("frames get " + (a / "truth/cell.yaml").string() + " --to handling_base --from seat_000");
+  r = RunCli("frames get " + (a / "truth/cell.yaml").string() +
+             " --to handling_base --from seat_000");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("handling_base_from_seat_000"));
 }
@@ -307,11 +285,12 @@ TEST_F(CliTest, SimulateSeatIsDeterministicAndReadable) {
 TEST_F(CliTest, SimulateBadConfigNamesTheField) {
   const fs::path cfg = dir_ / "sim.yaml";
   std::ofstream(cfg) << "seats: {count: -1}\n";
-  RunResult r = Run("simulate cell --out " + (dir_ / "out").string() + " --config " + cfg.string());
+  CommandResult r =
+      RunCli("simulate cell --out " + (dir_ / "out").string() + " --config " + cfg.string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("seats.count"));
   std::ofstream(cfg, std::ios::trunc) << "sensor: {standof_mm: 700}\n";
-  r = Run("simulate cell --out " + (dir_ / "out").string() + " --config " + cfg.string());
+  r = RunCli("simulate cell --out " + (dir_ / "out").string() + " --config " + cfg.string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("standof_mm"));
 }
@@ -319,7 +298,8 @@ TEST_F(CliTest, SimulateBadConfigNamesTheField) {
 TEST_F(CliTest, BenchRegistrationPrintsPoseErrorTable) {
   // OpenCV training takes about a minute: the full comparison runs by hand (BENCHMARKS.md).
   const std::string json = (dir_ / "bench.json").string();
-  const RunResult r = Run("bench registration --runs 2 --skip-opencv --skip-pcl --icp-starts 3 --json " + json);
+  const CommandResult r =
+      RunCli("bench registration --runs 2 --skip-opencv --skip-pcl --icp-starts 3 --json " + json);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_THAT(r.out, HasSubstr("| lasercell |"));
   EXPECT_THAT(r.out, HasSubstr("pose error"));
@@ -334,15 +314,17 @@ TEST_F(CliTest, BenchRegistrationPrintsPoseErrorTable) {
 }
 
 TEST_F(CliTest, BenchRegistrationBadArgumentsExitTwo) {
-  RunResult r = Run("bench registration --runs 0 --skip-opencv --skip-pcl");
+  CommandResult r = RunCli("bench registration --runs 0 --skip-opencv --skip-pcl");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(CountLines(r.err), 1) << r.err;
   EXPECT_THAT(r.err, HasSubstr("--runs"));
-  r = Run("bench registration --runs 1 --skip-opencv --skip-pcl --model " + (dir_ / "missing.ply").string());
+  r = RunCli("bench registration --runs 1 --skip-opencv --skip-pcl --model " +
+             (dir_ / "missing.ply").string());
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_THAT(r.err, HasSubstr("missing.ply"));
-  r = Run("bench");
+  r = RunCli("bench");
   EXPECT_EQ(r.exit_code, 2);
 }
 
 }  // namespace
+}  // namespace lasercell::test

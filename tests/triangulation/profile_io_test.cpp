@@ -4,12 +4,12 @@
 
 #include <cmath>
 #include <cstring>
-#include <filesystem>
 #include <limits>
 #include <string>
 
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
+#include "tests/cli_util.hpp"
 
 namespace lasercell::triangulation {
 namespace {
@@ -68,12 +68,6 @@ void ExpectBitIdentical(const ProfileSet& a, const ProfileSet& b) {
   }
 }
 
-std::string TempPath(const std::string& name) {
-  return (std::filesystem::temp_directory_path() /
-          ("lasercell_profile_io_" + std::to_string(::getpid()) + "_" + name))
-      .string();
-}
-
 template <typename F>
 std::string FileErrorMessage(F&& f) {
   try {
@@ -100,13 +94,13 @@ TEST(ProfileIo, RoundTripIsBitExactWithJoints) {
 
 TEST(ProfileIo, RoundTripThroughFileWithoutJoints) {
   const ProfileSet set = MakeSet(1024, 0, 3);
-  const std::string path = TempPath("plain.lcp");
+  const test::TestDir dir("profile_io");
+  const std::string path = dir.File("plain.lcp");
   WriteProfiles(path, set);
   const ProfileSet back = ReadProfiles(path);
   ExpectBitIdentical(set, back);
   EXPECT_EQ(back.profiles[0].ValidCount(), 1024u - 147u);  // c % 7 == 0 has no peak
   EXPECT_TRUE(std::isnan(back.profiles[0].row_px[0]));
-  std::filesystem::remove(path);
 }
 
 TEST(ProfileIo, EmptySetRoundTrips) {
@@ -203,7 +197,8 @@ TEST(ProfileIo, TrailingBytesAndFlagsAreRejected) {
 }
 
 TEST(ProfileIo, MissingFileIsFileError) {
-  EXPECT_THROW(ReadProfiles(TempPath("does_not_exist.lcp")), FileError);
+  const test::TestDir dir("profile_io");
+  EXPECT_THROW(ReadProfiles(dir.File("does_not_exist.lcp")), FileError);
 }
 
 TEST(ProfileIo, WriterRejectsProfilesThatDoNotMatchTheHeader) {

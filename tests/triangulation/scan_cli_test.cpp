@@ -1,13 +1,9 @@
 // `lasercell scan triangulate` end to end: a simulated plane sweep written as files, the CLI run
 // as a process, its PLY read back.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <sstream>
 #include <string>
 
@@ -19,6 +15,7 @@
 #include "datasets/cell.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/simulate.hpp"
+#include "tests/cli_util.hpp"
 #include "triangulation/profile_io.hpp"
 
 namespace lasercell::triangulation {
@@ -26,17 +23,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;
-  std::string err;
-};
+using test::CommandResult;
+using test::RunCli;
 
 class ScanCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("lasercell_scan_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test::MakeTestDir("scan");
     // A 10-profile linear sweep of the white plane at 250 mm, camera and truth files.
     const datasets::Scene scene = datasets::MakePlaneScene(truth_.layout, height_, {2000, 2000});
     const datasets::LaserRenderer renderer(scene, truth_.sensor, config_.render);
@@ -57,21 +50,7 @@ class ScanCli : public ::testing::Test {
     plane_ = truth_.sensor.laser.Coefficients();
     velocity_ = sweep_.At(0).linear().transpose() * sweep_.velocity_mm_s;
   }
-  void TearDown() override { fs::remove_all(dir_); }
-
-  CliRun Cli(const std::string& args) const {
-    const fs::path err = dir_ / "stderr.txt";
-    const std::string cmd =
-        std::string(LASERCELL_CLI) + " " + args + " >/dev/null 2>" + err.string();
-    const int status = std::system(cmd.c_str());
-    CliRun r;
-    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    std::ifstream in(err);
-    std::stringstream s;
-    s << in.rdbuf();
-    r.err = s.str();
-    return r;
-  }
+  void TearDown() override { test::RemoveTestDir(dir_); }
   std::string P(const std::string& f) const { return (dir_ / f).string(); }
   static std::string Csv(const Eigen::VectorXd& v) {
     std::ostringstream o;
@@ -106,10 +85,10 @@ TEST_F(ScanCli, TriangulatesALinearSweepWithAPlaneFromTheCommandLine) {
   const std::string common = "scan triangulate --camera " + P("camera.cameramodel") +
                              " --profiles " + P("plane.lcp") + " --t0-ns 1000000000" +
                              " --velocity-mm-s " + Csv(velocity_) + " --laser-plane=" + Csv(plane_);
-  CliRun r = Cli(common + " --out " + P("fast.ply"));
+  CommandResult r = RunCli(common + " --out " + P("fast.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ExpectOnPlane(P("fast.ply"));
-  r = Cli(common + " --exact --out " + P("exact.ply"));
+  r = RunCli(common + " --exact --out " + P("exact.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ExpectOnPlane(P("exact.ply"));
 }
@@ -125,7 +104,7 @@ TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
   const std::string common = "scan triangulate --camera " + P("camera.cameramodel") +
                              " --profiles " + P("plane.lcp") + " --t0-ns 1000000000" +
                              " --velocity-mm-s " + Csv(velocity_);
-  CliRun r = Cli(common + " --cell " + P("cell.yaml") + " --out " + P("cell.ply"));
+  CommandResult r = RunCli(common + " --cell " + P("cell.yaml") + " --out " + P("cell.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ExpectOnPlane(P("cell.ply"));
   // The simulator's truth/sensor.yaml.
@@ -135,7 +114,7 @@ TEST_F(ScanCli, ReadsTheLaserPlaneFromCellYamlOrTheSimulatorTruth) {
   truth << "format: lasercell.sim_sensor\nversion: 1\nlaser_plane_in_sensor:\n  normal: [" << n.x()
         << ", " << n.y() << ", " << n.z() << "]\n  d_mm: " << plane_[3] << "\n";
   io::WriteFileAtomically(P("sensor.yaml"), truth.str());
-  r = Cli(common + " --sensor-truth " + P("sensor.yaml") + " --out " + P("truth.ply"));
+  r = RunCli(common + " --sensor-truth " + P("sensor.yaml") + " --out " + P("truth.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   ExpectOnPlane(P("truth.ply"));
 }
@@ -165,9 +144,9 @@ TEST_F(ScanCli, RobotSweepIsPosedThroughTheCellFile) {
   entry.point_mm = -plane_[3] * entry.normal;
   graph.SetLaserPlane("laser", entry);
   io::WriteFileAtomically(P("cell.yaml"), FrameGraphToYaml(graph));
-  const CliRun run =
-      Cli("scan triangulate --camera " + P("camera.cameramodel") + " --profiles " + P("robot.lcp") +
-          " --cell " + P("cell.yaml") + " --frame cell --out " + P("robot.ply"));
+  const CommandResult run = RunCli("scan triangulate --camera " + P("camera.cameramodel") +
+                                   " --profiles " + P("robot.lcp") + " --cell " + P("cell.yaml") +
+                                   " --frame cell --out " + P("robot.ply"));
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const PointCloud cloud = io::ReadPointCloud(P("robot.ply"));
   EXPECT_EQ(cloud.size(), r.valid_peaks);
@@ -193,9 +172,9 @@ TEST_F(ScanCli, LinearSweepIsPlacedThroughStaticEdges) {
   const std::string common = "scan triangulate --camera " + P("camera.cameramodel") +
                              " --profiles " + P("plane.lcp") + " --t0-ns 1000000000" +
                              " --velocity-mm-s " + Csv(velocity_) + " --cell " + P("cell.yaml");
-  CliRun r = Cli(common + " --out " + P("t0.ply"));
+  CommandResult r = RunCli(common + " --out " + P("t0.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = Cli(common + " --frame handling_base --out " + P("hb.ply"));
+  r = RunCli(common + " --frame handling_base --out " + P("hb.ply"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const PointCloud t0 = io::ReadPointCloud(P("t0.ply"));
   const PointCloud hb = io::ReadPointCloud(P("hb.ply"));
@@ -213,34 +192,32 @@ TEST_F(ScanCli, LinearSweepIsPlacedThroughStaticEdges) {
 TEST_F(ScanCli, BadInputExitsTwoWithOneLine) {
   const std::string base = "scan triangulate --camera " + P("camera.cameramodel") + " --profiles " +
                            P("plane.lcp") + " --out " + P("x.ply");
-  CliRun r = Cli(base);
+  CommandResult r = RunCli(base);
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("no laser plane"), std::string::npos) << r.err;
-  r = Cli(base + " --laser-plane=0,1,0,0");
+  r = RunCli(base + " --laser-plane=0,1,0,0");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("passes through the camera centre"), std::string::npos) << r.err;
-  r = Cli(base + " --laser-plane=" + Csv(plane_) + " --velocity-mm-s 1,2");
+  r = RunCli(base + " --laser-plane=" + Csv(plane_) + " --velocity-mm-s 1,2");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--velocity-mm-s"), std::string::npos) << r.err;
-  r = Cli(base + " --laser-plane=" + Csv(plane_) + " --frame vision_base");
+  r = RunCli(base + " --laser-plane=" + Csv(plane_) + " --frame vision_base");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--frame needs --cell"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(P("x.ply")));
 }
 
 TEST_F(ScanCli, BenchPeaksPrintsOneRowPerEstimatorAndSnr) {
-  const std::string out = P("peaks.txt");
-  const int status = std::system(
-      (std::string(LASERCELL_CLI) + " bench peaks --snr 20,50 --images 1 >" + out).c_str());
-  ASSERT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 0);
-  std::ifstream in(out);
+  const CommandResult run = RunCli("bench peaks --snr 20,50 --images 1");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::istringstream in(run.out);
   std::string line;
   int rows = 0;
   while (std::getline(in, line)) {
     if (line.rfind("| 20 |", 0) == 0 || line.rfind("| 50 |", 0) == 0) ++rows;
   }
   EXPECT_EQ(rows, 6);
-  const CliRun bad = Cli("bench peaks --snr 500");
+  const CommandResult bad = RunCli("bench peaks --snr 500");
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("saturation"), std::string::npos) << bad.err;
 }
