@@ -11,7 +11,7 @@
 #include <cstdio>
 
 #include "calib/cost_functions/hand_eye_reprojection.hpp"
-#include "calib/internal/chessboard_cv.hpp"
+#include "calib/internal/board_pose.hpp"
 #include "core/error.hpp"
 
 namespace lasercell::calib {

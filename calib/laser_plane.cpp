@@ -374,6 +374,7 @@ void StripeOptions::Check() const {
     throw OptionError("StripeOptions.min_triangulation_angle_deg must be in [0, 90)");
   }
   if (!(outlier_sigmas > 0)) throw OptionError("StripeOptions.outlier_sigmas must be > 0");
+  board_detection.Check();
 }
 
 std::string LaserPlaneResult::Summary() const {
@@ -784,14 +785,18 @@ StripeObservation DetectStripe(const CameraModel& camera, const StripeImage& ima
                   "StripeImage buffer size");
   StripeObservation out;
   out.name = image.name;
-  const cv::Mat gray = internal::GrayOf(image);
-  const auto corners = internal::FindChessboard(gray, board.cols, board.rows);
-  if (!corners) {
-    out.note = "chessboard with " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-               " inner corners not found (check --board)";
+  BoardSpec spec;
+  spec.type = BoardType::kChessboard;
+  spec.cols = board.cols;
+  spec.rows = board.rows;
+  spec.square_mm = board.square_mm;
+  const TargetDetection detection =
+      DetectTarget(internal::GrayImageOf(image), spec, options.board_detection);
+  if (!detection.found()) {
+    out.note = "board: " + detection.message;
     return out;
   }
-  out.corners_px = *corners;
+  out.corners_px = detection.corners_px;
   const Eigen::Isometry3d camera_from_board = internal::BoardPose(camera, out.corners_px, board, nullptr);
   // The board region: the inner-corner grid grown by the margin, sampled along its edges
   // (straight on the board, curved in a distorted image).

@@ -199,6 +199,15 @@ std::string RobotPosesYaml(const RobotPoses& poses) {
   return o.str();
 }
 
+BoardSpec ChessboardDetections::Board() const {
+  BoardSpec board;
+  board.type = BoardType::kChessboard;
+  board.cols = cols;
+  board.rows = rows;
+  board.square_mm = square_mm;
+  return board;
+}
+
 ChessboardDetections ParseChessboardDetections(const std::string& text,
                                                const std::string& name) {
   std::istringstream in(text);

@@ -24,6 +24,8 @@
 #include <string>
 #include <vector>
 
+#include "calib/board.hpp"
+
 namespace lasercell::calib {
 
 /// Robot poses, one per image.
@@ -67,6 +69,9 @@ struct ChessboardDetections {
   int width_px = 0, height_px = 0;  ///< Image size.
   std::vector<std::string> images;  ///< Image names, in order.
   std::vector<std::vector<Eigen::Vector2d>> corners_px;  ///< Per image, cols * rows corners.
+
+  /// The chessboard these corners belong to (corner ids and board-frame positions, board.hpp).
+  BoardSpec Board() const;
 };
 /// Parses the text above; throws FileError(name, ...) naming the line.
 ChessboardDetections ParseChessboardDetections(const std::string& text, const std::string& name);

@@ -85,20 +85,61 @@ void Store(const std::vector<cv::Point2f>& corners, const std::vector<int>& ids,
   out.corner_ids = ids;
 }
 
+// The image the board is searched in: `gray` itself, or shrunk by options.search_downscale.
+cv::Mat SearchImage(const cv::Mat& gray, const DetectionOptions& options) {
+  const int s = options.search_downscale;
+  if (s == 1) return gray;
+  cv::Mat small;
+  cv::resize(gray, small, cv::Size(gray.cols / s, gray.rows / s), 0, 0, cv::INTER_AREA);
+  return small;
+}
+
+// Search-image pixels back to full resolution: an area average of s x s pixels puts the centre
+// of small pixel x at full-resolution s x + (s - 1) / 2 (pixel centres at integers).
+void ToFullResolution(std::vector<cv::Point2f>& corners, const DetectionOptions& options) {
+  const float s = static_cast<float>(options.search_downscale);
+  const float shift = 0.5f * (s - 1.f);
+  for (cv::Point2f& c : corners) c = cv::Point2f(s * c.x + shift, s * c.y + shift);
+}
+
+// The inner-corner grid of any chessboard of at least 3x3 inner corners in the image (SB with
+// CALIB_CB_LARGER grows the grid to the whole board and reports its size through `meta`), or
+// 0x0 when there is none.
+cv::Size VisibleChessboard(const cv::Mat& search) {
+  std::vector<cv::Point2f> any;
+  cv::Mat meta;
+  if (cv::findChessboardCornersSB(search, cv::Size(3, 3), any,
+                                  cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER, meta) &&
+      !meta.empty()) {
+    return cv::Size(meta.cols, meta.rows);
+  }
+  return cv::Size(0, 0);
+}
+
 void DetectChessboard(const cv::Mat& gray, const BoardSpec& board, const DetectionOptions& options,
                       TargetDetection& out) {
   const cv::Size pattern(board.cols, board.rows);
+  const cv::Mat search = SearchImage(gray, options);
   std::vector<cv::Point2f> corners;
-  bool found = cv::findChessboardCornersSB(gray, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE);
-  if (!found) {
+  bool found = cv::findChessboardCornersSB(search, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE);
+  // On failure, what chessboard is visible (when asked): a grid too small to hold the pattern in
+  // either orientation means no detector can find it, so the fallbacks are skipped (the classic
+  // detector alone takes seconds on a 1 Mpx image of a wrong-size board).
+  const cv::Size visible =
+      !found && options.diagnose_board_size ? VisibleChessboard(search) : cv::Size(0, 0);
+  const bool can_hold = visible.area() == 0 ||
+                        (visible.width >= board.cols && visible.height >= board.rows) ||
+                        (visible.width >= board.rows && visible.height >= board.cols);
+  if (!found && can_hold) {
     found = cv::findChessboardCorners(
-        gray, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+        search, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
   }
-  if (!found) {
-    found = cv::findChessboardCornersSB(gray, pattern, corners,
+  if (!found && can_hold) {
+    found = cv::findChessboardCornersSB(search, pattern, corners,
                                         cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
   }
   if (found && static_cast<int>(corners.size()) == board.NumCorners()) {
+    ToFullResolution(corners, options);
     // The detectors may return a mirrored order (rows or columns reversed), i.e. the board seen
     // from behind. Reverse the rows of a left-handed grid so every view has the board's z
     // pointing away from the camera (board x along increasing ids, y down the rows).
@@ -123,27 +164,19 @@ void DetectChessboard(const cv::Mat& gray, const BoardSpec& board, const Detecti
   out.status = DetectionStatus::kNotFound;
   out.message = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
                 " chessboard (inner corners) found";
-  if (!options.diagnose_board_size) return;
-  // Any chessboard of at least 3x3 inner corners: CALIB_CB_LARGER lets SB grow the grid to the
-  // whole board and reports its size through `meta`.
-  std::vector<cv::Point2f> any;
-  cv::Mat meta;
-  if (cv::findChessboardCornersSB(gray, cv::Size(3, 3), any,
-                                  cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER, meta) &&
-      !meta.empty()) {
-    const int c = meta.cols;
-    const int r = meta.rows;
-    if ((c == board.cols && r == board.rows) || (c == board.rows && r == board.cols)) {
-      out.message += " although a board of that size is visible (blurred, cut off or low "
-                     "contrast?)";
-      return;
-    }
-    out.status = DetectionStatus::kWrongBoardSize;
-    out.message = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-                  " chessboard found, but a " + std::to_string(c) + "x" + std::to_string(r) +
-                  " one (inner corners) is visible: wrong board size in the board spec? (a "
-                  "board partly outside the image also looks smaller)";
+  if (visible.area() == 0) return;
+  const int c = visible.width;
+  const int r = visible.height;
+  if ((c == board.cols && r == board.rows) || (c == board.rows && r == board.cols)) {
+    out.message += " although a board of that size is visible (blurred, cut off or low "
+                   "contrast?)";
+    return;
   }
+  out.status = DetectionStatus::kWrongBoardSize;
+  out.message = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
+                " chessboard found, but a " + std::to_string(c) + "x" + std::to_string(r) +
+                " one (inner corners) is visible: wrong board size in the board spec? (a "
+                "board partly outside the image also looks smaller)";
 }
 
 void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionOptions& options,
@@ -156,7 +189,8 @@ void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionO
   std::vector<std::vector<cv::Point2f>> marker_corners, rejected;
   std::vector<int> marker_ids;
   const cv::Ptr<cv::aruco::DetectorParameters> params = cv::aruco::DetectorParameters::create();
-  cv::aruco::detectMarkers(gray, dictionary, marker_corners, marker_ids, params, rejected);
+  const cv::Mat search = SearchImage(gray, options);
+  cv::aruco::detectMarkers(search, dictionary, marker_corners, marker_ids, params, rejected);
   if (marker_ids.empty()) {
     out.status = DetectionStatus::kNotFound;
     out.message = "no ArUco marker of " + board.dictionary + " found";
@@ -164,11 +198,12 @@ void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionO
   }
   std::vector<cv::Point2f> corners;
   std::vector<int> ids;
-  if (cv::aruco::interpolateCornersCharuco(marker_corners, marker_ids, gray, charuco, corners,
+  if (cv::aruco::interpolateCornersCharuco(marker_corners, marker_ids, search, charuco, corners,
                                            ids) <= 0) {
     corners.clear();
     ids.clear();
   }
+  ToFullResolution(corners, options);
   if (static_cast<int>(ids.size()) < options.min_charuco_corners) {
     out.status = ids.empty() ? DetectionStatus::kNotFound : DetectionStatus::kTooFewCorners;
     out.message = std::to_string(marker_ids.size()) + " markers but only " +
@@ -208,6 +243,13 @@ void DetectionOptions::Check() const {
   }
   if (min_charuco_corners < 4) {
     throw OptionError("DetectionOptions.min_charuco_corners must be >= 4");
+  }
+  if (search_downscale < 1 || search_downscale > 8) {
+    throw OptionError("DetectionOptions.search_downscale must be in 1..8");
+  }
+  if (search_downscale > 1 && !refine) {
+    throw OptionError("DetectionOptions.search_downscale > 1 needs refine = true (corners found "
+                      "on the shrunk image are only good to about half the factor in px)");
   }
 }
 

@@ -52,11 +52,17 @@ struct DetectionOptions {
   /// Bounds of the refinement half window, px.
   int min_refine_half_window_px = 2;
   int max_refine_half_window_px = 15;
-  /// On failure, look for a chessboard of any size to diagnose a wrong --board spec (costs one
-  /// more detection pass on failed images only).
+  /// When the first search fails, look for a chessboard of any size to diagnose a wrong --board
+  /// spec (one more detection pass on failed images only). A visible grid too small to hold the
+  /// board also skips the slower fallback searches, which could not find it.
   bool diagnose_board_size = true;
   /// ChArUco views with fewer interpolated corners are rejected.
   int min_charuco_corners = 6;
+  /// Search for the board on the image shrunk by this integer factor (area average), then refine
+  /// the corners at full resolution: about factor^2 less search time on large images whose
+  /// squares stay >= ~10 px when shrunk. 1 (default): search at full resolution. > 1 needs
+  /// `refine` (the search's corners are only good to ~factor/2 px).
+  int search_downscale = 1;
 
   /// Throws OptionError naming the field.
   void Check() const;

@@ -29,8 +29,8 @@
 
 #include "calib/camera_model.hpp"
 #include "calib/hand_eye.hpp"
-#include "calib/internal/chessboard_cv.hpp"
 #include "calib/pose_io.hpp"
+#include "calib/target_detection.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/calibration_captures.hpp"
@@ -349,6 +349,10 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
 
   if (args.sim_render) {
     const datasets::ImageRenderer renderer(truth.sensor.camera);
+    calib::BoardSpec rendered_board;  // chessboard; only the corner grid matters here
+    rendered_board.cols = board.squares_x - 1;
+    rendered_board.rows = board.squares_y - 1;
+    rendered_board.square_mm = board.square_mm;
     std::vector<calib::HandEyeView> detected;
     int flipped = 0;
     double det_ss = 0;
@@ -356,9 +360,10 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
     for (std::size_t i = 0; i < set.images.size(); ++i) {
       const datasets::GrayImage img = renderer.RenderChessboard(
           board, set.images[i].camera_from_board, config.images, args.seed * 1000 + i);
-      auto c = calib::internal::DetectChessboardCorners(img.pixels, img.width, img.height,
-                                                        board.squares_x - 1, board.squares_y - 1);
-      if (!c) continue;
+      const calib::TargetDetection found =
+          calib::DetectTarget({img.width, img.height, img.pixels}, rendered_board);
+      if (!found.found()) continue;
+      auto c = std::optional<std::vector<Eigen::Vector2d>>(found.corners_px);
       // The detector's corner order can differ from the board's by a reversal of rows and/or
       // columns (its own board frame); relabel to the simulator's order, chosen from truth.
       const auto& truth_px = set.images[i].corners_px;
@@ -393,8 +398,9 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
       detected.push_back(v);
     }
     std::snprintf(title, sizeof title,
-                  "Simulated cell, rendered images (default image noise/blur), corners by OpenCV "
-                  "findChessboardCornersSB + cornerSubPix: %zu of %zu boards found, detection "
+                  "Simulated cell, rendered images (default image noise/blur), corners by "
+                  "calib::DetectTarget (findChessboardCornersSB + cornerSubPix): %zu of %zu boards "
+                  "found, detection "
                   "error vs true projections %.3f px RMS, %d corner orderings relabelled from truth",
                   detected.size(), set.images.size(), std::sqrt(det_ss / std::max(det_n, 1)),
                   flipped);
@@ -432,22 +438,30 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
     det.cols = 24;
     det.rows = 17;
     det.square_mm = 15.0;
-    const auto board = calib::internal::ChessboardCorners(24, 17, 15.0);
+    const calib::BoardSpec spec = det.Board();
+    const std::vector<Eigen::Vector3d> board = spec.Corners();
     std::vector<std::vector<cv::Point3f>> obj;
     std::vector<std::vector<cv::Point2f>> img;
     for (int i = 1; i <= 28; ++i) {
       char name[32];
       std::snprintf(name, sizeof name, "im_%02d.png", i);
-      const auto c = calib::internal::DetectChessboardCornersInFile(
-          args.kuka2_dir + "/" + name, 24, 17, &det.width_px, &det.height_px);
-      if (!c) throw InputError(std::string("kuka2: board not found in ") + name);
+      const std::string path = args.kuka2_dir + "/" + name;
+      const calib::TargetDetection found =
+          calib::DetectTargetInEncodedImage(io::ReadFileBytes(path), spec);
+      if (found.status == calib::DetectionStatus::kUnreadable) {
+        throw FileError(path, found.message);
+      }
+      if (!found.found()) throw InputError("kuka2: " + path + ": " + found.message);
+      det.width_px = found.width;
+      det.height_px = found.height;
       det.images.push_back(name);
-      det.corners_px.push_back(*c);
+      det.corners_px.push_back(found.corners_px);
       std::vector<cv::Point3f> o;
       std::vector<cv::Point2f> p;
-      for (std::size_t k = 0; k < c->size(); ++k) {
+      for (std::size_t k = 0; k < found.corners_px.size(); ++k) {
+        const Eigen::Vector2d& c = found.corners_px[k];
         o.emplace_back(static_cast<float>(board[k].x()), static_cast<float>(board[k].y()), 0.f);
-        p.emplace_back(static_cast<float>((*c)[k].x()), static_cast<float>((*c)[k].y()));
+        p.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
       }
       obj.push_back(o);
       img.push_back(p);
@@ -470,7 +484,7 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
     throw InputError("kuka2: " + std::to_string(poses.base_from_flange.size()) + " poses but " +
                      std::to_string(det.images.size()) + " images");
   }
-  const auto board = calib::internal::ChessboardCorners(det.cols, det.rows, det.square_mm);
+  const std::vector<Eigen::Vector3d> board = det.Board().Corners();
   std::vector<calib::HandEyeView> views;
   for (std::size_t i = 0; i < det.images.size(); ++i) {
     views.push_back({poses.base_from_flange[i], det.corners_px[i], board});

@@ -17,7 +17,6 @@
 
 #include "calib/camera_model.hpp"
 #include "calib/hand_eye.hpp"
-#include "calib/internal/chessboard_cv.hpp"
 #include "calib/board.hpp"
 #include "calib/pose_io.hpp"
 #include "calib/target_detection.hpp"
@@ -286,8 +285,7 @@ void Run(const HandEyeArgs& args) {
       }
     }
   }
-  const std::vector<Eigen::Vector3d> board =
-      calib::internal::ChessboardCorners(det.cols, det.rows, det.square_mm);
+  const std::vector<Eigen::Vector3d> board = det.Board().Corners();
   std::vector<calib::HandEyeView> views;
   std::vector<std::string> used;
   for (std::size_t i = 0; i < det.images.size(); ++i) {

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "calib/internal/board_pose.hpp"
 #include "core/error.hpp"
 
 namespace lasercell::calib::internal {
@@ -47,49 +47,32 @@ cv::Mat LaserChannel(const StripeImage& image, const std::string& color) {
   return out;
 }
 
-std::optional<std::vector<Eigen::Vector2d>> FindChessboard(const cv::Mat& gray, int cols, int rows) {
-  std::vector<cv::Point2f> corners;
-  // SB's default first (it finds boards the exhaustive search sometimes misses), then exhaustive.
-  bool found = cv::findChessboardCornersSB(gray, cv::Size(cols, rows), corners);
-  if (!found) {
-    found = cv::findChessboardCornersSB(gray, cv::Size(cols, rows), corners,
-                                        cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY);
-  }
-  if (!found || corners.size() != static_cast<std::size_t>(cols * rows)) return std::nullopt;
-  cv::cornerSubPix(gray, corners, cv::Size(5, 5), cv::Size(-1, -1),
-                   cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 40, 0.001));
-  std::vector<Eigen::Vector2d> out;
-  out.reserve(corners.size());
-  for (const auto& c : corners) out.emplace_back(c.x, c.y);
+GrayImage GrayImageOf(const StripeImage& image) {
+  const cv::Mat gray = GrayOf(image);  // continuous: a clone or cvtColor's output
+  GrayImage out;
+  out.width = gray.cols;
+  out.height = gray.rows;
+  out.pixels.assign(gray.data, gray.data + gray.total());
   return out;
 }
 
 Eigen::Isometry3d BoardPose(const CameraModel& camera, const std::vector<Eigen::Vector2d>& corners,
                             const ChessboardSpec& board, double* rms_px) {
-  std::vector<cv::Point3d> object;
-  std::vector<cv::Point2d> normalized;
-  const std::vector<Eigen::Vector3d> rays = camera.UnprojectMany(corners);
+  std::vector<Eigen::Vector3d> object;
+  std::vector<Eigen::Vector2d> normalized;
   for (int j = 0; j < board.rows; ++j) {
     for (int i = 0; i < board.cols; ++i) {
       object.emplace_back(i * board.square_mm, j * board.square_mm, 0.0);
     }
   }
-  for (const auto& r : rays) normalized.emplace_back(r.x() / r.z(), r.y() / r.z());
-  cv::Mat rvec, tvec;
-  const cv::Mat identity = cv::Mat::eye(3, 3, CV_64F);
-  cv::solvePnP(object, normalized, identity, cv::Mat(), rvec, tvec, false, cv::SOLVEPNP_IPPE);
-  cv::solvePnP(object, normalized, identity, cv::Mat(), rvec, tvec, true, cv::SOLVEPNP_ITERATIVE);
-  cv::Mat rmat;
-  cv::Rodrigues(rvec, rmat);
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  for (int r = 0; r < 3; ++r) {
-    for (int c = 0; c < 3; ++c) pose.linear()(r, c) = rmat.at<double>(r, c);
-    pose.translation()(r) = tvec.at<double>(r);
+  for (const auto& r : camera.UnprojectMany(corners)) {
+    normalized.emplace_back(r.x() / r.z(), r.y() / r.z());
   }
+  const Eigen::Isometry3d pose = SolvePnPNormalised(object, normalized);
   if (rms_px != nullptr) {
     double sum = 0;
     for (std::size_t k = 0; k < corners.size(); ++k) {
-      const Eigen::Vector3d p = pose * Eigen::Vector3d(object[k].x, object[k].y, 0.0);
+      const Eigen::Vector3d p = pose * object[k];
       sum += (camera.Project(p) - corners[k]).squaredNorm();
     }
     *rms_px = std::sqrt(sum / static_cast<double>(corners.size()));

@@ -1,28 +1,24 @@
 #pragma once
-// Private OpenCV helpers of the stripe-on-chessboard laser calibration (calib/laser_plane.cpp):
-// chessboard corners, board pose through the camera model, and one subpixel laser-stripe peak
-// per scan line inside the board region. The camera engineer's calib/target_detection* and the
-// triangulation module's peak detectors will replace these once they land.
+// Private helpers of the stripe-on-chessboard laser calibration (calib/laser_plane.cpp): board
+// pose through the camera model, the laser channel of a colour image, and one subpixel
+// laser-stripe peak per scan line inside the board region. The board itself is found by the
+// shared detector, calib/target_detection.hpp.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <opencv2/core.hpp>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include "calib/camera_model.hpp"
 #include "calib/laser_plane.hpp"
+#include "calib/target_detection.hpp"
 
 namespace lasercell::calib::internal {
 
-/// Inner corners (OpenCV order) found by findChessboardCornersSB and refined by cornerSubPix,
-/// or nullopt.
-std::optional<std::vector<Eigen::Vector2d>> FindChessboard(const cv::Mat& gray, int cols, int rows);
-
 /// camera_from_board from corners: rays from the camera model (mrcal unprojection), normalized
-/// to z = 1, then OpenCV solvePnP (iterative LM) with an identity camera matrix; board corner
-/// (i, j) at (i s, j s, 0). `rms_px` gets the reprojection RMS through the camera model.
+/// to z = 1, then SolvePnPNormalised (calib/internal/board_pose.hpp); board corner (i, j) at
+/// (i s, j s, 0). `rms_px` gets the reprojection RMS through the camera model.
 Eigen::Isometry3d BoardPose(const CameraModel& camera, const std::vector<Eigen::Vector2d>& corners,
                             const ChessboardSpec& board, double* rms_px);
 
@@ -37,5 +33,7 @@ std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser, const std::vector
 cv::Mat LaserChannel(const StripeImage& image, const std::string& color);
 /// The image as 8-bit gray.
 cv::Mat GrayOf(const StripeImage& image);
+/// The same, as the board detector's image type.
+GrayImage GrayImageOf(const StripeImage& image);
 
 }  // namespace lasercell::calib::internal

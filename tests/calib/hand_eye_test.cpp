@@ -14,7 +14,7 @@
 #include <sstream>
 
 #include "calib/cost_functions/hand_eye_reprojection.hpp"
-#include "calib/internal/chessboard_cv.hpp"
+#include "calib/board.hpp"
 #include "calib/pose_io.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
@@ -55,7 +55,11 @@ Synthetic MakeViews(const CameraModel& camera, int n_views, int cols, int rows, 
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
   std::normal_distribution<double> noise(0, sigma_px);
-  const std::vector<Eigen::Vector3d> board = internal::ChessboardCorners(cols, rows, square_mm);
+  BoardSpec chessboard;  // type chessboard by default
+  chessboard.cols = cols;
+  chessboard.rows = rows;
+  chessboard.square_mm = square_mm;
+  const std::vector<Eigen::Vector3d> board = chessboard.Corners();
   const Eigen::Vector3d centre((cols - 1) * square_mm / 2, (rows - 1) * square_mm / 2, 0);
   Synthetic s;
   for (int i = 0; i < n_views; ++i) {
@@ -426,7 +430,7 @@ TEST(HandEyeReal, Kuka2FromSharedImages) {
   const RobotPoses poses = LoadRobotPoses(kuka2->dir + "/RobotPosesVec.txt", "kuka");
   ASSERT_EQ(det.images.size(), 28u);
   ASSERT_EQ(poses.base_from_flange.size(), 28u);
-  const auto board = internal::ChessboardCorners(det.cols, det.rows, det.square_mm);
+  const auto board = det.Board().Corners();
   std::vector<HandEyeView> views;
   std::vector<Eigen::Isometry3d> a;
   for (std::size_t i = 0; i < det.images.size(); ++i) {
@@ -434,6 +438,7 @@ TEST(HandEyeReal, Kuka2FromSharedImages) {
     a.push_back(poses.base_from_flange[i]);
   }
   const HandEyeResult r = CalibrateHandEye(views, camera);
+  std::printf("kuka2 %s\n", r.Summary().c_str());
   EXPECT_TRUE(r.converged) << r.termination;
   EXPECT_TRUE(r.covariance_valid);
   EXPECT_LT(r.reprojection_rms_px, 2.0) << r.Summary();

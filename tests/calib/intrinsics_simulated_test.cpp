@@ -6,6 +6,7 @@
 #include "calib/intrinsics.hpp"
 #include "calib/target_detection.hpp"
 #include "datasets/camera_images.hpp"
+#include "tests/calib/rendered_board.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -15,10 +16,7 @@ TEST(CalibrateIntrinsicsSimulatedImages, RenderedBoardsGiveIntrinsicsInsideThree
   const datasets::CameraModel camera{truth};
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
-  BoardSpec board;
-  board.cols = target.squares_x - 1;
-  board.rows = target.squares_y - 1;
-  board.square_mm = target.square_mm;
+  const BoardSpec board = BoardOf(target);
   std::vector<BoardView> views;
   const auto poses = datasets::DrawChessboardPoses(target, camera, 10, 41);
   for (std::size_t k = 0; k < poses.size(); ++k) {

@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/camera_images.hpp"
+#include "tests/calib/rendered_board.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -27,9 +28,7 @@ Synthetic MakeSynthetic(int num_views, std::uint64_t seed) {
   Synthetic s;
   const datasets::CameraModel camera{s.truth};
   const datasets::ChessboardTarget target;
-  s.board.cols = target.squares_x - 1;
-  s.board.rows = target.squares_y - 1;
-  s.board.square_mm = target.square_mm;
+  s.board = BoardOf(target);
   const Eigen::Vector3d offset(target.square_mm, target.square_mm, 0);  // target -> BoardSpec
   for (const Eigen::Isometry3d& pose : datasets::DrawChessboardPoses(target, camera, num_views, seed)) {
     s.camera_from_board.push_back(pose * Eigen::Translation3d(offset));

@@ -17,8 +17,10 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "calib/board.hpp"
 #include "calib/camera_model.hpp"
 #include "calib/laser_plane.hpp"
+#include "calib/target_detection.hpp"
 #include "core/io/file_util.hpp"
 #include "tests/shared_data.hpp"
 
@@ -30,18 +32,28 @@ const ChessboardSpec kBoard{6, 8, 40.0};
 /// OpenCV calibrateCamera on the six board views (k1 k2 p1 p2; k3 fixed), as mrcal
 /// LENSMODEL_OPENCV4: the documented stand-in for intrinsics the source only partly quotes. It
 /// gives fy / fx = 1.333 (RMS 0.27 px): the images were evidently resized from 16:9 to 4:3, so the
-/// source's fx = 514.41 with square pixels does not fit them (PnP RMS 4-11 px with it).
-CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images, double* rms_px, int* views) {
+/// source's fx = 514.41 with square pixels does not fit them (PnP RMS 4-11 px with it). Corners
+/// from the detector DetectStripe uses, with the same options.
+CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images, const DetectionOptions& detection,
+                                double* rms_px, int* views) {
+  BoardSpec board;  // chessboard
+  board.cols = kBoard.cols;
+  board.rows = kBoard.rows;
+  board.square_mm = kBoard.square_mm;
   std::vector<std::vector<cv::Point3f>> object;
   std::vector<std::vector<cv::Point2f>> image_points;
   for (const auto& image : images) {
     cv::Mat bgr(image.height_px, image.width_px, CV_8UC3, const_cast<std::uint8_t*>(image.pixels.data()));
     cv::Mat gray;
     cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
+    const TargetDetection found =
+        DetectTarget({gray.cols, gray.rows, std::vector<std::uint8_t>(gray.data, gray.data + gray.total())},
+                     board, detection);
+    if (!found.found()) continue;
     std::vector<cv::Point2f> corners;
-    if (!cv::findChessboardCornersSB(gray, cv::Size(kBoard.cols, kBoard.rows), corners)) continue;
-    cv::cornerSubPix(gray, corners, cv::Size(5, 5), cv::Size(-1, -1),
-                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 40, 0.001));
+    for (const auto& c : found.corners_px) {
+      corners.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
+    }
     std::vector<cv::Point3f> grid;
     for (int j = 0; j < kBoard.rows; ++j) {
       for (int i = 0; i < kBoard.cols; ++i) {
@@ -98,7 +110,8 @@ TEST(LaserPlaneReal, ImagesGiveAConsistentPlane) {
   }
   double rms_px = 0;
   int views = 0;
-  const CameraModel camera = CalibrateIntrinsics(images, &rms_px, &views);
+  const StripeOptions options;
+  const CameraModel camera = CalibrateIntrinsics(images, options.board_detection, &rms_px, &views);
   std::printf("intrinsics from the 6 views: fx %.2f fy %.2f cx %.2f cy %.2f k1 %.4f k2 %.4f, RMS %.3f px\n",
               camera.intrinsics()[0], camera.intrinsics()[1], camera.intrinsics()[2], camera.intrinsics()[3],
               camera.intrinsics()[4], camera.intrinsics()[5], rms_px);
@@ -107,8 +120,8 @@ TEST(LaserPlaneReal, ImagesGiveAConsistentPlane) {
   ASSERT_EQ(views, 6);
   ASSERT_LT(rms_px, 0.5);
   std::vector<StripeObservation> observations;
-  for (const auto& image : images) observations.push_back(DetectStripe(camera, image, kBoard));
-  ExpectConsistentPlane(CalibrateLaserPlaneFromStripeObservations(camera, observations, kBoard));
+  for (const auto& image : images) observations.push_back(DetectStripe(camera, image, kBoard, options));
+  ExpectConsistentPlane(CalibrateLaserPlaneFromStripeObservations(camera, observations, kBoard, options));
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/camera_images.hpp"
+#include "tests/calib/rendered_board.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -110,6 +111,27 @@ TEST(TargetDetection, BlankImageIsNotFound) {
   EXPECT_NE(d.message.find("no 9x6 chessboard"), std::string::npos) << d.message;
 }
 
+// RMS distance of detected corners from the true projections, in the best of the 4 orderings:
+// the simulator's board frame has +z towards the camera (a left-handed grid in the image), and a
+// marker-less board has no preferred origin.
+double RmsToTruth(const TargetDetection& d, const datasets::CameraModel& camera,
+                  const Eigen::Isometry3d& camera_from_board,
+                  const std::vector<Eigen::Vector3d>& corners, int nx, int ny) {
+  double best = 1e300;
+  for (int flip = 0; flip < 4; ++flip) {
+    double ss = 0;
+    for (int r = 0; r < ny; ++r) {
+      for (int c = 0; c < nx; ++c) {
+        const int rr = (flip & 1) ? ny - 1 - r : r, cc = (flip & 2) ? nx - 1 - c : c;
+        const Eigen::Vector2d truth = *camera.Project(camera_from_board * corners[r * nx + c]);
+        ss += (d.corners_px[rr * nx + cc] - truth).squaredNorm();
+      }
+    }
+    best = std::min(best, ss);
+  }
+  return std::sqrt(best / static_cast<double>(corners.size()));
+}
+
 // Rendered (exact-area, blur 0.6 px, read noise 1.5) boards of the simulator: refined corners
 // against the true projections. The noise-free detector bias is < 0.05 px (cornerSubPix, see
 // tests/datasets/camera_images_test.cpp); read noise adds ~0.02 px.
@@ -117,10 +139,7 @@ TEST(TargetDetection, RenderedChessboardCornersMatchTheTruth) {
   const datasets::CameraModel camera{datasets::CameraIntrinsics{}};
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
-  BoardSpec board;
-  board.cols = target.squares_x - 1;
-  board.rows = target.squares_y - 1;
-  board.square_mm = target.square_mm;
+  const BoardSpec board = BoardOf(target);
   const auto poses = datasets::DrawChessboardPoses(target, camera, 3, 5);
   const std::vector<Eigen::Vector3d> corners = target.InnerCorners();
   const int nx = board.cols, ny = board.rows;
@@ -133,22 +152,48 @@ TEST(TargetDetection, RenderedChessboardCornersMatchTheTruth) {
     const Eigen::Vector2d dx = d.corners_px[1] - d.corners_px[0];
     const Eigen::Vector2d dy = d.corners_px[nx] - d.corners_px[0];
     EXPECT_GT(dx.x() * dy.y() - dx.y() * dy.x(), 0) << "view " << k;
-    // The simulator's board frame has +z towards the camera (a left-handed grid in the image),
-    // and a marker-less board has no preferred origin: compare in the best of the 4 orderings.
-    double best = 1e300;
-    for (int flip = 0; flip < 4; ++flip) {
-      double ss = 0;
-      for (int r = 0; r < ny; ++r) {
-        for (int c = 0; c < nx; ++c) {
-          const int rr = (flip & 1) ? ny - 1 - r : r, cc = (flip & 2) ? nx - 1 - c : c;
-          const Eigen::Vector2d truth = *camera.Project(poses[k] * corners[r * nx + c]);
-          ss += (d.corners_px[rr * nx + cc] - truth).squaredNorm();
-        }
-      }
-      best = std::min(best, ss);
-    }
-    EXPECT_LT(std::sqrt(best / corners.size()), 0.06) << "view " << k;
+    EXPECT_LT(RmsToTruth(d, camera, poses[k], corners, nx, ny), 0.06) << "view " << k;
   }
+}
+
+// search_downscale 2: the board is found on the half-size image and refined at full resolution,
+// so the corners meet the same bound against the truth as the full-resolution search (the
+// search's own corners, ~0.5 px off, would not).
+TEST(TargetDetection, SearchOnAShrunkImageRefinesAtFullResolution) {
+  const datasets::CameraModel camera{datasets::CameraIntrinsics{}};
+  const datasets::ImageRenderer renderer(camera);
+  const datasets::ChessboardTarget target;
+  const BoardSpec board = BoardOf(target);
+  DetectionOptions options;
+  options.search_downscale = 2;
+  const auto poses = datasets::DrawChessboardPoses(target, camera, 3, 11);
+  const std::vector<Eigen::Vector3d> corners = target.InnerCorners();
+  for (std::size_t k = 0; k < poses.size(); ++k) {
+    const TargetDetection d = DetectTarget(
+        FromDatasets(renderer.RenderChessboard(target, poses[k], {}, 11 + k)), board, options);
+    ASSERT_TRUE(d.found()) << d.message;
+    ASSERT_EQ(d.corners_px.size(), corners.size());
+    EXPECT_EQ(d.width, camera.intrinsics().width_px);
+    EXPECT_GT(d.refine_half_window_px, 0);
+    EXPECT_LT(RmsToTruth(d, camera, poses[k], corners, board.cols, board.rows), 0.06)
+        << "view " << k;
+  }
+}
+
+TEST(TargetDetection, ShrunkSearchWithoutRefinementIsAnOptionError) {
+  DetectionOptions options;
+  options.search_downscale = 2;
+  options.refine = false;
+  try {
+    options.Check();
+    FAIL() << "expected OptionError";
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("search_downscale > 1 needs refine"), std::string::npos)
+        << e.what();
+  }
+  options.refine = true;
+  options.search_downscale = 0;
+  EXPECT_THROW(options.Check(), OptionError);
 }
 
 // A ChArUco board drawn by OpenCV, seen through a known homography.
