@@ -75,6 +75,25 @@ double MaxCornerError(const std::vector<cv::Point2f>& found, const std::vector<c
   return worst;
 }
 
+// An exact image: a distortion-free camera, no noise, blur or vignetting.
+struct ExactRendering {
+  CameraIntrinsics intrinsics = [] {
+    CameraIntrinsics k;
+    k.distortion.fill(0.0);
+    return k;
+  }();
+  CameraModel camera{intrinsics};
+  ImageRenderer renderer{camera};
+  ChessboardTarget board;
+  ImageRenderOptions options = [] {
+    ImageRenderOptions o;
+    o.noise_sigma = 0;
+    o.blur_sigma_px = 0;
+    o.vignetting = false;
+    return o;
+  }();
+};
+
 // The renderer itself: on a fronto-parallel board through a distortion-free camera, without
 // blur or vignetting, a pixel an edge crosses holds ambient + exposure * (area-weighted albedo),
 // so the edge's subpixel position follows from that one pixel's gray level. It must agree with
@@ -82,21 +101,16 @@ double MaxCornerError(const std::vector<cv::Point2f>& found, const std::vector<c
 // n-rooks supersampling step, 1 / (2 edge_samples^2), plus the 8-bit quantization 0.5 /
 // contrast (a regular ns x ns grid would only reach 1 / (2 ns): 0.031 px at 16 samples).
 TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
-  CameraIntrinsics intrinsics;
-  intrinsics.distortion.fill(0.0);
-  const CameraModel camera{intrinsics};
-  const ImageRenderer renderer(camera);
-  const ChessboardTarget board;
+  const ExactRendering exact;
+  const CameraModel& camera = exact.camera;
+  const ChessboardTarget& board = exact.board;
   Eigen::Isometry3d camera_from_board = Eigen::Isometry3d::Identity();
   camera_from_board.translation() = Eigen::Vector3d(-183.3, -121.7, 700.0);
   // The default 16 samples (64 gives 0.0024 px, bound 0.0026, but takes 25 s under ASan).
   for (int samples : {16}) {
-    ImageRenderOptions options;
-    options.noise_sigma = 0;
-    options.blur_sigma_px = 0;
-    options.vignetting = false;
+    ImageRenderOptions options = exact.options;
     options.edge_samples = samples;
-    const GrayImage image = renderer.RenderChessboard(board, camera_from_board, options, 1);
+    const GrayImage image = exact.renderer.RenderChessboard(board, camera_from_board, options, 1);
     const double contrast = options.exposure * (board.light_albedo - board.dark_albedo);
     const double bound = 0.5 / (samples * samples) + 0.5 / contrast + 1e-9;
     double worst = 0;
@@ -257,15 +271,12 @@ cv::Mat RenderPinholeBySupersampling(const ChessboardTarget& board, const Camera
 // (-0.048, -0.001) px on the 35.5 deg view. So on an exact image of that view SB is 0.073 px
 // off, above the 0.05, and no renderer can bring it under.
 TEST(CameraImages, AnIndependentRendererGivesFindChessboardCornersSbTheSameCorners) {
-  CameraIntrinsics intrinsics;
-  intrinsics.distortion.fill(0.0);
-  const CameraModel camera{intrinsics};
-  const ImageRenderer renderer(camera);
-  const ChessboardTarget board;
-  ImageRenderOptions options;
-  options.noise_sigma = 0;
-  options.blur_sigma_px = 0;
-  options.vignetting = false;
+  const ExactRendering exact;
+  const CameraIntrinsics& intrinsics = exact.intrinsics;
+  const CameraModel& camera = exact.camera;
+  const ImageRenderer& renderer = exact.renderer;
+  const ChessboardTarget& board = exact.board;
+  const ImageRenderOptions& options = exact.options;
   const std::vector<Eigen::Isometry3d> poses =
       DrawChessboardPoses(board, CameraModel{CameraIntrinsics{}}, 8, 17);
   const cv::Size pattern(board.squares_x - 1, board.squares_y - 1);
