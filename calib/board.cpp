@@ -68,6 +68,15 @@ void BoardSpec::Check() const {
 int BoardSpec::CornersX() const { return type == BoardType::kChessboard ? cols : cols - 1; }
 int BoardSpec::CornersY() const { return type == BoardType::kChessboard ? rows : rows - 1; }
 
+BoardSpec BoardSpec::Chessboard(int cols, int rows, double square_mm) {
+  BoardSpec board;
+  board.type = BoardType::kChessboard;
+  board.cols = cols;
+  board.rows = rows;
+  board.square_mm = square_mm;
+  return board;
+}
+
 Eigen::Vector3d BoardSpec::Corner(int id) const {
   const int nx = CornersX();
   const int c = id % nx;

@@ -28,6 +28,9 @@ struct BoardSpec {
   double marker_mm = 0.0;    ///< ChArUco marker edge, mm (< square_mm); unused for chessboards.
   std::string dictionary = "DICT_4X4_50";  ///< ChArUco ArUco dictionary name.
 
+  /// A chessboard with `cols` x `rows` inner corners and `square_mm` squares.
+  static BoardSpec Chessboard(int cols, int rows, double square_mm);
+
   /// Throws OptionError naming the field when a value is out of range.
   void Check() const;
   /// Inner corners per row / column (chessboard: cols/rows; ChArUco: squares - 1).

@@ -785,13 +785,10 @@ StripeObservation DetectStripe(const CameraModel& camera, const StripeImage& ima
                   "StripeImage buffer size");
   StripeObservation out;
   out.name = image.name;
-  BoardSpec spec;
-  spec.type = BoardType::kChessboard;
-  spec.cols = board.cols;
-  spec.rows = board.rows;
-  spec.square_mm = board.square_mm;
   const TargetDetection detection =
-      DetectTarget(internal::GrayImageOf(image), spec, options.board_detection);
+      DetectTarget(internal::GrayImageOf(image),
+                   BoardSpec::Chessboard(board.cols, board.rows, board.square_mm),
+                   options.board_detection);
   if (!detection.found()) {
     out.note = "board: " + detection.message;
     return out;

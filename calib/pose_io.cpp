@@ -200,12 +200,7 @@ std::string RobotPosesYaml(const RobotPoses& poses) {
 }
 
 BoardSpec ChessboardDetections::Board() const {
-  BoardSpec board;
-  board.type = BoardType::kChessboard;
-  board.cols = cols;
-  board.rows = rows;
-  board.square_mm = square_mm;
-  return board;
+  return BoardSpec::Chessboard(cols, rows, square_mm);
 }
 
 ChessboardDetections ParseChessboardDetections(const std::string& text,

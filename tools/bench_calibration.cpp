@@ -349,10 +349,8 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
 
   if (args.sim_render) {
     const datasets::ImageRenderer renderer(truth.sensor.camera);
-    calib::BoardSpec rendered_board;  // chessboard; only the corner grid matters here
-    rendered_board.cols = board.squares_x - 1;
-    rendered_board.rows = board.squares_y - 1;
-    rendered_board.square_mm = board.square_mm;
+    const calib::BoardSpec rendered_board =
+        calib::BoardSpec::Chessboard(board.squares_x - 1, board.squares_y - 1, board.square_mm);
     std::vector<calib::HandEyeView> detected;
     int flipped = 0;
     double det_ss = 0;
@@ -363,7 +361,6 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
       const calib::TargetDetection found =
           calib::DetectTarget({img.width, img.height, img.pixels}, rendered_board);
       if (!found.found()) continue;
-      auto c = std::optional<std::vector<Eigen::Vector2d>>(found.corners_px);
       // The detector's corner order can differ from the board's by a reversal of rows and/or
       // columns (its own board frame); relabel to the simulator's order, chosen from truth.
       const auto& truth_px = set.images[i].corners_px;
@@ -372,14 +369,14 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
       double best_ss = 1e300;
       int best_variant = 0;
       for (int variant = 0; variant < 4; ++variant) {
-        std::vector<Eigen::Vector2d> cand(c->size());
+        std::vector<Eigen::Vector2d> cand(found.corners_px.size());
         double ss = 0;
         for (int rr = 0; rr < rows_n; ++rr) {
           for (int cc = 0; cc < cols; ++cc) {
             const int sr = (variant & 1) ? rows_n - 1 - rr : rr;
             const int sc = (variant & 2) ? cols - 1 - cc : cc;
             cand[static_cast<std::size_t>(rr * cols + cc)] =
-                (*c)[static_cast<std::size_t>(sr * cols + sc)];
+                found.corners_px[static_cast<std::size_t>(sr * cols + sc)];
           }
         }
         for (std::size_t k = 0; k < cand.size(); ++k) ss += (cand[k] - truth_px[k]).squaredNorm();
@@ -389,12 +386,11 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
           best_variant = variant;
         }
       }
-      *c = best;
       if (best_variant != 0) ++flipped;
       det_ss += best_ss;
-      det_n += static_cast<int>(c->size());
+      det_n += static_cast<int>(best.size());
       calib::HandEyeView v = views[i];
-      v.corners_px = *c;
+      v.corners_px = std::move(best);
       detected.push_back(v);
     }
     std::snprintf(title, sizeof title,

@@ -41,20 +41,15 @@ struct HandEyeArgs {
   int threads = 1;
 };
 
-struct Board {
-  int cols = 0, rows = 0;
-  double square_mm = 0;
-};
-
 // chessboard:COLSxROWS:SQUARE_MM, inner corners (calib/board.hpp parses and checks it; the
 // hand-eye solver takes full chessboards only).
-Board ParseBoard(const std::string& spec) {
+calib::BoardSpec ParseBoard(const std::string& spec) {
   const calib::BoardSpec board = calib::ParseBoardSpec(spec);
   if (board.type != calib::BoardType::kChessboard) {
     throw OptionError("--board: calibrate handeye takes a chessboard:COLSxROWS:SQUARE_MM board, "
                       "not '" + spec + "'");
   }
-  return {board.CornersX(), board.CornersY(), board.square_mm};
+  return board;
 }
 
 calib::HandEyeMethod ParseMethod(const std::string& name) {
@@ -235,24 +230,23 @@ void Run(const HandEyeArgs& args) {
   if (!args.corners.empty()) {
     det = calib::ParseChessboardDetections(io::ReadFileBytes(args.corners), args.corners);
     if (!args.board.empty()) {
-      const Board b = ParseBoard(args.board);
+      const calib::BoardSpec b = ParseBoard(args.board);
       if (b.cols != det.cols || b.rows != det.rows || b.square_mm != det.square_mm) {
         throw InputError("--board " + args.board + " does not match the board of " + args.corners);
       }
     }
   } else {
     if (args.board.empty()) throw OptionError("--board is required with --images");
-    const Board b = ParseBoard(args.board);
-    det.cols = b.cols;
-    det.rows = b.rows;
-    det.square_mm = b.square_mm;
+    const calib::BoardSpec spec = ParseBoard(args.board);
+    det.cols = spec.cols;
+    det.rows = spec.rows;
+    det.square_mm = spec.square_mm;
     const std::vector<std::string> files = Glob(args.images);
     if (files.size() != poses.base_from_flange.size()) {
       throw InputError("--images matches " + std::to_string(files.size()) + " images but --poses " +
                        args.poses + " has " + std::to_string(poses.base_from_flange.size()) +
                        " poses; give one pose per image, in sorted image order");
     }
-    const calib::BoardSpec spec = calib::ParseBoardSpec(args.board);
     for (const std::string& f : files) {
       // The shared detector (SB, fallback, cornerSubPix sized to the squares, diagnostics).
       const calib::TargetDetection d = calib::DetectTargetInEncodedImage(io::ReadFileBytes(f), spec);

@@ -58,13 +58,9 @@ GrayImage GrayImageOf(const StripeImage& image) {
 
 Eigen::Isometry3d BoardPose(const CameraModel& camera, const std::vector<Eigen::Vector2d>& corners,
                             const ChessboardSpec& board, double* rms_px) {
-  std::vector<Eigen::Vector3d> object;
+  const std::vector<Eigen::Vector3d> object =
+      BoardSpec::Chessboard(board.cols, board.rows, board.square_mm).Corners();
   std::vector<Eigen::Vector2d> normalized;
-  for (int j = 0; j < board.rows; ++j) {
-    for (int i = 0; i < board.cols; ++i) {
-      object.emplace_back(i * board.square_mm, j * board.square_mm, 0.0);
-    }
-  }
   for (const auto& r : camera.UnprojectMany(corners)) {
     normalized.emplace_back(r.x() / r.z(), r.y() / r.z());
   }

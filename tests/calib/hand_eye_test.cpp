@@ -55,11 +55,7 @@ Synthetic MakeViews(const CameraModel& camera, int n_views, int cols, int rows, 
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0, 1);
   std::normal_distribution<double> noise(0, sigma_px);
-  BoardSpec chessboard;  // type chessboard by default
-  chessboard.cols = cols;
-  chessboard.rows = rows;
-  chessboard.square_mm = square_mm;
-  const std::vector<Eigen::Vector3d> board = chessboard.Corners();
+  const std::vector<Eigen::Vector3d> board = BoardSpec::Chessboard(cols, rows, square_mm).Corners();
   const Eigen::Vector3d centre((cols - 1) * square_mm / 2, (rows - 1) * square_mm / 2, 0);
   Synthetic s;
   for (int i = 0; i < n_views; ++i) {

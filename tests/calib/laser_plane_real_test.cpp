@@ -36,10 +36,7 @@ const ChessboardSpec kBoard{6, 8, 40.0};
 /// from the detector DetectStripe uses, with the same options.
 CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images, const DetectionOptions& detection,
                                 double* rms_px, int* views) {
-  BoardSpec board;  // chessboard
-  board.cols = kBoard.cols;
-  board.rows = kBoard.rows;
-  board.square_mm = kBoard.square_mm;
+  const BoardSpec board = BoardSpec::Chessboard(kBoard.cols, kBoard.rows, kBoard.square_mm);
   std::vector<std::vector<cv::Point3f>> object;
   std::vector<std::vector<cv::Point2f>> image_points;
   for (const auto& image : images) {

@@ -7,11 +7,7 @@
 namespace lasercell::calib {
 
 inline BoardSpec BoardOf(const datasets::ChessboardTarget& target) {
-  BoardSpec board;  // chessboard
-  board.cols = target.squares_x - 1;
-  board.rows = target.squares_y - 1;
-  board.square_mm = target.square_mm;
-  return board;
+  return BoardSpec::Chessboard(target.squares_x - 1, target.squares_y - 1, target.square_mm);
 }
 
 }  // namespace lasercell::calib
