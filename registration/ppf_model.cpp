@@ -97,6 +97,11 @@ double EstimateDiameter(std::span<const Eigen::Vector3d> points) {
   return std::sqrt(best);
 }
 
+PpfModel PpfModel::Build(const TriangleMesh& model, const PpfModelOptions& options) {
+  if (model.faces.empty() || model.vertices.HasNormals()) return Build(model.vertices, options);
+  return Build(WithMeshNormals(model), options);
+}
+
 PpfModel PpfModel::Build(const PointCloud& model_cloud, const PpfModelOptions& options) {
   options.Check();
   model_cloud.Validate("PPF model cloud");

@@ -87,6 +87,10 @@ class PpfModel {
   /// options.normals). Throws InputError for an empty/invalid cloud or zero normals, and
   /// OptionError naming the field for bad options or a table that would be too large.
   static PpfModel Build(const PointCloud& model, const PpfModelOptions& options = {});
+  /// Builds from a CAD mesh: its vertex normals when it has them, else the normals of its faces
+  /// (MeshVertexNormals: outward, the two sides of a thin shell kept apart, which a PCA fit on
+  /// the vertices mixes). A mesh without faces is built as a cloud, as above.
+  static PpfModel Build(const TriangleMesh& model, const PpfModelOptions& options = {});
 
   /// Versioned binary encoding (little-endian); Deserialize throws InputError naming `name`
   /// on a bad magic, unknown version, truncation or checksum mismatch.

@@ -17,7 +17,6 @@
 #include "core/io/point_cloud_io.hpp"
 #include "core/yaml_fields.hpp"
 #include "registration/localize_in_cloud.hpp"
-#include "registration/normals.hpp"
 #include "registration/ppf_model.hpp"
 #include "tools/commands.hpp"
 
@@ -167,18 +166,13 @@ nlohmann::json ResultJson(const LocalizationResult& r, const LocalizeArgs& args,
   return j;
 }
 
-// The model as points with normals: a PLY mesh without normals gets its vertex normals from its
-// faces (outward, both sides of a thin shell kept apart); anything else is read as a cloud
-// (PpfModel::Build estimates normals when absent).
-PointCloud ReadModelCloud(const std::string& path) {
-  if (io::LowerExtension(path) == ".ply") {
-    TriangleMesh mesh = io::ReadPlyMesh(path);
-    if (!mesh.faces.empty() && !mesh.vertices.HasNormals()) {
-      return registration::WithMeshNormals(mesh);
-    }
-    return std::move(mesh.vertices);
-  }
-  return io::ReadPointCloud(path);
+// A prebuilt .ppfm, or a model built from a PLY (mesh or cloud: PpfModel::Build takes the
+// faces' normals for a mesh without normals) or a PCD cloud.
+PpfModel LoadOrBuildModel(const std::string& path, const PpfModelOptions& options) {
+  const std::string extension = io::LowerExtension(path);
+  if (extension == ".ppfm") return PpfModel::Load(path);
+  if (extension == ".ply") return PpfModel::Build(io::ReadPlyMesh(path), options);
+  return PpfModel::Build(io::ReadPointCloud(path), options);
 }
 
 void Localize(const LocalizeArgs& args) {
@@ -203,9 +197,7 @@ void Localize(const LocalizeArgs& args) {
   model_options.Check();
 
   const auto start = std::chrono::steady_clock::now();
-  const bool prebuilt = io::LowerExtension(args.model) == ".ppfm";
-  const PpfModel model = prebuilt ? PpfModel::Load(args.model)
-                                  : PpfModel::Build(ReadModelCloud(args.model), model_options);
+  const PpfModel model = LoadOrBuildModel(args.model, model_options);
   const double model_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (!args.save_model.empty()) model.Save(args.save_model);

@@ -190,6 +190,57 @@ TEST(PpfModelTest, EstimatesNormalsWhenAbsent) {
   for (const auto& n : model.normals()) EXPECT_NEAR(n.norm(), 1.0, 1e-9);
 }
 
+// A closed cube (side 100 mm, centred at the origin), each face a 10 x 10 grid of quads wound
+// counter-clockwise seen from outside.
+TriangleMesh CubeMesh() {
+  TriangleMesh mesh;
+  const int n = 10;
+  const double half = 50.0, step = 100.0 / n;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const double side : {-1.0, 1.0}) {
+      Eigen::Vector3d normal = Eigen::Vector3d::Zero();
+      normal[axis] = side;
+      const Eigen::Vector3d u = Eigen::Vector3d::Unit((axis + 1) % 3);
+      const Eigen::Vector3d v = normal.cross(u);  // u x v = normal: counter-clockwise outside
+      const int base = static_cast<int>(mesh.vertices.size());
+      for (int j = 0; j <= n; ++j) {
+        for (int i = 0; i <= n; ++i) {
+          mesh.vertices.positions.push_back(half * normal + (i * step - half) * u +
+                                            (j * step - half) * v);
+        }
+      }
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+          const int a = base + j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+          mesh.faces.push_back({a, b, d});
+          mesh.faces.push_back({a, d, c});
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+TEST(PpfModelTest, AMeshWithoutNormalsGetsOutwardNormalsFromItsFaces) {
+  const TriangleMesh cube = CubeMesh();
+  // A viewpoint at the centre: PCA normals flipped toward it would all point inward.
+  PpfModelOptions options;
+  options.normals.viewpoint = Viewpoint::AtPoint({0, 0, 0});
+  const PpfModel model = PpfModel::Build(cube, options);
+  ASSERT_GT(model.points().size(), 10U);
+  // points() are centred at the model's centroid, the cube's centre.
+  for (std::size_t i = 0; i < model.points().size(); ++i) {
+    EXPECT_GT(model.normals()[i].dot(model.points()[i]), 0.0) << "point " << i;
+  }
+  // The same vertices as a cloud take the PCA path and its viewpoint: inward.
+  const PpfModel from_cloud = PpfModel::Build(cube.vertices, options);
+  int inward = 0;
+  for (std::size_t i = 0; i < from_cloud.points().size(); ++i) {
+    inward += from_cloud.normals()[i].dot(from_cloud.points()[i]) < 0.0;
+  }
+  EXPECT_GT(inward, static_cast<int>(from_cloud.points().size()) / 2);
+}
+
 TEST(PpfModelTest, RejectsBadInputAndOptions) {
   EXPECT_THAT([] { PpfModel::Build(PointCloud{}); }, ::testing::ThrowsMessage<InputError>(HasSubstr("at least 3 points")));
   PointCloud zero_normals = BoxModel();
