@@ -18,15 +18,11 @@
 #include <vector>
 
 #include "calib/board.hpp"
+#include "core/gray_image.hpp"
 
 namespace lasercell::calib {
 
-/// An 8-bit gray image, row-major.
-struct GrayImage {
-  int width = 0;
-  int height = 0;
-  std::vector<std::uint8_t> pixels;
-};
+using lasercell::GrayImage;
 
 /// Decodes PNG/JPEG/... bytes (any format OpenCV's imdecode reads) to gray; nullopt when the
 /// bytes are not a readable image.

@@ -22,6 +22,7 @@
 #include <string>
 #include <vector>
 
+#include "core/gray_image.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/sensor.hpp"
 
@@ -56,13 +57,7 @@ struct ImageRenderOptions {
   void Check(const std::string& what = "images") const;
 };
 
-/// An 8-bit gray image.
-struct GrayImage {
-  int width = 0;
-  int height = 0;
-  std::vector<std::uint8_t> pixels;  ///< Row-major.
-  std::uint8_t at(int x, int y) const { return pixels[static_cast<std::size_t>(y) * width + x]; }
-};
+using lasercell::GrayImage;
 
 /// Renders images through one camera. Construction unprojects every pixel corner once.
 class ImageRenderer {

@@ -10,7 +10,7 @@
 
 #include "core/error.hpp"
 #include "core/se3.hpp"
-#include "registration/internal/parallel.hpp"
+#include "core/parallel.hpp"
 
 namespace lasercell::registration {
 namespace {
@@ -109,7 +109,7 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
 
   // Nearest target point and residual for every source point at the current pose.
   auto associate = [&](const Eigen::Isometry3d& pose) {
-    internal::ParallelForChunks(options.threads, n, kChunk, [&](std::size_t begin, std::size_t end) {
+    ParallelForChunks(options.threads, n, kChunk, [&](std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
         moved[i] = pose * source[i];
         Neighbor nn;
@@ -152,9 +152,9 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
     }
     c /= static_cast<double>(valid);
 
-    const std::size_t chunks = internal::ChunkCount(n, kChunk);
+    const std::size_t chunks = ChunkCount(n, kChunk);
     std::vector<Partial> partial(chunks);
-    internal::ParallelForChunks(options.threads, chunks, 1, [&](std::size_t begin, std::size_t end) {
+    ParallelForChunks(options.threads, chunks, 1, [&](std::size_t begin, std::size_t end) {
       for (std::size_t k = begin; k < end; ++k) {
         Partial& p = partial[k];
         for (std::size_t i = k * kChunk; i < std::min(n, (k + 1) * kChunk); ++i) {

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "registration/internal/parallel.hpp"
+#include "core/parallel.hpp"
 #include "registration/kdtree.hpp"
 
 namespace lasercell::registration {
@@ -90,7 +90,7 @@ NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOpti
                               : std::numeric_limits<double>::infinity();
 
   // Each point's fit only reads the cloud and writes its own slot: thread-count independent.
-  internal::ParallelForChunks(options.threads, n, 512, [&](std::size_t begin, std::size_t end) {
+  ParallelForChunks(options.threads, n, 512, [&](std::size_t begin, std::size_t end) {
     std::vector<Neighbor> hits;
     std::vector<std::uint32_t> grid_hits;
     for (std::size_t i = begin; i < end; ++i) {

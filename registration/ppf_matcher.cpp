@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "registration/internal/parallel.hpp"
+#include "core/parallel.hpp"
 
 namespace lasercell::registration {
 namespace {
@@ -94,7 +94,7 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
   });
   const std::uint32_t spread_alpha = options.spread_alpha && alpha_bins > 1 ? 1 : 0;
 
-  internal::ParallelForChunks(options.threads, refs, 4, [&](std::size_t begin, std::size_t end) {
+  ParallelForChunks(options.threads, refs, 4, [&](std::size_t begin, std::size_t end) {
     Voter& voter = voters.local();
     std::uint32_t* acc = voter.accumulator.data();
     const std::size_t cells = voter.accumulator.size();

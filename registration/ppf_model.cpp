@@ -7,7 +7,7 @@
 #include <string>
 
 #include "core/error.hpp"
-#include "registration/internal/parallel.hpp"
+#include "core/parallel.hpp"
 
 namespace lasercell::registration {
 namespace {
@@ -182,7 +182,7 @@ PpfModel PpfModel::Build(const PointCloud& model_cloud, const PpfModelOptions& o
   const std::size_t row = n - 1;
   std::vector<std::uint32_t> pair_key(n * row);
   std::vector<std::uint16_t> pair_angle(n * row);
-  internal::ParallelForChunks(options.threads, n, 16, [&](std::size_t begin, std::size_t end) {
+  ParallelForChunks(options.threads, n, 16, [&](std::size_t begin, std::size_t end) {
     for (std::size_t r = begin; r < end; ++r) {
       const Eigen::Matrix3d rot = RotationNormalToX(model.normals_[r]);
       std::size_t slot = r * row;

@@ -1,6 +1,7 @@
 #include "core/io/file_util.hpp"
 
 #include <fcntl.h>
+#include <glob.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -123,6 +124,21 @@ std::string LowerExtension(const std::string& path) {
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
+}
+
+std::vector<std::string> GlobFiles(const std::string& pattern, const std::string& what) {
+  glob_t g{};
+  std::vector<std::string> paths;
+  if (::glob(pattern.c_str(), 0, nullptr, &g) == 0) {
+    for (std::size_t i = 0; i < g.gl_pathc; ++i) paths.emplace_back(g.gl_pathv[i]);
+  }
+  ::globfree(&g);
+  if (paths.empty()) {
+    throw InputError(what + " '" + pattern +
+                     "' matches no file (quote the pattern so the shell does not expand it)");
+  }
+  std::sort(paths.begin(), paths.end());
+  return paths;
 }
 
 }  // namespace lasercell::io

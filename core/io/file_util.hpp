@@ -4,6 +4,7 @@
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace lasercell::io {
 
@@ -31,6 +32,11 @@ class MappedFile {
 /// Writes `bytes` to `path` atomically: to `path.tmp-XXXXXX` beside it, flushed, then renamed
 /// over `path`. On failure nothing at `path` changes and FileError is thrown.
 void WriteFileAtomically(const std::string& path, std::string_view bytes);
+
+/// The files matching a shell pattern (glob(3): *, ?, [...]), sorted by name. `what` names the
+/// input in the message (e.g. "--images"); no match is an InputError that says to quote the
+/// pattern so the shell does not expand it.
+std::vector<std::string> GlobFiles(const std::string& pattern, const std::string& what);
 
 /// Lower-case file extension with the dot, e.g. ".ply" (empty when none).
 std::string LowerExtension(const std::string& path);

@@ -1,5 +1,5 @@
 #pragma once
-// Deterministic parallel loops for the registration module (TBB).
+// Deterministic parallel loops (TBB), the one parallel-for of every module.
 // Every loop here writes results by index (or into per-chunk slots merged in chunk order), so
 // the output never depends on the thread count or the scheduling: the chunking is fixed by the
 // problem size alone, never by the number of threads.
@@ -11,7 +11,7 @@
 #include <algorithm>
 #include <cstddef>
 
-namespace lasercell::registration::internal {
+namespace lasercell {
 
 /// Calls body(begin, end) over [0, n) in chunks of at most `grain` items. `threads` <= 0 uses
 /// every core, 1 runs inline on the calling thread (no TBB at all).
@@ -39,4 +39,4 @@ void ParallelForChunks(int threads, std::size_t n, std::size_t grain, const Body
 /// when partial sums must be merged in a fixed order (deterministic reductions).
 inline std::size_t ChunkCount(std::size_t n, std::size_t chunk) { return (n + chunk - 1) / chunk; }
 
-}  // namespace lasercell::registration::internal
+}  // namespace lasercell
