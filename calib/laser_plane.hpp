@@ -1,9 +1,9 @@
 #pragma once
-// Laser-plane calibration (issue 6 item 3): the light plane of a line laser, n . p + d = 0 in
+// Laser-plane calibration: the light plane of a line laser, n . p + d = 0 in
 // the `sensor` frame (= the camera frame of the laser sensor, calib/camera_model.hpp), with its
 // covariance, by two methods:
 //
-//  (a) White plane at known heights (../shared/SEED.md "Calibration chain" 2). A matt white
+//  (a) White plane at known heights. A matt white
 //      plate is swept at k heights h_i. What a cell knows, and what is estimated:
 //        known  - the plate's unit normal m in the sensor frame, pointing towards the sensor
 //                 (from the fixture / the robot's orientation: e.g. the sensor looks down on a
@@ -40,6 +40,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/board.hpp"
 #include "calib/camera_model.hpp"
 #include "calib/target_detection.hpp"
 
@@ -93,15 +94,6 @@ struct StripeImage {
 /// Decodes an image file's bytes (JPEG, PNG, ... through OpenCV imgcodecs); throws FileError
 /// naming `name` when it cannot be decoded.
 StripeImage DecodeStripeImage(const std::string& bytes, const std::string& name);
-
-/// A chessboard: inner corners cols x rows, square edge in mm ("chessboard:COLSxROWS:SQUARE_MM").
-struct ChessboardSpec {
-  int cols = 0;
-  int rows = 0;
-  double square_mm = 0;
-};
-/// Parses "chessboard:COLSxROWS:SQUARE_MM"; throws OptionError naming `what`.
-ChessboardSpec ParseChessboardSpec(const std::string& text, const std::string& what = "--board");
 
 /// Options of the stripe-on-chessboard method (b).
 struct StripeOptions {
@@ -200,6 +192,10 @@ struct LaserPlaneResult {
 
   /// One line: method, plane, sigmas, RMS, points, flags.
   std::string Summary() const;
+  /// Why this plane must not be written to a cell: empty when it is usable, else the first
+  /// warning (or the summary) of an ill-conditioned or not converged fit. The policy of
+  /// `lasercell calibrate laser`, which refuses such a plane after writing its JSON and report.
+  std::string RefusalReason() const;
 };
 
 /// Method (a). Throws InputError naming the problem for: fewer than 2 distinct heights ("planes
@@ -223,13 +219,13 @@ struct StripeObservation {
 /// line of the laser channel inside the board region; rows or columns, whichever gives more
 /// peaks). Throws InputError when the image size differs from the camera's.
 StripeObservation DetectStripe(const CameraModel& camera, const StripeImage& image,
-                               const ChessboardSpec& board, const StripeOptions& options = {});
+                               const BoardSpec& board, const StripeOptions& options = {});
 
 /// Method (b) from observations (board pose by PnP through the camera model, rays ∩ board
 /// plane, one plane over all images). Same errors as CalibrateLaserPlaneFromStripes.
 LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
     const CameraModel& camera, const std::vector<StripeObservation>& observations,
-    const ChessboardSpec& board, const StripeOptions& options = {});
+    const BoardSpec& board, const StripeOptions& options = {});
 
 /// Method (b): DetectStripe on every image, then CalibrateLaserPlaneFromStripeObservations. Images where the board or the stripe is not found are kept as unused items with
 /// the reason; throws InputError when fewer than 2 images are usable (listing why each failed),
@@ -237,7 +233,7 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
 /// in one plane through the camera centre (laser plane parallel to the camera rays).
 LaserPlaneResult CalibrateLaserPlaneFromStripes(const CameraModel& camera,
                                                 const std::vector<StripeImage>& images,
-                                                const ChessboardSpec& board,
+                                                const BoardSpec& board,
                                                 const StripeOptions& options = {});
 
 }  // namespace lasercell::calib

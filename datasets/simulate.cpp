@@ -10,6 +10,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "calib/laser_plane_heights_record.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
@@ -759,16 +760,7 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
     // calibration estimates it (>= 3 heights).
     const Eigen::Vector3d up_in_sensor =
         sweep.cell_from_sensor_start.linear().transpose() * Eigen::Vector3d::UnitZ();
-    std::ostringstream o;
-    o << "format: lasercell.plane_heights\nversion: 1\n"
-      << "# profiles/plane_<i>.lcp sweeps the white plate at heights_mm[i] (along the plate\n"
-      << "# normal, relative to an arbitrary zero).\n"
-      << "heights_mm: [";
-    for (std::size_t i = 0; i < config.plane_heights_mm.size(); ++i) {
-      o << (i ? ", " : "") << Num(config.plane_heights_mm[i]);
-    }
-    o << "]\nplate_normal_in_sensor: " << Vec(up_in_sensor) << "\n";
-    out.Write("records/planes.yaml", o.str());
+    out.Write("records/planes.yaml", calib::PlaneHeightsYaml({config.plane_heights_mm, up_in_sensor}));
   }
   if (config.capture_trajectory) {
     const SeatCapture& seat = seats.front();

@@ -7,15 +7,6 @@
 
 namespace lasercell::calib::internal {
 
-std::optional<Eigen::Vector3d> IntersectRayPlane(const Eigen::Vector3d& ray,
-                                                 const Eigen::Vector3d& normal, double offset) {
-  const double nr = normal.dot(ray);
-  if (std::abs(nr) < 1e-12) return std::nullopt;
-  const double t = -offset / nr;
-  if (!(t > 0)) return std::nullopt;
-  return Eigen::Vector3d(t * ray);
-}
-
 void OrientPlane(Eigen::Vector3d& normal, double& offset) {
   if (offset > 0) {
     normal = -normal;

@@ -1,18 +1,12 @@
 #pragma once
-// Small private helpers of the laser-plane calibration: ray/plane intersection and a total
-// least-squares plane through points. The triangulation module will hold the shared versions
-// (triangulation/triangulator*); this copy is private to calib until then.
+// Private helpers of the laser-plane calibration: a total least-squares plane through points
+// and the orientation rule of its planes (d <= 0). Ray-plane intersection is core's
+// (core/ray_plane.hpp).
 
 #include <Eigen/Core>
-#include <optional>
 #include <vector>
 
 namespace lasercell::calib::internal {
-
-/// The point where the ray t * ray (t > 0, from the origin) meets n . p + d = 0; nullopt when
-/// the ray is parallel to the plane (|n . ray| < 1e-12) or the plane lies behind the origin.
-std::optional<Eigen::Vector3d> IntersectRayPlane(const Eigen::Vector3d& ray,
-                                                 const Eigen::Vector3d& normal, double offset);
 
 /// A plane (unit normal, offset) through points by total least squares (smallest eigenvector of
 /// the scatter), the normal oriented so that the offset is <= 0 (n points from the origin

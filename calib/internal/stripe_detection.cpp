@@ -57,9 +57,8 @@ GrayImage GrayImageOf(const StripeImage& image) {
 }
 
 Eigen::Isometry3d BoardPose(const CameraModel& camera, const std::vector<Eigen::Vector2d>& corners,
-                            const ChessboardSpec& board, double* rms_px) {
-  const std::vector<Eigen::Vector3d> object =
-      BoardSpec::Chessboard(board.cols, board.rows, board.square_mm).Corners();
+                            const BoardSpec& board, double* rms_px) {
+  const std::vector<Eigen::Vector3d> object = board.Corners();
   std::vector<Eigen::Vector2d> normalized;
   for (const auto& r : camera.UnprojectMany(corners)) {
     normalized.emplace_back(r.x() / r.z(), r.y() / r.z());

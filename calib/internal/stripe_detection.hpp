@@ -1,5 +1,5 @@
 #pragma once
-// Private helpers of the stripe-on-chessboard laser calibration (calib/laser_plane.cpp): board
+// Private helpers of the stripe-on-chessboard laser calibration (calib/laser_plane_stripe.cpp): board
 // pose through the camera model, the laser channel of a colour image, and one subpixel
 // laser-stripe peak per scan line inside the board region. The board itself is found by the
 // shared detector, calib/target_detection.hpp.
@@ -20,7 +20,7 @@ namespace lasercell::calib::internal {
 /// to z = 1, then SolvePnPNormalised (calib/internal/board_pose.hpp); board corner (i, j) at
 /// (i s, j s, 0). `rms_px` gets the reprojection RMS through the camera model.
 Eigen::Isometry3d BoardPose(const CameraModel& camera, const std::vector<Eigen::Vector2d>& corners,
-                            const ChessboardSpec& board, double* rms_px);
+                            const BoardSpec& board, double* rms_px);
 
 /// One peak per scan line (image column, or image row when `along_rows`) of the laser channel
 /// inside `region` (a convex polygon in pixels): the maximum, rejected below the contrast or

@@ -27,7 +27,7 @@
 namespace lasercell::calib {
 namespace {
 
-const ChessboardSpec kBoard{6, 8, 40.0};
+const BoardSpec kBoard = BoardSpec::Chessboard(6, 8, 40.0);
 
 /// OpenCV calibrateCamera on the six board views (k1 k2 p1 p2; k3 fixed), as mrcal
 /// LENSMODEL_OPENCV4: the documented stand-in for intrinsics the source only partly quotes. It

@@ -433,8 +433,8 @@ const StripeScene& SharedScene() {
   return scene;
 }
 
-ChessboardSpec SpecOf(const datasets::ChessboardTarget& board) {
-  return {board.squares_x - 1, board.squares_y - 1, board.square_mm};
+BoardSpec SpecOf(const datasets::ChessboardTarget& board) {
+  return BoardSpec::Chessboard(board.squares_x - 1, board.squares_y - 1, board.square_mm);
 }
 
 TEST(LaserPlaneStripes, RenderedBoardsGiveTheTruePlane) {
@@ -486,7 +486,7 @@ TEST(LaserPlaneStripes, WithExactCornersOnlyTheStripePeaksLimitThePlane) {
 
 TEST(LaserPlaneStripes, WrongBoardLeavesTooFewUsableImages) {
   const StripeScene& scene = SharedScene();
-  ChessboardSpec wrong = SpecOf(scene.board);
+  BoardSpec wrong = SpecOf(scene.board);
   wrong.cols += 2;
   try {
     CalibrateLaserPlaneFromStripes(scene.camera, {scene.images[0], scene.images[1]}, wrong);
@@ -495,7 +495,7 @@ TEST(LaserPlaneStripes, WrongBoardLeavesTooFewUsableImages) {
     const std::string what = e.what();
     EXPECT_NE(what.find("fewer than 2 usable stripe images"), std::string::npos) << what;
     // The detector names the board it does see.
-    const ChessboardSpec right = SpecOf(scene.board);
+    const BoardSpec right = SpecOf(scene.board);
     EXPECT_NE(what.find("but a " + std::to_string(right.cols) + "x" + std::to_string(right.rows) +
                         " one (inner corners) is visible: wrong board size"),
               std::string::npos)
@@ -537,7 +537,7 @@ TEST(LaserPlaneStripes, ImageOfAnotherCameraSizeIsRejected) {
   image.pixels.assign(64 * 48, 0);
   const CameraModel camera = SimCamera(datasets::CameraIntrinsics{});
   try {
-    DetectStripe(camera, image, {8, 6, 40.0});
+    DetectStripe(camera, image, BoardSpec::Chessboard(8, 6, 40.0));
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("small.png' is 64x48 but the camera model is 1024x1024"),
@@ -581,13 +581,23 @@ TEST(LaserPlaneStripes, PlaneThroughTheCameraCentreIsFlagged) {
 }
 
 TEST(LaserPlaneStripes, BoardSpecIsParsedAndChecked) {
-  const ChessboardSpec spec = ParseChessboardSpec("chessboard:6x8:40");
+  // The stripe method takes the one board spec (calib/board.hpp) and needs a chessboard.
+  const BoardSpec spec = ParseBoardSpec("chessboard:6x8:40");
+  EXPECT_EQ(spec.type, BoardType::kChessboard);
   EXPECT_EQ(spec.cols, 6);
   EXPECT_EQ(spec.rows, 8);
   EXPECT_EQ(spec.square_mm, 40.0);
-  EXPECT_THROW(ParseChessboardSpec("chessboard:6x8"), OptionError);
-  EXPECT_THROW(ParseChessboardSpec("charuco:6x8:40"), OptionError);
-  EXPECT_THROW(ParseChessboardSpec("chessboard:1x8:40"), OptionError);
+  EXPECT_THROW(ParseBoardSpec("chessboard:6x8"), InputError);
+  EXPECT_THROW(ParseBoardSpec("chessboard:1x8:40"), Error);
+  const StripeScene& scene = SharedScene();
+  try {
+    DetectStripe(scene.camera, scene.images[0], ParseBoardSpec("charuco:6x8:40:30"));
+    FAIL() << "expected OptionError";
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("the stripe method needs a chessboard"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(CalibrateLaserPlaneFromStripeObservations(scene.camera, {}, ParseBoardSpec("charuco:6x8:40:30")),
+               OptionError);
 }
 
 }  // namespace
