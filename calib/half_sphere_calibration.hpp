@@ -57,8 +57,9 @@ struct SphereTouches {
   std::vector<SphereTouch> touches;
 };
 
-/// Parses a touches file's text; `name` appears in errors. Throws FileError naming the file and
-/// the field: unknown fields, wrong format/version, a frame other than handling_base, values
+/// Parses a touches file's text; `name` appears in errors. Throws FileError naming the file, the
+/// line and the field path (yaml::Fields, e.g. `touches[2].joints_rad`):
+/// unknown fields, wrong format/version, a frame other than handling_base, values
 /// that are not numbers, fields in other units (`*_m`, `*_deg`, ...), points that look like
 /// metres among millimetres (mixed units), joints that look like degrees, duplicate labels.
 SphereTouches ParseTouchesYaml(const std::string& text, const std::string& name);

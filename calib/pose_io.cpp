@@ -1,8 +1,6 @@
 // Robot pose files (pose_io.hpp).
 #include "calib/pose_io.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -13,6 +11,7 @@
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/se3.hpp"
+#include "core/yaml_fields.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -30,15 +29,19 @@ std::string Fmt(const char* f, double v) {
   return b;
 }
 
-Eigen::Vector3d Vec3(const YAML::Node& n, const std::string& name, const std::string& where) {
-  if (!n || !n.IsSequence() || n.size() != 3) {
-    throw FileError(name, where + ": translation_mm must be a list of 3 numbers");
+// A YAML record's root as a Fields walker (FileError), its format and version checked.
+yaml::Fields RecordFields(const std::string& text, const std::string& name, const char* format) {
+  yaml::Fields top = yaml::Fields::Parse(text, name, yaml::ErrorKind::kFile);
+  std::string f;
+  top.ReadRequired("format", &f);
+  if (f != format) top.Fail("format", "is '" + f + "'; expected '" + format + "'");
+  int version = 0;
+  top.ReadRequired("version", &version);
+  if (version != 1) {
+    top.Fail("version", "is " + std::to_string(version) +
+                            ": unsupported version (this lasercell reads version 1)");
   }
-  try {
-    return {n[0].as<double>(), n[1].as<double>(), n[2].as<double>()};
-  } catch (const YAML::Exception&) {
-    throw FileError(name, where + ": translation_mm must hold numbers");
-  }
+  return top;
 }
 
 }  // namespace
@@ -116,42 +119,19 @@ RobotPoses ParseKukaPoses(const std::string& text, const std::string& name) {
 }
 
 RobotPoses ParseYamlPoses(const std::string& text, const std::string& name) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw FileError(name, std::string("not valid YAML: ") + e.what());
-  }
-  if (!root["format"] || root["format"].as<std::string>() != "lasercell.robot_poses") {
-    throw FileError(name, "format must be lasercell.robot_poses");
-  }
-  if (!root["version"] || root["version"].as<int>() != 1) {
-    throw FileError(name, "unsupported version (expected 1)");
-  }
-  const YAML::Node poses = root["poses"];
-  if (!poses || !poses.IsSequence() || poses.size() == 0) {
-    throw FileError(name, "`poses` must be a non-empty list");
-  }
+  yaml::Fields top = RecordFields(text, name, "lasercell.robot_poses");
+  top.Known("poses");
+  top.Done();
+  if (!top.Has("poses")) top.Fail("poses", "is required: a non-empty list of poses");
+  std::vector<yaml::Fields> poses = top.List("poses");
+  if (poses.empty()) top.Fail("poses", "must be a non-empty list");
   RobotPoses out;
-  for (std::size_t i = 0; i < poses.size(); ++i) {
-    const std::string where = "pose " + std::to_string(i + 1);
-    const YAML::Node p = poses[i];
-    const Eigen::Vector3d t = Vec3(p["translation_mm"], name, where);
-    const YAML::Node q = p["rotation_wxyz"];
-    if (!q || !q.IsSequence() || q.size() != 4) {
-      throw FileError(name, where + ": rotation_wxyz must be a list of 4 numbers");
-    }
-    const Eigen::Quaterniond quat(q[0].as<double>(), q[1].as<double>(), q[2].as<double>(),
-                                  q[3].as<double>());
-    if (std::abs(quat.norm() - 1.0) > kOrthonormalTolerance) {
-      throw FileError(name, where + ": rotation_wxyz is not a unit quaternion (norm " +
-                                Fmt("%.9g", quat.norm()) + ")");
-    }
-    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = quat.normalized().toRotationMatrix();
-    pose.translation() = t;
-    out.base_from_flange.push_back(pose);
-    if (p["image"]) out.images.push_back(p["image"].as<std::string>());
+  for (yaml::Fields& p : poses) {
+    p.Known({"image", "translation_mm", "rotation_wxyz"});
+    p.Done();
+    out.base_from_flange.push_back(p.ReadPoseFields().ToIsometry());
+    std::string image;
+    if (p.Read("image", &image)) out.images.push_back(image);
   }
   if (!out.images.empty() && out.images.size() != out.base_from_flange.size()) {
     throw FileError(name, "`image` must be given for every pose or for none");
@@ -161,29 +141,36 @@ RobotPoses ParseYamlPoses(const std::string& text, const std::string& name) {
 }
 
 HandEyeImagesRecord ParseHandEyeImagesRecord(const std::string& text, const std::string& name) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw FileError(name, std::string("not valid YAML: ") + e.what());
-  }
-  if (!root["format"] || root["format"].as<std::string>() != "lasercell.hand_eye_images") {
-    throw FileError(name, "format must be lasercell.hand_eye_images");
-  }
+  yaml::Fields top = RecordFields(text, name, "lasercell.hand_eye_images");
+  top.Known({"robot", "board", "images"});
+  top.Done();
   HandEyeImagesRecord out;
-  try {
-    out.robot = root["robot"].as<std::string>();
-    out.inner_cols = root["board"]["inner_corners"][0].as<int>();
-    out.inner_rows = root["board"]["inner_corners"][1].as<int>();
-    out.square_mm = root["board"]["square_mm"].as<double>();
-    for (const auto& im : root["images"]) {
-      out.images.push_back(im["file"].as<std::string>());
-      out.joints_rad.push_back(im["joints_rad"].as<std::vector<double>>());
-    }
-  } catch (const YAML::Exception& e) {
-    throw FileError(name, std::string("malformed record: ") + e.what());
+  top.ReadRequired("robot", &out.robot);
+  if (!top.Has("board")) top.Fail("board", "is required: {inner_corners: [cols, rows], square_mm}");
+  yaml::Fields board = top.Sub("board");
+  board.Known({"squares", "inner_corners", "square_mm"});
+  board.Done();
+  std::vector<double> inner;
+  board.ReadRequired("inner_corners", &inner);
+  if (inner.size() != 2 || inner[0] != std::floor(inner[0]) || inner[1] != std::floor(inner[1]) ||
+      inner[0] < 2 || inner[1] < 2) {
+    board.Fail("inner_corners", "must be [cols, rows], two integers >= 2");
   }
-  if (out.images.empty()) throw FileError(name, "no images");
+  out.inner_cols = static_cast<int>(inner[0]);
+  out.inner_rows = static_cast<int>(inner[1]);
+  board.ReadRequired("square_mm", &out.square_mm);
+  if (!(out.square_mm > 0)) board.Fail("square_mm", "must be positive");
+  for (yaml::Fields& im : top.List("images")) {
+    im.Known({"file", "joints_rad"});
+    im.Done();
+    std::string file;
+    std::vector<double> joints;
+    im.ReadRequired("file", &file);
+    im.ReadRequired("joints_rad", &joints);
+    out.images.push_back(file);
+    out.joints_rad.push_back(joints);
+  }
+  if (out.images.empty()) top.Fail("images", "must list at least one image");
   return out;
 }
 

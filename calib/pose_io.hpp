@@ -15,10 +15,12 @@
 //    lasercell.hand_eye_images) holds joints instead; ParseHandEyeImagesRecord reads those and
 //    the caller turns them into poses through the cell's kinematic model.
 //
-// Every reader checks: rotations orthonormal (|R^T R - I| <= 1e-6 for kuka, |q| within 1e-6 of
-// 1 for yaml; the rotation is then re-orthonormalised), translations in mm (all |t| < 5 looks
-// like metres; a mix of |t| < 5 and |t| > 50 looks like mixed units), and throws FileError
-// naming the file, the line/entry and the problem.
+// Every reader checks: rotations orthonormal (|R^T R - I| <= 1e-6 for kuka; for yaml |q| within
+// kUnitQuaternionTolerance of 1, core/se3.hpp, the one tolerance of every lasercell file; the
+// rotation is then re-orthonormalised), translations in mm (all |t| < 5 looks like metres; a mix
+// of |t| < 5 and |t| > 50 looks like mixed units), and throws FileError naming the file, the
+// line and the problem. The YAML forms are read through yaml::Fields (core/yaml_fields.hpp):
+// unknown fields are errors naming the line and the field path (`poses[2].rotation_wxyz`).
 
 #include <Eigen/Geometry>
 #include <string>
@@ -47,7 +49,10 @@ struct HandEyeImagesRecord {
   std::vector<std::string> images;              ///< Relative file names.
   std::vector<std::vector<double>> joints_rad;  ///< Per image.
 };
-/// Parses records/hand_eye_images.yaml; `name` appears in errors.
+/// Parses records/hand_eye_images.yaml (format lasercell.hand_eye_images, version 1, as
+/// datasets::HandEyeImagesRecordYaml writes it: robot, board {squares, inner_corners,
+/// square_mm}, images [{file, joints_rad}]); strict like the other readers; `name` appears in
+/// errors.
 HandEyeImagesRecord ParseHandEyeImagesRecord(const std::string& text, const std::string& name);
 
 /// The lasercell YAML text of poses (round-trips through ParseYamlPoses).

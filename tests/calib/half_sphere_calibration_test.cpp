@@ -285,7 +285,20 @@ TEST(ParseTouchesYaml, ReadsWhatTheSimulatorWrites) {
   ASSERT_EQ(t.touches.size(), sim.touches.size());
   for (std::size_t i = 0; i < t.touches.size(); ++i) {
     EXPECT_LT((t.touches[i].point_in_handling_base - sim.touches[i].measured_in_handling_base).norm(), 1e-12);
+    // Every recorded field reads back exactly (shortest round-trip numbers).
+    EXPECT_EQ(t.touches[i].sphere, sim.touches[i].sphere);
+    EXPECT_EQ(t.touches[i].point_in_handling_base, sim.touches[i].measured_in_handling_base);
+    EXPECT_EQ(t.touches[i].joints_rad, sim.touches[i].joints_rad) << "touch " << i;
   }
+  EXPECT_EQ(t.robot, "handling_robot");
+  EXPECT_EQ(t.frame, "handling_base");
+  EXPECT_EQ(t.stated_sigma_mm, config.touches.sigma_mm);
+  EXPECT_EQ(t.sphere_radius_mm, config.spheres.radius_mm);
+  ASSERT_TRUE(t.handling_flange_from_tool_tip.has_value());
+  EXPECT_LT((t.handling_flange_from_tool_tip->matrix() -
+             datasets::PointingTool(config.touches).matrix())
+                .norm(),
+            1e-12);
 }
 
 void ExpectFileError(const std::string& text, const std::string& expected) {
@@ -305,36 +318,43 @@ std::string Replace(std::string s, const std::string& from, const std::string& t
 
 TEST(ParseTouchesYaml, UnknownFieldsAreErrors) {
   ExpectFileError(Replace(kTouchesYaml, "robot:", "robto:"),
-                  "line 3: unknown field 'robto' in the top level");
+                  "line 3: unknown field 'robto' (known fields here: format, version, robot, "
+                  "frame,");
   ExpectFileError(Replace(kTouchesYaml, "joints_rad: null", "joint_rad: null"),
-                  "unknown field 'joint_rad' in touches[1]");
+                  "line 14: unknown field 'touches[1].joint_rad'");
 }
 
 TEST(ParseTouchesYaml, MixedUnitsAreErrors) {
   // A field in another unit.
   ExpectFileError(Replace(kTouchesYaml, "stated_sigma_mm: 0.05", "stated_sigma_m: 0.00005"),
-                  "unknown field 'stated_sigma_m' in the top level (a field in 'm': lasercell "
-                  "files are in mm and rad)");
+                  "line 6: unknown field 'stated_sigma_m'; did you mean 'stated_sigma_mm'? "
+                  "(lasercell uses millimetres)");
+  ExpectFileError(Replace(kTouchesYaml, "stated_sigma_mm: 0.05", "stated_sigma_in: 0.002"),
+                  "line 6: unknown field 'stated_sigma_in'; did you mean 'stated_sigma_mm'? "
+                  "(lasercell uses millimetres)");
   // One touch in metres among millimetres.
   ExpectFileError(Replace(kTouchesYaml, "[1120.0, 160.0, 274.0]", "[1.12, 0.16, 0.274]"),
-                  "touches[1].point_in_handling_base is 1.164077 from the base while another is 1623.185772");
+                  "line 13: field 'touches[1].point_in_handling_base' is 1.164077 from the base while "
+                  "another is 1623.185772");
   ExpectFileError(Replace(kTouchesYaml, "[1120.0, 160.0, 274.0]", "[1.12, 0.16, 0.274]"),
                   "mixed units (metres among millimetres?)");
   // Joints in degrees.
   ExpectFileError(Replace(kTouchesYaml, "[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]", "[10, 20, 30, 40, 50, 60]"),
-                  "touches[0].joints_rad holds 10.000000, beyond +-2 pi: it looks like degrees");
+                  "line 11: field 'touches[0].joints_rad' holds 10.000000, beyond +-2 pi: it looks like "
+                  "degrees");
   // A radius in metres.
   ExpectFileError(Replace(kTouchesYaml, "sphere_radius_mm: 25", "sphere_radius_mm: 0.025"),
-                  "sphere_radius_mm 0.025 looks like metres");
+                  "line 7: field 'sphere_radius_mm' is 0.025, which looks like metres");
 }
 
 TEST(ParseTouchesYaml, OtherProblemsNameTheField) {
   ExpectFileError(Replace(kTouchesYaml, "frame: handling_base", "frame: cell"),
-                  "frame 'cell': touches must be given in handling_base");
-  ExpectFileError(Replace(kTouchesYaml, "- sphere: 1", "- sphere: 0"), "sphere 0 is touched twice");
+                  "line 4: field 'frame' is 'cell': touches must be given in handling_base");
+  ExpectFileError(Replace(kTouchesYaml, "- sphere: 1", "- sphere: 0"), "line 12: field 'touches[1].sphere' repeats a label: sphere 0 is touched twice");
   ExpectFileError(Replace(kTouchesYaml, "[1120.0, 160.0, 274.0]", "[1120.0, 160.0]"),
-                  "touches[1].point_in_handling_base needs 3 numbers (mm)");
-  ExpectFileError(Replace(kTouchesYaml, "version: 1", "version: 2"), "unsupported version");
+                  "line 13: field 'touches[1].point_in_handling_base' must list exactly 3 numbers "
+                  "(got 2)");
+  ExpectFileError(Replace(kTouchesYaml, "version: 1", "version: 2"), "line 2: field 'version' is 2: unsupported version");
   ExpectFileError("[1, 2]", "is not a touches file");
 }
 

@@ -390,6 +390,71 @@ TEST(PoseIo, MetresInYamlAndMixedUnitsAreRejected) {
   }
 }
 
+// records/hand_eye_images.yaml as the simulator writes it reads back through the calib reader:
+// robot, board and every image's file and joints, the joints bit for bit.
+TEST(PoseIo, ReadsTheSimulatorsHandEyeImagesRecord) {
+  datasets::SimConfig config;
+  const datasets::CellTruth truth = datasets::MakeCellTruth(config);
+  const datasets::ChessboardTarget board = config.chessboard;
+  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
+  const std::string text = datasets::HandEyeImagesRecordYaml(board, set);
+  const HandEyeImagesRecord rec = ParseHandEyeImagesRecord(text, "records/hand_eye_images.yaml");
+  EXPECT_EQ(rec.robot, "vision_robot");
+  EXPECT_EQ(rec.inner_cols, board.squares_x - 1);
+  EXPECT_EQ(rec.inner_rows, board.squares_y - 1);
+  EXPECT_EQ(rec.square_mm, board.square_mm);
+  ASSERT_EQ(rec.images.size(), set.images.size());
+  for (std::size_t i = 0; i < set.images.size(); ++i) {
+    EXPECT_EQ(rec.images[i], datasets::HandEyeImageFile(i));
+    EXPECT_EQ(rec.joints_rad[i], set.images[i].joints_rad) << "image " << i;
+  }
+  // Strict: a typo and a wrong board are errors naming the line and the field.
+  const auto error = [&](const std::string& from, const std::string& to) {
+    std::string bad = text;
+    bad.replace(bad.find(from), from.size(), to);
+    try {
+      ParseHandEyeImagesRecord(bad, "rec.yaml");
+    } catch (const FileError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_NE(error("    joints_rad:", "    joint_rad:").find("unknown field 'images[0].joint_rad'"),
+            std::string::npos);
+  EXPECT_NE(error("square_mm:", "square_m:")
+                .find("unknown field 'board.square_m'; did you mean 'square_mm'?"),
+            std::string::npos)
+      << error("square_mm:", "square_m:");
+  EXPECT_NE(error("version: 1", "version: 2").find("rec.yaml: line 2: field 'version' is 2"),
+            std::string::npos);
+}
+
+TEST(PoseIo, YamlPosesNameTheLineAndTheField) {
+  const std::string good =
+      "format: lasercell.robot_poses\nversion: 1\nposes:\n"
+      "  - {image: a.png, translation_mm: [500, 0, 700], rotation_wxyz: [1, 0, 0, 0]}\n"
+      "  - {image: b.png, translation_mm: [450, 0, 650], rotation_wxyz: [0, 1, 0, 0]}\n";
+  EXPECT_EQ(ParseYamlPoses(good, "p.yaml").images, (std::vector<std::string>{"a.png", "b.png"}));
+  const auto error = [&](const std::string& from, const std::string& to) {
+    std::string bad = good;
+    bad.replace(bad.find(from), from.size(), to);
+    try {
+      ParseYamlPoses(bad, "p.yaml");
+    } catch (const FileError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(error("[0, 1, 0, 0]", "[0, 1.1, 0, 0]"),
+            "p.yaml: line 5: field 'poses[1].rotation_wxyz' has norm 1.1; expected a unit "
+            "quaternion (norm within 1e-9 of 1), w first");
+  EXPECT_EQ(error("[450, 0, 650]", "[450, 0]"),
+            "p.yaml: line 5: field 'poses[1].translation_mm' must list exactly 3 numbers (got 2)");
+  EXPECT_EQ(error("image: b.png, translation_mm", "translation_m"),
+            "p.yaml: line 5: unknown field 'poses[1].translation_m'; did you mean "
+            "'translation_mm'? (lasercell uses millimetres)");
+}
+
 TEST(PoseIo, YamlRoundTrip) {
   RobotPoses p;
   p.images = {"a.png", "b.png"};

@@ -513,61 +513,66 @@ TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {
   } cases[] = {
       {"- a\n- b\n", "is not a mapping at the top level"},
       {"", "is empty"},
-      {Replace(v, "format: lasercell.cell\n", ""), "missing field 'format'"},
+      {Replace(v, "format: lasercell.cell\n", ""), "line 1: field 'format' is required; a lasercell cell file starts with 'format: "
+       "lasercell.cell'"},
       {Replace(v, "lasercell.cell", "lasercell.job"),
-       "format is 'lasercell.job'; expected 'lasercell.cell'"},
-      {Replace(v, "version: 1\n", ""), "missing field 'version'"},
+       "line 1: field 'format' is 'lasercell.job'; expected 'lasercell.cell'"},
+      {Replace(v, "version: 1\n", ""), "field 'version' is required"},
       {Replace(v, "version: 1", "version: 7"),
-       "unsupported version 7; this lasercell reads version 1"},
-      {Replace(v, "version: 1", "version: one"), "not an integer"},
-      {Replace(v, "frames: [a, b, c, d]", "frames: a"), "frames must be a list"},
+       "line 2: field 'version': unsupported version 7; this lasercell reads version 1"},
+      {Replace(v, "version: 1", "version: one"), "line 2: field 'version' must be an integer (got 'one')"},
+      {Replace(v, "frames: [a, b, c, d]", "frames: a"), "line 3: field 'frames' must be a list of names"},
       {Replace(v, "[a, b, c, d]", "[a, b, c, d, B]"), "'B' is not lower snake case"},
       {Replace(v, "[a, b, c, d]", "[a, b, c, d, a]"), "frame 'a' is listed twice"},
       {Replace(v, "child: b", "child: nowhere"),
-       "edge 1: child frame 'nowhere' is not listed in frames"},
+       "line 12: field 'edges[0].child': frame 'nowhere' is not listed in frames"},
       {v + fourth_edge, "would create a cycle: d and a are already connected via d -> c"},
       {Replace(v, "    child: c\n", "    child: a\n"),
-       "edge 2 would create a cycle: b and a are already joined by edge 1"},
+       "line 15: field 'edges[1]' would create a cycle: b and a are already joined by edges[0]"},
       {Replace(v, "rotation_wxyz: [1, 0, 0, 0]}", "rotation_wxyz: [1.2, 0, 0, 0]}"),
-       "edge 1 parent_from_child: rotation_wxyz has norm 1.2; expected a unit quaternion"},
+       "line 14: field 'edges[0].parent_from_child.rotation_wxyz' has norm 1.2; expected a unit "
+       "quaternion"},
       {Replace(v, "[1, 2, 3]", "[1, 2]"),
-       "edge 1 parent_from_child.translation_mm must be a list of 3 numbers, got 2 values"},
-      {Replace(v, "[1, 2, 3]", "[1, .nan, 3]"), "translation_mm[1] is '.nan', not a finite number"},
-      {Replace(v, "[1, 2, 3]", "[1, 2, 1e999]"), "is '1e999', not a finite number"},
-      {Replace(v, "[1, 2, 3]", "[1, 2, inf]"), "is 'inf', not a finite number"},
-      {Replace(v, "[1, 2, 3]", "[1, 2, 3mm]"), "is '3mm', not a finite number"},
-      {Replace(v, cov36, cov35), "edge 2 covariance must be a list of 36 numbers, got 35 values"},
+       "line 14: field 'edges[0].parent_from_child.translation_mm' must list exactly 3 numbers "
+       "(got 2)"},
+      {Replace(v, "[1, 2, 3]", "[1, .nan, 3]"), "translation_mm[1]' must be a finite number (got '.nan')"},
+      {Replace(v, "[1, 2, 3]", "[1, 2, 1e999]"), "must be a finite number (got '1e999')"},
+      {Replace(v, "[1, 2, 3]", "[1, 2, inf]"), "must be a finite number (got 'inf')"},
+      {Replace(v, "[1, 2, 3]", "[1, 2, 3mm]"), "must be a finite number (got '3mm')"},
+      {Replace(v, cov36, cov35), "line 19: field 'edges[1].covariance' must list exactly 36 numbers (got 35)"},
       {Replace(v, cov36, cov_asym), "covariance is not symmetric"},
       {Replace(v, "type: static", "type: stat"),
-       "edge 1: unknown type 'stat'; expected static or dynamic"},
+       "line 13: field 'edges[0].type': unknown type 'stat'; expected static or dynamic"},
       {Replace(v, "robot: arm", "robot: ghost"),
-       "edge 3: robot 'ghost' is not declared under robots"},
-      {Replace(v, "model: dh", "model: urdf"), "robot 'arm': unknown model 'urdf'"},
-      {Replace(v, "convention: standard", "convention: craig"), "unknown convention 'craig'"},
+       "line 24: field 'edges[2].robot': robot 'ghost' is not declared under robots"},
+      {Replace(v, "model: dh", "model: urdf"), "line 6: field 'robots.arm.model': unknown model 'urdf'"},
+      {Replace(v, "convention: standard", "convention: craig"), "field 'robots.arm.convention': unknown convention 'craig'"},
       {Replace(v, "    joints:\n", "    convention: modified\n    joints:\n"),
-       "field 'convention' appears twice in robot 'arm'"},
+       "line 8: field 'robots.arm.convention' appears twice"},
       {Replace(v, "  - parent: b", "  - parnet: b"),
-       "unknown field 'parnet' in edge 2; expected parent, child, type"},
-      {Replace(v, "edges:", "edgez:"), "unknown field 'edgez' in the top level"},
-      {Replace(v, "d_mm: 100", "d_mmm: 100"), "unknown field 'd_mmm' in robot 'arm' joint 1"},
-      {Replace(v, "{tool:", "{tol:"), "unknown field 'tol' in edge 2 provenance"},
+       "line 15: unknown field 'edges[1].parnet' (known fields here: parent, child, type"},
+      {Replace(v, "edges:", "edgez:"), "line 10: unknown field 'edgez' (known fields here: format, version, frames"},
+      {Replace(v, "d_mm: 100", "d_mmm: 100"), "line 9: unknown field 'robots.arm.joints[0].d_mmm'"},
+      {Replace(v, "{tool:", "{tol:"), "line 20: unknown field 'edges[1].provenance.tol'"},
       {Replace(v, "rotation_wxyz: [1, 0, 0, 0]}\n  - parent: b",
                "rotation_xyzw: [1, 0, 0, 0]}\n  - parent: b"),
-       "unknown field 'rotation_xyzw' in edge 1 parent_from_child"},
+       "line 14: unknown field 'edges[0].parent_from_child.rotation_xyzw'"},
       {Replace(v, "    type: static\n", "    type: static\n    robot: arm\n"),
-       "unknown field 'robot' in edge 1 (type static)"},
+       "line 14: unknown field 'edges[0].robot' (known fields here: parent, child, type, "
+       "parent_from_child, covariance, provenance)"},
       {Replace(v, "    type: dynamic\n", "    type: dynamic\n    covariance: [1]\n"),
-       "unknown field 'covariance' in edge 3 (type dynamic)"},
+       "line 24: unknown field 'edges[2].covariance' (known fields here: parent, child, type, "
+       "robot)"},
       {Replace(v, "    robot: arm\n",
                "    robot: arm\n  - parent: a\n    child: x\n    type: dynamic\n    robot: arm\n"),
-       "child frame 'x' is not listed"},
+       "line 26: field 'edges[3].child': frame 'x' is not listed"},
       {Replace(Replace(v, "[a, b, c, d]", "[a, b, c, d, e]"), "    robot: arm\n",
                "    robot: arm\n  - parent: d\n    child: e\n    type: dynamic\n    robot: arm\n"),
-       "edge 4: robot 'arm' already drives edge 3"},
+       "line 28: field 'edges[3].robot': robot 'arm' already drives edges[2]"},
       {Replace(v,
                "    parent_from_child: {translation_mm: [1, 2, 3], rotation_wxyz: [1, 0, 0, 0]}\n",
                ""),
-       "missing field 'parent_from_child' in edge 1"},
+       "line 11: field 'edges[0].parent_from_child' is required"},
       {Replace(v, "frames: [a, b, c, d]", "frames: [a, b, c, d"), "YAML syntax error at line"},
   };
   for (const auto& c : cases) {
@@ -575,8 +580,10 @@ TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {
         << "expected: " << c.problem;
   }
   // Messages carry the line of the offending field.
-  EXPECT_THAT(ReadError(Replace(v, "  - parent: b", "  - parnet: b")), HasSubstr("(line 15)"));
-  EXPECT_THAT(ReadError(Replace(v, "version: 1", "version: 7")), HasSubstr("(line 2)"));
+  EXPECT_THAT(ReadError(Replace(v, "  - parent: b", "  - parnet: b")),
+              HasSubstr("cells/bad.yaml: line 15: "));
+  EXPECT_THAT(ReadError(Replace(v, "version: 1", "version: 7")),
+              HasSubstr("cells/bad.yaml: line 2: "));
 }
 
 class NoFileFormModel final : public KinematicModel {
@@ -732,12 +739,12 @@ TEST(FrameGraphYamlLaserPlanes, BadSectionsNameTheProblem) {
     std::string text;
     std::string problem;
   } cases[] = {
-      {replace("  version: 1\n  planes:", "  version: 2\n  planes:"), "laser_planes version is '2'"},
+      {replace("  version: 1\n  planes:", "  version: 2\n  planes:"), "line 12: field 'laser_planes.version': unsupported version 2"},
       {replace("      frame: sensor\n", "      frame: sensor\n      colour: green\n"),
-       "unknown field 'colour' in laser plane 'laser'"},
+       "line 16: unknown field 'laser_planes.planes.laser.colour'"},
       {replace("      frame: sensor\n", "      frame: nowhere\n"), "frame 'nowhere' is not listed in frames"},
-      {replace("      normal: [", "      normal: [2, "), "normal must be a list of 3 numbers"},
-      {replace("  planes:\n", "  extra: 1\n  planes:\n"), "unknown field 'extra' in laser_planes"},
+      {replace("      normal: [", "      normal: [2, "), "field 'laser_planes.planes.laser.normal' must list exactly 3 numbers"},
+      {replace("  planes:\n", "  extra: 1\n  planes:\n"), "line 13: unknown field 'laser_planes.extra'"},
   };
   for (const auto& c : cases) {
     try {
