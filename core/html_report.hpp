@@ -4,7 +4,7 @@
 // <svg class="lc-plot" data-plot="TITLE">; a small inline script marks the page
 // <body data-report-ready="1" data-plots="N"> after load and records script errors in
 // data-report-errors, so a headless browser test can check "page loads, no script errors, plots
-// present" (tests/tools/report_test.cpp does this with Debian's chromium).
+// present" (tests/core/html_report_test.cpp does this with Debian's chromium).
 //
 // Units are whatever the caller says in the axis labels (px, mm, deg). Libraries fill a report
 // with data; only tools write it (WriteHtmlReport is atomic).

@@ -58,8 +58,10 @@ Eigen::Isometry3d Orthonormalized(const Eigen::Isometry3d& pose);
 /// Skew-symmetric matrix [v]x so that [v]x w = v x w.
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v);
 
-/// How far from 1 the norm of a stored quaternion may be (files, StaticEdge, DhChain mounts).
-inline constexpr double kUnitQuaternionTolerance = 1e-9;
+/// How far from 1 the norm of a stored quaternion may be (files, StaticEdge, DhChain mounts):
+/// loose enough for a quaternion printed with 7 significant digits by a controller or a person,
+/// tight enough to catch a typo. Matrices are built from the normalized quaternion.
+inline constexpr double kUnitQuaternionTolerance = 1e-6;
 
 /// The unit quaternion of a rotation matrix, with the canonical sign: the first nonzero of
 /// (w, x, y, z) is positive (w >= 0; x > 0 when w == 0; ...), and no coefficient is -0.

@@ -447,7 +447,7 @@ TEST(PoseIo, YamlPosesNameTheLineAndTheField) {
   };
   EXPECT_EQ(error("[0, 1, 0, 0]", "[0, 1.1, 0, 0]"),
             "p.yaml: line 5: field 'poses[1].rotation_wxyz' has norm 1.1; expected a unit "
-            "quaternion (norm within 1e-9 of 1), w first");
+            "quaternion (norm within 1e-6 of 1), w first");
   EXPECT_EQ(error("[450, 0, 650]", "[450, 0]"),
             "p.yaml: line 5: field 'poses[1].translation_mm' must list exactly 3 numbers (got 2)");
   EXPECT_EQ(error("image: b.png, translation_mm", "translation_m"),

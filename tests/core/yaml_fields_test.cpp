@@ -170,7 +170,7 @@ TEST(YamlFields, PosesAreReadAsWrittenWithAUnitQuaternion) {
               top.List("edges")[0].ReadPose("pose", &p);
             }),
             "cell.yaml: line 2: field 'edges[0].pose.rotation_wxyz' has norm 1.2; expected a unit "
-            "quaternion (norm within 1e-9 of 1), w first");
+            "quaternion (norm within 1e-6 of 1), w first");
   EXPECT_EQ(ErrorOf([] {
               Fields top = Fields::Parse(
                   "p: {translation_mm: [0, 0, 0], rotation_xyzw: [0, 0, "
