@@ -110,8 +110,8 @@ TEST(LaserHandEye, TwelvePoseSetIsWeakAndSaysSo) {
 }
 
 // The rendered simulator sweeps of the default eye-in-hand set (24 poses at ranges -100 / 0 /
-// +100 mm from the stand-off, 40 profiles, default noise 0.05 px per row) -> private exact
-// ray/plane -> hand-eye with the TRUE robot model: within the 0.05 mm / 0.02 deg, the
+// +100 mm from the stand-off, 40 profiles, default noise 0.05 px per row) -> the sweep loader
+// (triangulator, exact path) -> hand-eye with the TRUE robot model: within the 0.05 mm / 0.02 deg, the
 // error within 4 reported sigma per component, the residual at the noise level.
 TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
   datasets::SimConfig config;
