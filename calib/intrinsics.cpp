@@ -366,24 +366,12 @@ std::string IntrinsicsResult::Summary() const {
   return s.str();
 }
 
-IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const BoardSpec& board,
-                                     int width_px, int height_px,
-                                     const IntrinsicsOptions& options) {
-  options.Check();
-  board.Check();
-  if (width_px <= 0 || height_px <= 0) {
-    throw InputError("camera calibration: image size " + std::to_string(width_px) + " x " +
-                     std::to_string(height_px) + " px must be positive");
-  }
-  IntrinsicsResult result;
-  State s;
-  s.board = &board;
-  s.options = &options;
-  s.width = width_px;
-  s.height = height_px;
-  s.layout.fix_aspect = options.fix_aspect_ratio;
+namespace {
 
-  // Validate and select views.
+// Validate and select views: a ViewResult per view (used, or why not); InputError for
+// inconsistent inputs and for fewer than min_views usable views.
+void SelectViews(const std::vector<BoardView>& views, const BoardSpec& board, int width_px,
+                 int height_px, const IntrinsicsOptions& options, IntrinsicsResult& result) {
   std::vector<std::string> problems;
   for (std::size_t v = 0; v < views.size(); ++v) {
     const BoardView& view = views[v];
@@ -434,7 +422,13 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
     throw InputError(msg + ": add views of the board at varied tilts covering the image");
   }
 
-  // Initial focal length and poses (pinhole, principal point at the centre).
+}
+
+// Initial focal length and poses (pinhole, principal point at the centre): fills the poses
+// and observations of `s`; returns the focal length.
+double InitialPoses(const std::vector<BoardView>& views, const BoardSpec& board, int width_px,
+                    int height_px, const IntrinsicsOptions& options, State& s,
+                    IntrinsicsResult& result) {
   const double cx0 = 0.5 * (width_px - 1), cy0 = 0.5 * (height_px - 1);
   std::vector<Eigen::Matrix3d> homographies;
   for (std::size_t v = 0; v < views.size(); ++v) {
@@ -502,7 +496,14 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
                      ")");
   }
 
-  // Stage 1: OpenCV-family model (the final one, or the start of a splined fit).
+  return f0;
+}
+
+// Stage 1: OpenCV-family model (the final one, or the start of a splined fit); then, for a
+// splined model, the knots from the OPENCV8 fit.
+void FitLens(State& s, const IntrinsicsOptions& options, double f0, double cx0, double cy0,
+             IntrinsicsResult& result) {
+  const int width_px = s.width, height_px = s.height;
   const LensModelKind first = options.model == LensModelKind::kSplined ? LensModelKind::kOpenCV8
                                                                        : options.model;
   IntrinsicsOptions first_options = options;
@@ -513,7 +514,7 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
     full.resize(4 + n_dist, 0.0);
     SetLens(s, MrcalLensModelName(first_options, 0), full);
   }
-  SolveReport report = SolveWithOutliers(s, result);
+  SolveWithOutliers(s, result);
 
   if (options.model == LensModelKind::kSplined) {
     const std::vector<double> cv8 = FullIntrinsics(s);
@@ -537,28 +538,27 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
     s.regularization = SplineRegularization(s, options.spline_nx, options.spline_ny, cv8[0]);
     const SolveReport held = Solve(s, true, nullptr);  // knots with the OPENCV8 poses
     result.iterations += held.iterations;
-    report = SolveWithOutliers(s, result);
+    SolveWithOutliers(s, result);
   }
 
-  // Final statistics and covariance.
-  Eigen::MatrixXd cov_all;  // [free intrinsics, poses], unscaled
-  const SolveReport final_report = Solve(s, false, &cov_all);
-  const int n_free_params = s.layout.NumFree();
-  const Eigen::MatrixXd cov_free = cov_all.rows() >= n_free_params
-                                       ? Eigen::MatrixXd(cov_all.topLeftCorner(n_free_params, n_free_params))
-                                       : Eigen::MatrixXd();
+}
+
+// Final statistics and covariance: the last solve (covariance of [free intrinsics, poses],
+// unscaled, in *cov_all), the camera, residuals per corner and view, RMS and sigma.
+void FinalStatistics(State& s, std::size_t num_views, const IntrinsicsOptions& options,
+                     Eigen::MatrixXd* cov_all, IntrinsicsResult& result) {
+  const SolveReport final_report = Solve(s, false, cov_all);
   result.iterations += final_report.iterations;
-  report = final_report;
-  result.converged = report.converged;
-  result.termination = report.message;
+  result.converged = final_report.converged;
+  result.termination = final_report.message;
   const std::vector<double> full = FullIntrinsics(s);
-  result.camera.emplace(s.lens->lensmodel(), full, width_px, height_px);
+  result.camera.emplace(s.lens->lensmodel(), full, s.width, s.height);
   result.intrinsic_names = IntrinsicNames(options, s.layout.num_full);
   result.board_warp_mm = Eigen::Vector2d(s.warp[0], s.warp[1]);
 
   double ssr = 0;
-  std::vector<double> view_ssr(views.size(), 0.0);
-  std::vector<int> view_n(views.size(), 0), view_out(views.size(), 0);
+  std::vector<double> view_ssr(num_views, 0.0);
+  std::vector<int> view_n(num_views, 0), view_out(num_views, 0);
   for (const State::Obs& o : s.obs) {
     const int v = s.view_of_pose[o.pose];
     const Eigen::Vector2d r = Residual(s, full, o);
@@ -588,17 +588,24 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
     result.warnings.push_back("as many parameters as measurements: no residual to estimate "
                               "the noise from");
   }
+  for (std::size_t p = 0; p < s.poses.size(); ++p) {
+    ViewResult& vr = result.views[s.view_of_pose[p]];
+    const int v = s.view_of_pose[p];
+    vr.num_corners = view_n[v];
+    vr.num_outliers = view_out[v];
+    vr.rms_px = view_n[v] > 0 ? std::sqrt(view_ssr[v] / view_n[v]) : 0.0;
+  }
+}
 
-  // Views: fit, pose, tilt and the spread of the board normals.
+// Views: pose, tilt and the spread of the board normals (parallel views leave the focal length
+// unobservable). Returns the board distances.
+std::vector<double> ViewGeometry(const State& s, const IntrinsicsOptions& options,
+                                 IntrinsicsResult& result) {
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> distances;
   for (std::size_t p = 0; p < s.poses.size(); ++p) {
     ViewResult& vr = result.views[s.view_of_pose[p]];
     vr.camera_from_board = ToIsometry(s.poses[p]);
-    const int v = s.view_of_pose[p];
-    vr.num_corners = view_n[v];
-    vr.num_outliers = view_out[v];
-    vr.rms_px = view_n[v] > 0 ? std::sqrt(view_ssr[v] / view_n[v]) : 0.0;
     Eigen::Vector3d n = vr.camera_from_board.linear().col(2);
     if (n.z() < 0) n = -n;
     vr.tilt_deg = std::acos(std::clamp(n.z(), -1.0, 1.0)) * 180.0 / kPi;
@@ -621,8 +628,20 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
         Fmt(options.min_tilt_spread_deg, 1) +
         "); the focal length is not observable from parallel views: tilt the board");
   }
+  return distances;
+}
 
-  // Covariance of the full intrinsics.
+// Covariance of the full intrinsics (scaled by the residual variance), the focal length's
+// observability, and the remaining warnings.
+void IntrinsicsCovariance(const State& s, const Eigen::MatrixXd& cov_all,
+                          const IntrinsicsOptions& options, IntrinsicsResult& result) {
+  const int n_free_params = s.layout.NumFree();
+  const Eigen::MatrixXd cov_free =
+      cov_all.rows() >= n_free_params
+          ? Eigen::MatrixXd(cov_all.topLeftCorner(n_free_params, n_free_params))
+          : Eigen::MatrixXd();
+  const int dof = 2 * result.num_corners - result.num_parameters;
+  const std::vector<double> full = FullIntrinsics(s);
   const int n_full = s.layout.num_full, n_free = s.layout.NumFree();
   if (cov_free.rows() == n_free && dof > 0) {
     Eigen::MatrixXd jf = Eigen::MatrixXd::Zero(n_full, n_free);  // d full / d free
@@ -663,8 +682,16 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
     }
   }
 
-  // Projection uncertainty over the image (header: mrcal's mean-frames idea).
-  std::vector<double> sorted = distances;
+}
+
+// Projection uncertainty over the image (header: mrcal's mean-frames idea).
+void ProjectionUncertainty(const State& s, const Eigen::MatrixXd& cov_all,
+                           std::vector<double> distances, const IntrinsicsOptions& options,
+                           IntrinsicsResult& result) {
+  const int n_full = s.layout.num_full, n_free = s.layout.NumFree();
+  const int width_px = s.width, height_px = s.height;
+  const std::vector<double> full = FullIntrinsics(s);
+  std::vector<double>& sorted = distances;
   std::sort(sorted.begin(), sorted.end());
   result.uncertainty_range_mm = options.uncertainty_range_mm > 0 ? options.uncertainty_range_mm
                                                                  : sorted[sorted.size() / 2];
@@ -714,6 +741,34 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
       }
     }
   }
+}
+
+}  // namespace
+
+IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const BoardSpec& board,
+                                     int width_px, int height_px,
+                                     const IntrinsicsOptions& options) {
+  options.Check();
+  board.Check();
+  if (width_px <= 0 || height_px <= 0) {
+    throw InputError("camera calibration: image size " + std::to_string(width_px) + " x " +
+                     std::to_string(height_px) + " px must be positive");
+  }
+  IntrinsicsResult result;
+  State s;
+  s.board = &board;
+  s.options = &options;
+  s.width = width_px;
+  s.height = height_px;
+  s.layout.fix_aspect = options.fix_aspect_ratio;
+  SelectViews(views, board, width_px, height_px, options, result);
+  const double f0 = InitialPoses(views, board, width_px, height_px, options, s, result);
+  FitLens(s, options, f0, 0.5 * (width_px - 1), 0.5 * (height_px - 1), result);
+  Eigen::MatrixXd cov_all;  // [free intrinsics, poses], unscaled
+  FinalStatistics(s, views.size(), options, &cov_all, result);
+  std::vector<double> distances = ViewGeometry(s, options, result);
+  IntrinsicsCovariance(s, cov_all, options, result);
+  ProjectionUncertainty(s, cov_all, std::move(distances), options, result);
   return result;
 }
 

@@ -16,6 +16,7 @@
 #include "calib/cost_functions/kinematic_sphere_cost.hpp"
 #include "calib/internal/kinematic_sphere_seed.hpp"
 #include "core/error.hpp"
+#include "core/stats.hpp"
 
 namespace lasercell::calib {
 
@@ -241,12 +242,6 @@ std::vector<int> Thin(const std::vector<int>& from, int max) {
   return out;
 }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-  return v[v.size() / 2];
-}
-
 /// Rejects motions that leave the hand-eye rotation/translation unobservable: all flange
 /// rotations equal (pure translations) or all relative rotations about one axis.
 void CheckMotion(const DhChain& robot, const std::vector<SphereSweep>& sweeps) {
@@ -340,11 +335,11 @@ std::string JointIdentificationResult::Summary() const {
   return s;
 }
 
-JointIdentificationResult IdentifyRobot(const DhChain& robot,
-                                        const Eigen::Isometry3d& flange_from_sensor,
-                                        const std::vector<SphereSweep>& sweeps,
-                                        const JointIdentificationOptions& o) {
-  o.Check();
+namespace {
+
+/// Input checks of IdentifyRobot; returns the number of spheres (largest index + 1).
+int CheckSweeps(const DhChain& robot, const Eigen::Isometry3d& flange_from_sensor,
+                const std::vector<SphereSweep>& sweeps, const JointIdentificationOptions& o) {
   if (robot.NumJoints() != kJoints) {
     throw InputError("robot model: joint identification supports 6-joint chains, got " +
                      std::to_string(robot.NumJoints()) + " joints");
@@ -396,40 +391,24 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
                        " (sphere indices must be 0 .. count-1 without gaps)");
     }
   }
-  std::vector<bool> robot_estimated(kRobotParams, false);
-  for (int k = 0; k < kRobotParams; ++k) {
-    robot_estimated[k] = (k < kJoints) ? o.estimate_joint_offsets : o.estimate_dh_deltas;
-  }
-  // Counting: a sweep of a sphere fixes about 3 pose quantities (its centre seen from the pose)
-  // plus the radius; the unknowns are the model parameters and 3 per free sphere centre.
-  const Columns all_cols = MakeColumns(o, robot_estimated, spheres);
-  const int constraints = 3 * static_cast<int>(sweeps.size()) +
-                          (o.known_centres_in_base.empty() ? 0 : 3 * spheres) + 1;
-  if (constraints <= all_cols.count) {
-    throw InputError("sphere sweeps: " + std::to_string(sweeps.size()) +
-                     " poses give about " + std::to_string(constraints) +
-                     " constraints, not more than the " + std::to_string(all_cols.count) +
-                     " parameters to estimate (robot, hand-eye, sphere centres, radius); "
-                     "record more poses");
-  }
-  if (o.estimate_hand_eye) CheckMotion(robot, sweeps);
+  return spheres;
+}
 
-  // Seed: the initial model places each sweep's points in the base; a local RANSAC finds the
-  // sphere per sweep (a short sweep sees a nearly rigid copy of it even with model errors).
-  State st;
-  st.chain = KinematicChainReference::From(robot);
-  st.flange_from_sensor = flange_from_sensor;
-  std::vector<FlatSweep> flat(sweeps.size());
-  std::vector<std::vector<Eigen::Vector3d>> in_base(sweeps.size());
-  std::vector<internal::SeedSphere> seeds(sweeps.size());
+// Seed: the initial model places each sweep's points in the base; a local RANSAC finds the
+// sphere candidates per sweep (a short sweep sees a nearly rigid copy of it even with model
+// errors). Fills `flat` with every point and returns the candidates per sweep.
+std::vector<std::vector<internal::SeedSphere>> SeedCandidates(
+    const State& st, const std::vector<SphereSweep>& sweeps, const JointIdentificationOptions& o,
+    std::vector<FlatSweep>& flat) {
   std::vector<std::vector<internal::SeedSphere>> candidates(sweeps.size());
   for (std::size_t w = 0; w < sweeps.size(); ++w) {
+    std::vector<Eigen::Vector3d> in_base;
     for (std::size_t p = 0; p < sweeps[w].profiles.size(); ++p) {
       const Eigen::Isometry3d base_from_sensor = st.BaseFromSensor(sweeps[w].profiles[p].joints_rad);
       for (const Eigen::Vector3d& pt : sweeps[w].profiles[p].points_in_sensor) {
         flat[w].p_in_sensor.push_back(pt);
         flat[w].profile.push_back(static_cast<int>(p));
-        in_base[w].push_back(base_from_sensor * pt);
+        in_base.push_back(base_from_sensor * pt);
       }
     }
     internal::FindSphereOptions fo;
@@ -442,17 +421,25 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
       fo.near_centre = o.known_centres_in_base[static_cast<std::size_t>(sweeps[w].sphere)];
       fo.near_distance_mm = (o.radius_mm > 0 ? o.radius_mm : o.max_radius_mm) + 15;
     }
-    candidates[w] = internal::FindSpheres(in_base[w], fo, o.known_centres_in_base.empty() ? 4 : 1);
+    candidates[w] = internal::FindSpheres(in_base, fo, o.known_centres_in_base.empty() ? 4 : 1);
     if (candidates[w].empty()) {
       throw InputError("sweep '" + sweeps[w].name + "': no sphere found among its " +
-                       std::to_string(in_base[w].size()) +
+                       std::to_string(in_base.size()) +
                        " points (radius " + std::to_string(o.min_radius_mm) + " .. " +
                        std::to_string(o.max_radius_mm) + " mm); check the sweep and the "
                        "initial robot model / hand-eye transform");
     }
   }
-  // Each sweep may see several spheres (or a stand); per sphere index, the candidate that most
-  // sweeps agree on (within seed_consistency_mm: the initial model's error) is the sphere.
+  return candidates;
+}
+
+// Each sweep may see several spheres (or a stand); per sphere index, the candidate that most
+// sweeps agree on (within seed_consistency_mm: the initial model's error) is the sphere. Sets
+// the seed centres and radius of `st` and the seed inliers and selected points of `flat`.
+void SeedSpheres(const std::vector<std::vector<internal::SeedSphere>>& candidates,
+                 const std::vector<SphereSweep>& sweeps, const JointIdentificationOptions& o,
+                 int spheres, State& st, std::vector<FlatSweep>& flat) {
+  std::vector<internal::SeedSphere> seeds(sweeps.size());
   st.centres.assign(static_cast<std::size_t>(spheres), Eigen::Vector3d::Zero());
   std::vector<double> radii;
   for (int s = 0; s < spheres; ++s) {
@@ -510,36 +497,82 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
   }
   if (!o.known_centres_in_base.empty()) st.centres = o.known_centres_in_base;
   st.radius = o.radius_mm > 0 ? o.radius_mm : Median(radii);
+}
 
-  JointIdentificationResult result;
-  // Observability at the seed decides what is fixed.
-  std::vector<bool> robot_free = robot_estimated;
-  ObservabilityReport seed_obs;
-  {
-    BuiltProblem b = Build(st, sweeps, flat, o, robot_free, false);
-    Eigen::MatrixXd j;
-    Eigen::VectorXd r;
-    std::vector<int> row_sweep;
-    Evaluate(st, b, all_cols, &j, &r, &row_sweep);
-    seed_obs = AnalyzeObservability(j, all_cols.names, all_cols.fixable, o.observability);
-    if (seed_obs.degenerate) {
-      std::string names;
-      for (const std::string& n : seed_obs.directions.back().parameters) {
-        names += (names.empty() ? "" : ", ") + n;
-      }
-      throw InputError("sphere sweeps: the poses cannot separate " + names +
-                       " (a direction of the identification Jacobian with relative singular "
-                       "value " + std::to_string(seed_obs.directions.back().relative_singular_value) +
-                       "); record poses that rotate about several axes and see several spheres");
+// Observability at the seed decides what is fixed: clears robot_free of every robot parameter
+// the analysis fixes; a direction no robot parameter resolves is degenerate data (InputError).
+ObservabilityReport FixUnobservable(State& st, const std::vector<SphereSweep>& sweeps,
+                                    const std::vector<FlatSweep>& flat,
+                                    const JointIdentificationOptions& o, const Columns& all_cols,
+                                    std::vector<bool>& robot_free) {
+  BuiltProblem b = Build(st, sweeps, flat, o, robot_free, false);
+  Eigen::MatrixXd j;
+  Eigen::VectorXd r;
+  std::vector<int> row_sweep;
+  Evaluate(st, b, all_cols, &j, &r, &row_sweep);
+  ObservabilityReport seed_obs =
+      AnalyzeObservability(j, all_cols.names, all_cols.fixable, o.observability);
+  if (seed_obs.degenerate) {
+    std::string names;
+    for (const std::string& n : seed_obs.directions.back().parameters) {
+      names += (names.empty() ? "" : ", ") + n;
     }
-    for (int k = 0; k < kRobotParams; ++k) {
-      if (all_cols.robot[k] >= 0 && !seed_obs.identifiable[all_cols.robot[k]]) robot_free[k] = false;
+    throw InputError("sphere sweeps: the poses cannot separate " + names +
+                     " (a direction of the identification Jacobian with relative singular "
+                     "value " + std::to_string(seed_obs.directions.back().relative_singular_value) +
+                     "); record poses that rotate about several axes and see several spheres");
+  }
+  for (int k = 0; k < kRobotParams; ++k) {
+    if (all_cols.robot[k] >= 0 && !seed_obs.identifiable[all_cols.robot[k]]) robot_free[k] = false;
+  }
+  return seed_obs;
+}
+
+// Re-gate: residuals of every point of every sweep against the model; keeps the points within
+// gate_sigmas robust sigmas. Counts the seed inliers dropped when `count_rejected`.
+void Regate(const State& st, const std::vector<SphereSweep>& sweeps,
+            const JointIdentificationOptions& o, bool count_rejected,
+            std::vector<FlatSweep>& flat, JointIdentificationResult& result) {
+  std::vector<double> abs_res;
+  std::vector<std::vector<double>> res(sweeps.size());
+  for (std::size_t w = 0; w < sweeps.size(); ++w) {
+    const Eigen::Vector3d& c = st.centres[static_cast<std::size_t>(sweeps[w].sphere)];
+    std::vector<Eigen::Isometry3d> poses;
+    for (const SweptProfile& p : sweeps[w].profiles) poses.push_back(st.BaseFromSensor(p.joints_rad));
+    res[w].resize(flat[w].p_in_sensor.size());
+    for (std::size_t i = 0; i < flat[w].p_in_sensor.size(); ++i) {
+      res[w][i] = (poses[static_cast<std::size_t>(flat[w].profile[i])] * flat[w].p_in_sensor[i] - c).norm() -
+                  st.radius;
+    }
+    for (int i : flat[w].selected) abs_res.push_back(std::abs(res[w][static_cast<std::size_t>(i)]));
+  }
+  const double gate_mm = std::max(o.min_gate_mm, o.gate_sigmas * 1.4826 * Median(abs_res));
+  for (std::size_t w = 0; w < sweeps.size(); ++w) {
+    std::vector<int> in;
+    for (std::size_t i = 0; i < res[w].size(); ++i) {
+      if (std::abs(res[w][i]) < gate_mm) in.push_back(static_cast<int>(i));
+    }
+    if (in.size() < 10) {
+      throw InputError("sweep '" + sweeps[w].name + "': only " + std::to_string(in.size()) +
+                       " points lie within " + std::to_string(gate_mm) +
+                       " mm of its sphere after calibration; drop the sweep or check it");
+    }
+    flat[w].selected = Thin(in, o.max_points_per_sweep);
+    if (count_rejected) {
+      std::size_t dropped = 0;
+      for (int i : flat[w].seed_inliers) {
+        if (std::abs(res[w][static_cast<std::size_t>(i)]) >= gate_mm) ++dropped;
+      }
+      result.points_rejected += dropped;
     }
   }
+}
 
-  // Pass 1 robust on the seed inliers; then re-gate every point against the model and solve
-  // without a robust loss (so the covariance is the plain Gauss-Newton one).
-  double gate_mm = 0;
+// Pass 1 robust on the seed inliers; then re-gate every point against the model and solve
+// without a robust loss (so the covariance is the plain Gauss-Newton one).
+void Solve(State& st, const std::vector<SphereSweep>& sweeps, const JointIdentificationOptions& o,
+           const std::vector<bool>& robot_free, std::vector<FlatSweep>& flat,
+           JointIdentificationResult& result) {
   for (int pass = 0; pass < 3; ++pass) {
     BuiltProblem b = Build(st, sweeps, flat, o, robot_free, pass == 0);
     ceres::Solver::Options so;
@@ -556,97 +589,75 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
     result.termination = summary.message;
     Fold(st);
     if (pass == 2) break;
-    // Re-gate: residuals of every point of every sweep.
-    std::vector<double> abs_res;
-    std::vector<std::vector<double>> res(sweeps.size());
-    for (std::size_t w = 0; w < sweeps.size(); ++w) {
-      const Eigen::Vector3d& c = st.centres[static_cast<std::size_t>(sweeps[w].sphere)];
-      std::vector<Eigen::Isometry3d> poses;
-      for (const SweptProfile& p : sweeps[w].profiles) poses.push_back(st.BaseFromSensor(p.joints_rad));
-      res[w].resize(flat[w].p_in_sensor.size());
-      for (std::size_t i = 0; i < flat[w].p_in_sensor.size(); ++i) {
-        res[w][i] = (poses[static_cast<std::size_t>(flat[w].profile[i])] * flat[w].p_in_sensor[i] - c).norm() -
-                    st.radius;
-      }
-      for (int i : flat[w].selected) abs_res.push_back(std::abs(res[w][static_cast<std::size_t>(i)]));
-    }
-    gate_mm = std::max(o.min_gate_mm, o.gate_sigmas * 1.4826 * Median(abs_res));
-    for (std::size_t w = 0; w < sweeps.size(); ++w) {
-      std::vector<int> in;
-      for (std::size_t i = 0; i < res[w].size(); ++i) {
-        if (std::abs(res[w][i]) < gate_mm) in.push_back(static_cast<int>(i));
-      }
-      if (in.size() < 10) {
-        throw InputError("sweep '" + sweeps[w].name + "': only " + std::to_string(in.size()) +
-                         " points lie within " + std::to_string(gate_mm) +
-                         " mm of its sphere after calibration; drop the sweep or check it");
-      }
-      flat[w].selected = Thin(in, o.max_points_per_sweep);
-      if (pass == 1) {
-        std::size_t dropped = 0;
-        for (int i : flat[w].seed_inliers) {
-          if (std::abs(res[w][static_cast<std::size_t>(i)]) >= gate_mm) ++dropped;
-        }
-        result.points_rejected += dropped;
-      }
-    }
+    Regate(st, sweeps, o, pass == 1, flat, result);
   }
+}
 
-  // Final Jacobian at the solution (all corrections zero: left perturbation at the estimate).
-  BuiltProblem b = Build(st, sweeps, flat, o, robot_free, false);
+/// The Jacobian at the solution and the columns still estimated.
+struct FinalJacobian {
   Eigen::MatrixXd j;
   Eigen::VectorXd r;
   std::vector<int> row_sweep;
-  Evaluate(st, b, all_cols, &j, &r, &row_sweep);
+  std::vector<int> active;  // columns of all_cols that are parameters (not fixed)
+};
+
+// Final Jacobian at the solution (all corrections zero: left perturbation at the estimate);
+// observability of the active columns and the covariance of every estimated parameter.
+FinalJacobian Uncertainty(State& st, const std::vector<SphereSweep>& sweeps,
+                          const std::vector<FlatSweep>& flat, const JointIdentificationOptions& o,
+                          const Columns& all_cols, const std::vector<bool>& robot_free,
+                          const ObservabilityReport& seed_obs, JointIdentificationResult& result) {
+  FinalJacobian f;
+  BuiltProblem b = Build(st, sweeps, flat, o, robot_free, false);
+  Evaluate(st, b, all_cols, &f.j, &f.r, &f.row_sweep);
   // Fixed robot columns are not parameters any more: analyse the rest (and report the earlier
   // decisions).
-  std::vector<int> active;
   for (int c = 0; c < all_cols.count; ++c) {
     bool fixed = false;
     for (int k = 0; k < kRobotParams; ++k) fixed |= (all_cols.robot[k] == c && !robot_free[k]);
-    if (!fixed) active.push_back(c);
+    if (!fixed) f.active.push_back(c);
   }
-  {
-    Eigen::MatrixXd ja(j.rows(), static_cast<Eigen::Index>(active.size()));
-    std::vector<std::string> names;
-    std::vector<bool> fixable;
-    for (std::size_t c = 0; c < active.size(); ++c) {
-      ja.col(static_cast<Eigen::Index>(c)) = j.col(active[c]);
-      names.push_back(all_cols.names[static_cast<std::size_t>(active[c])]);
-      fixable.push_back(all_cols.fixable[static_cast<std::size_t>(active[c])]);
-    }
-    ObservabilityReport final_obs = AnalyzeObservability(ja, names, fixable, o.observability);
-    if (!final_obs.directions.empty()) {
-      result.warnings.push_back("observability at the solution differs from the seed: " +
-                                final_obs.Summary());
-    }
-    // Report all columns, with the seed's fixing decisions.
-    result.observability = seed_obs;
-    result.observability.singular_values = final_obs.singular_values;
-    result.observability.condition_number = final_obs.condition_number;
+  Eigen::MatrixXd ja(f.j.rows(), static_cast<Eigen::Index>(f.active.size()));
+  std::vector<std::string> names;
+  std::vector<bool> fixable;
+  for (std::size_t c = 0; c < f.active.size(); ++c) {
+    ja.col(static_cast<Eigen::Index>(c)) = f.j.col(f.active[c]);
+    names.push_back(all_cols.names[static_cast<std::size_t>(f.active[c])]);
+    fixable.push_back(all_cols.fixable[static_cast<std::size_t>(f.active[c])]);
   }
-  const Eigen::Index m = j.rows();
-  const double rss = r.squaredNorm();
-  const double dof = static_cast<double>(m - static_cast<Eigen::Index>(active.size()));
+  ObservabilityReport final_obs = AnalyzeObservability(ja, names, fixable, o.observability);
+  if (!final_obs.directions.empty()) {
+    result.warnings.push_back("observability at the solution differs from the seed: " +
+                              final_obs.Summary());
+  }
+  // Report all columns, with the seed's fixing decisions.
+  result.observability = seed_obs;
+  result.observability.singular_values = final_obs.singular_values;
+  result.observability.condition_number = final_obs.condition_number;
+  const Eigen::Index m = f.j.rows();
+  const double rss = f.r.squaredNorm();
+  const double dof = static_cast<double>(m - static_cast<Eigen::Index>(f.active.size()));
   result.variance_factor = dof > 0 ? rss / dof : 0;
-  result.covariance = CovarianceFromJacobian(j, active, result.variance_factor);
-  for (int c : active) result.covariance_names.push_back(all_cols.names[static_cast<std::size_t>(c)]);
-  const auto sigma_of = [&](int col) {
-    for (std::size_t a = 0; a < active.size(); ++a) {
-      if (active[a] == col) {
-        return std::sqrt(result.covariance(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(a)));
-      }
-    }
-    return 0.0;
-  };
+  result.covariance = CovarianceFromJacobian(f.j, f.active, result.variance_factor);
+  for (int c : f.active) result.covariance_names.push_back(all_cols.names[static_cast<std::size_t>(c)]);
+  return f;
+}
+
+// Results: the identified model, sigmas of the parameters, spheres and hand-eye.
+void FillParameters(const DhChain& robot, const State& st, const JointIdentificationOptions& o,
+                    const Columns& all_cols, const std::vector<bool>& robot_free,
+                    const std::vector<int>& active, int spheres,
+                    JointIdentificationResult& result) {
   const auto index_of = [&](int col) {
     for (std::size_t a = 0; a < active.size(); ++a) {
       if (active[a] == col) return static_cast<Eigen::Index>(a);
     }
     return Eigen::Index(-1);
   };
-
-  // Results.
+  const auto sigma_of = [&](int col) {
+    const Eigen::Index a = index_of(col);
+    return a >= 0 ? std::sqrt(result.covariance(a, a)) : 0.0;
+  };
   const std::vector<double> input = DhParameterVector(robot);
   std::vector<double> identified(st.chain.parameters.begin(), st.chain.parameters.end());
   result.robot = WithDhParameters(robot, identified);
@@ -677,7 +688,11 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
   }
   result.radius_mm = st.radius;
   result.radius_sigma_mm = all_cols.radius >= 0 ? sigma_of(all_cols.radius) : 0.0;
-  // Residuals in mm, per sweep.
+}
+
+// Residuals in mm, per sweep.
+void FillResiduals(const std::vector<SphereSweep>& sweeps, const FinalJacobian& f,
+                   const JointIdentificationOptions& o, JointIdentificationResult& result) {
   double sum2 = 0;
   result.sweeps.resize(sweeps.size());
   for (std::size_t w = 0; w < sweeps.size(); ++w) {
@@ -685,10 +700,10 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
     result.sweeps[w].sphere = sweeps[w].sphere;
   }
   std::vector<double> sweep_sum2(sweeps.size(), 0), sweep_sum(sweeps.size(), 0);
-  for (Eigen::Index i = 0; i < m; ++i) {
-    const int w = row_sweep[static_cast<std::size_t>(i)];
+  for (Eigen::Index i = 0; i < f.j.rows(); ++i) {
+    const int w = f.row_sweep[static_cast<std::size_t>(i)];
     if (w < 0) continue;
-    const double mm = r[i] * o.point_sigma_mm;
+    const double mm = f.r[i] * o.point_sigma_mm;
     result.residuals_mm.push_back(mm);
     sum2 += mm * mm;
     SweepResidual& sr = result.sweeps[static_cast<std::size_t>(w)];
@@ -705,6 +720,48 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
   }
   result.points_used = result.residuals_mm.size();
   result.rms_mm = std::sqrt(sum2 / static_cast<double>(std::max<std::size_t>(1, result.points_used)));
+}
+
+}  // namespace
+
+JointIdentificationResult IdentifyRobot(const DhChain& robot,
+                                        const Eigen::Isometry3d& flange_from_sensor,
+                                        const std::vector<SphereSweep>& sweeps,
+                                        const JointIdentificationOptions& o) {
+  o.Check();
+  const int spheres = CheckSweeps(robot, flange_from_sensor, sweeps, o);
+  std::vector<bool> robot_estimated(kRobotParams, false);
+  for (int k = 0; k < kRobotParams; ++k) {
+    robot_estimated[k] = (k < kJoints) ? o.estimate_joint_offsets : o.estimate_dh_deltas;
+  }
+  // Counting: a sweep of a sphere fixes about 3 pose quantities (its centre seen from the pose)
+  // plus the radius; the unknowns are the model parameters and 3 per free sphere centre.
+  const Columns all_cols = MakeColumns(o, robot_estimated, spheres);
+  const int constraints = 3 * static_cast<int>(sweeps.size()) +
+                          (o.known_centres_in_base.empty() ? 0 : 3 * spheres) + 1;
+  if (constraints <= all_cols.count) {
+    throw InputError("sphere sweeps: " + std::to_string(sweeps.size()) +
+                     " poses give about " + std::to_string(constraints) +
+                     " constraints, not more than the " + std::to_string(all_cols.count) +
+                     " parameters to estimate (robot, hand-eye, sphere centres, radius); "
+                     "record more poses");
+  }
+  if (o.estimate_hand_eye) CheckMotion(robot, sweeps);
+
+  State st;
+  st.chain = KinematicChainReference::From(robot);
+  st.flange_from_sensor = flange_from_sensor;
+  std::vector<FlatSweep> flat(sweeps.size());
+  SeedSpheres(SeedCandidates(st, sweeps, o, flat), sweeps, o, spheres, st, flat);
+
+  JointIdentificationResult result;
+  std::vector<bool> robot_free = robot_estimated;
+  const ObservabilityReport seed_obs = FixUnobservable(st, sweeps, flat, o, all_cols, robot_free);
+  Solve(st, sweeps, o, robot_free, flat, result);
+  const FinalJacobian f =
+      Uncertainty(st, sweeps, flat, o, all_cols, robot_free, seed_obs, result);
+  FillParameters(robot, st, o, all_cols, robot_free, f.active, spheres, result);
+  FillResiduals(sweeps, f, o, result);
   if (!result.converged) result.warnings.push_back("Ceres did not converge: " + result.termination);
   return result;
 }

@@ -22,6 +22,7 @@
 #include "datasets/robots.hpp"
 #include "datasets/stl.hpp"
 #include "triangulation/profile_io.hpp"
+#include "triangulation/sphere_sweeps.hpp"
 
 namespace lasercell::datasets {
 
@@ -459,11 +460,12 @@ void RunPoseSweeps(const SimConfig& config, const CellTruth& truth,
                    const PoseSweepOptions& options, const std::vector<PoseSweep>& plans,
                    const std::string& set, const char* name_format, std::uint64_t render_stream,
                    Output& out, SimulationReport& report, std::string& captures_yaml,
-                   std::string& records_yaml, const ProgressCallback& progress, int threads) {
+                   triangulation::SphereSweepList& records, const ProgressCallback& progress,
+                   int threads) {
   const Scene scene = MakeSphereScene(truth.layout, config.spheres);
   const LaserRenderer renderer(scene, truth.sensor, config.render);
   const SweepTiming timing = PoseSweepTiming(config, options);
-  records_yaml += set + ":\n";
+  records.sets.push_back({set, {}});
   for (std::size_t i = 0; i < plans.size(); ++i) {
     char name[48];
     std::snprintf(name, sizeof(name), name_format, static_cast<int>(i));
@@ -473,8 +475,7 @@ void RunPoseSweeps(const SimConfig& config, const CellTruth& truth,
         {name, set + "_sphere", "SimConfig." + set + ".* and SimConfig.spheres.*"}, result,
         config, out);
     report.captures.push_back(r);
-    records_yaml += "  - {profiles_file: " + r.profiles_file +
-                    ", aimed_at_sphere: " + std::to_string(plans[i].sphere) + "}\n";
+    records.sets.back().sweeps.push_back({r.profiles_file, plans[i].sphere});
     captures_yaml += CaptureHeader(r) + PoseSweepTruthYaml(config, truth, plans[i]) +
                      ExposureTimesTruth(result, config);
     ReportProgress(progress, set, static_cast<double>(i + 1) / plans.size());
@@ -801,8 +802,7 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
   }
   if (config.capture_touches) RunTouches(config, truth, out);
   if (config.capture_eye_in_hand || config.capture_joint_poses) {
-    std::string records = "format: lasercell.sphere_sweeps\nversion: 1\n"
-                          "# Pose-sweep sets of the vision robot (joints in each profile).\n";
+    triangulation::SphereSweepList records;
     if (config.capture_eye_in_hand) {
       RunPoseSweeps(config, truth, config.eye_in_hand, eye_in_hand, "eye_in_hand",
                     "eye_in_hand_%02d", kEyeInHandStream, out, report, captures_yaml, records,
@@ -813,7 +813,7 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
                     "joint_pose_%03d", kJointPoseStream, out, report, captures_yaml, records,
                     progress, threads);
     }
-    out.Write("records/sphere_sweeps.yaml", records);
+    out.Write("records/sphere_sweeps.yaml", triangulation::SphereSweepListYaml(records));
   }
   if (config.capture_chessboard_images) {
     RunChessboardImages(config, truth, out, threads);

@@ -180,6 +180,55 @@ TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
   EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.out;
 }
 
+// `calibrate handeye` creates the cell file when it is absent (as `calibrate laser` does): with
+// poses in the lasercell YAML form (mm, the true robot's flange poses) no robot of the cell is
+// needed, and the new file holds just the vision_flange -> sensor edge.
+TEST_F(HandEyeCli, CreatesTheCellFileWhenAbsent) {
+  datasets::SimConfig config;
+  const datasets::CellTruth truth = datasets::MakeCellTruth(config);
+  const datasets::ChessboardTarget board = config.chessboard;
+  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
+  io::WriteFileAtomically((dir_ / "camera.cameramodel").string(),
+                          datasets::MrcalCameraModelText(config.sensor.camera));
+  calib::RobotPoses poses;
+  calib::ChessboardDetections det;
+  det.cols = board.squares_x - 1;
+  det.rows = board.squares_y - 1;
+  det.square_mm = board.square_mm;
+  det.width_px = config.sensor.camera.width_px;
+  det.height_px = config.sensor.camera.height_px;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.03);
+  for (std::size_t i = 0; i < set.images.size(); ++i) {
+    const std::string name = fs::path(datasets::HandEyeImageFile(i)).filename().string();
+    poses.base_from_flange.push_back(truth.true_vision_robot.BaseFromFlange(set.images[i].joints_rad));
+    poses.images.push_back(name);
+    det.images.push_back(name);
+    det.corners_px.emplace_back();
+    for (const auto& q : set.images[i].corners_px) {
+      det.corners_px.back().push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
+    }
+  }
+  io::WriteFileAtomically((dir_ / "poses.yaml").string(), calib::RobotPosesYaml(poses));
+  io::WriteFileAtomically((dir_ / "corners.txt").string(), calib::ChessboardDetectionsText(det));
+  const std::string cell = (dir_ / "new" / "cell.yaml").string();
+  fs::create_directories(dir_ / "new");
+  ASSERT_FALSE(fs::exists(cell));
+  const CommandResult r =
+      RunCliMerged("calibrate handeye --cell " + cell + " --camera " +
+                   (dir_ / "camera.cameramodel").string() + " --corners " +
+                   (dir_ / "corners.txt").string() + " --poses " + (dir_ / "poses.yaml").string());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  ASSERT_TRUE(fs::exists(cell));
+  const FrameGraph g = LoadFrameGraph(cell);
+  ASSERT_EQ(g.static_edges().size(), 1u);
+  EXPECT_EQ(g.static_edges()[0].parent, "vision_flange");
+  EXPECT_EQ(g.static_edges()[0].child, "sensor");
+  const Eigen::Isometry3d got = g.Transform("vision_flange", "sensor");
+  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.out;
+  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.out;
+}
+
 // The images path of the CLI: the simulator renders the eye-in-hand chessboard images, the
 // shared detector (calib/target_detection) finds the corners, the record's joints pose the
 // flange through the cell's (true) robot -> within the 0.05 mm / 0.02 deg.

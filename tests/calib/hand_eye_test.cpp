@@ -158,6 +158,20 @@ TEST(BoardPoseReprojectionCost, JacobianMatchesNumericDifferences) {
   for (int k = 0; k < 12; ++k) EXPECT_NEAR(ja[k], jn[k], 1e-4 * (1 + std::abs(jn[k]))) << k;
 }
 
+// The error rule: a solver that stops early on valid data is an outcome in the Result
+// (converged false, Summary says so), not an exception.
+TEST(HandEye, NotConvergedIsReportedInTheResult) {
+  const CameraModel camera = Opencv8();
+  const Synthetic s = MakeViews(camera, 15, 9, 6, 30.0, 0.03, 3);
+  HandEyeOptions options;
+  options.max_iterations = 1;
+  options.function_tolerance = 1e-300;
+  HandEyeResult r;
+  ASSERT_NO_THROW(r = CalibrateHandEye(s.views, camera, options));
+  EXPECT_FALSE(r.converged) << r.termination;
+  EXPECT_NE(r.Summary().find("NOT converged"), std::string::npos) << r.Summary();
+}
+
 // sigma = 0.03 px per corner coordinate: the corner error measured on the simulator's rendered
 // chessboard images (OpenCV SB + cornerSubPix: 0.029 px RMS, `lasercell bench calibration`).
 // 15 views of a 9 x 6 board (30 mm), camera 600 mm away. Reported 1 sigma here is 0.004-0.017 mm

@@ -14,7 +14,6 @@
 
 #include "calib/camera_model.hpp"
 #include "calib/cost_functions/kinematic_sphere_cost.hpp"
-#include "calib/internal/kinematic_profile_points.hpp"
 #include "calib/robot_observability.hpp"
 #include "core/error.hpp"
 #include "datasets/robots.hpp"

@@ -1,5 +1,6 @@
 // Laser eye-in-hand calibration (issue 7 item 3b): synthetic exact sweeps on the simulator's
-// planned poses, rendered simulator sweeps through the private ray/plane step, bad motions.
+// planned poses, rendered simulator sweeps through the sweep loader (the triangulator's exact
+// path, as `scan triangulate`), bad motions.
 
 #include "calib/laser_hand_eye.hpp"
 
@@ -10,14 +11,13 @@
 #include <random>
 
 #include "calib/camera_model.hpp"
-#include "calib/internal/kinematic_profile_points.hpp"
 #include "core/error.hpp"
 #include "core/se3.hpp"
 #include "datasets/robots.hpp"
 #include "datasets/simulate.hpp"
 #include "tests/calib/joint_test_util.hpp"
 #include "tests/cli_util.hpp"
-#include "triangulation/profile_io.hpp"
+#include "triangulation/sphere_sweeps.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -110,8 +110,8 @@ TEST(LaserHandEye, TwelvePoseSetIsWeakAndSaysSo) {
 }
 
 // The rendered simulator sweeps of the default eye-in-hand set (24 poses at ranges -100 / 0 /
-// +100 mm from the stand-off, 40 profiles, default noise 0.05 px per row) -> private exact
-// ray/plane -> hand-eye with the TRUE robot model: within the issue's 0.05 mm / 0.02 deg, the
+// +100 mm from the stand-off, 40 profiles, default noise 0.05 px per row) -> the sweep loader
+// (triangulator, exact path) -> hand-eye with the TRUE robot model: within the issue's 0.05 mm / 0.02 deg, the
 // error within 4 reported sigma per component, the residual at the noise level.
 TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
   datasets::SimConfig config;
@@ -126,20 +126,11 @@ TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
   const CameraModel camera = LoadCameraModel(dir + "/truth/camera.cameramodel");
   const Eigen::Vector4d plane = truth.sensor.laser.Coefficients();
-  std::vector<SphereSweep> sweeps;
-  for (int i = 0; i < config.eye_in_hand.poses; ++i) {
-    char name[64];
-    std::snprintf(name, sizeof(name), "profiles/eye_in_hand_%02d.lcp", i);
-    const triangulation::ProfileSet set = triangulation::ReadProfiles(dir + "/" + name);
-    SphereSweep s;
-    s.name = name;
-    s.sphere = i % 4;  // records/sphere_sweeps.yaml says the same (the CLI reads it)
-    for (const triangulation::Profile& p : set.profiles) {
-      s.profiles.push_back({p.joints_rad, internal::ProfilePointsOnPlane(
-                                              camera, plane, set.header.first_column, p.row_px)});
-    }
-    sweeps.push_back(std::move(s));
-  }
+  // records/sphere_sweeps.yaml aims pose i at sphere i % 4, as the CLI reads it.
+  const std::vector<SphereSweep> sweeps = triangulation::LoadSphereSweeps(
+      dir + "/records/sphere_sweeps.yaml", "eye_in_hand", camera, plane);
+  ASSERT_EQ(static_cast<int>(sweeps.size()), config.eye_in_hand.poses);
+  for (std::size_t i = 0; i < sweeps.size(); ++i) EXPECT_EQ(sweeps[i].sphere, static_cast<int>(i % 4));
   LaserHandEyeOptions options;
   options.solver.max_points_per_sweep = 5000;  // all points: 6 unknowns, every point helps
   const LaserHandEyeResult r = CalibrateLaserHandEye(

@@ -1,0 +1,132 @@
+#include "triangulation/sphere_sweeps.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <utility>
+
+#include "core/error.hpp"
+#include "core/io/file_util.hpp"
+#include "core/yaml_fields.hpp"
+#include "triangulation/profile_io.hpp"
+
+namespace lasercell::triangulation {
+
+namespace {
+
+constexpr const char* kFormat = "lasercell.sphere_sweeps";
+constexpr int kVersion = 1;
+
+// The sensor-frame points of one profile by the exact path (the rejected peaks dropped).
+std::vector<Eigen::Vector3d> ProfilePoints(const Triangulator& triangulator,
+                                           std::uint32_t first_column, const Profile& profile) {
+  std::vector<Eigen::Vector3d> all(profile.row_px.size());
+  triangulator.Triangulate(profile.row_px, first_column, all, TriangulationPath::kExact);
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(all.size());
+  for (const Eigen::Vector3d& p : all) {
+    if (p.allFinite()) points.push_back(p);
+  }
+  return points;
+}
+
+}  // namespace
+
+const SphereSweepSet* SphereSweepList::Find(const std::string& name) const {
+  for (const SphereSweepSet& s : sets) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
+std::string SphereSweepListYaml(const SphereSweepList& list) {
+  std::string text = std::string("format: ") + kFormat + "\nversion: " + std::to_string(kVersion) +
+                     "\n# Pose-sweep sets of the vision robot (joints in each profile).\n";
+  for (const SphereSweepSet& set : list.sets) {
+    text += set.name + ":\n";
+    for (const SphereSweepEntry& e : set.sweeps) {
+      text += "  - {profiles_file: " + e.profiles_file +
+              ", aimed_at_sphere: " + std::to_string(e.aimed_at_sphere) + "}\n";
+    }
+  }
+  return text;
+}
+
+SphereSweepList ParseSphereSweepList(const std::string& text, const std::string& name) {
+  yaml::Fields root = yaml::Fields::Parse(text, name);
+  if (!root.Has("format") || !root.Has("version")) {
+    root.Fail(root.Has("format") ? "version" : "format",
+              std::string("is required (a sphere-sweep list has format: ") + kFormat +
+                  ", version: " + std::to_string(kVersion) + ")");
+  }
+  root.ExpectFormat(kFormat, kVersion);
+  SphereSweepList list;
+  for (const auto& item : root.node()) {
+    const std::string key = item.first.as<std::string>();
+    if (key == "format" || key == "version") continue;
+    root.Known(key.c_str());
+    const YAML::Node& seq = item.second;
+    if (!seq.IsSequence() || seq.size() == 0) {
+      root.Fail(key, "must be a non-empty list of {profiles_file, aimed_at_sphere}");
+    }
+    SphereSweepSet set;
+    set.name = key;
+    for (std::size_t i = 0; i < seq.size(); ++i) {
+      yaml::Fields entry(seq[i], root.Path(key) + "[" + std::to_string(i) + "]", name);
+      SphereSweepEntry e;
+      entry.ReadRequired("profiles_file", &e.profiles_file);
+      entry.ReadRequired("aimed_at_sphere", &e.aimed_at_sphere);
+      if (e.aimed_at_sphere < 0) entry.Fail("aimed_at_sphere", "must be >= 0");
+      if (e.profiles_file.empty()) entry.Fail("profiles_file", "must name a profile file");
+      entry.Done();
+      set.sweeps.push_back(std::move(e));
+    }
+    list.sets.push_back(std::move(set));
+  }
+  root.Done();
+  return list;
+}
+
+std::vector<calib::SphereSweep> LoadSphereSweeps(const std::string& path, const std::string& set,
+                                                 const calib::CameraModel& camera,
+                                                 const Eigen::Vector4d& plane_in_sensor,
+                                                 const TriangulatorOptions& options) {
+  const SphereSweepList list = ParseSphereSweepList(io::ReadFileBytes(path), path);
+  const SphereSweepSet* chosen = list.Find(set);
+  if (chosen == nullptr) {
+    std::string names;
+    for (const SphereSweepSet& s : list.sets) names += (names.empty() ? "" : " or ") + s.name;
+    throw FileError(path, "has no sweep set '" + set + "' (try --set " +
+                              (names.empty() ? std::string("eye_in_hand or joint_poses") : names) +
+                              ")");
+  }
+  const Triangulator triangulator(camera, plane_in_sensor, options);
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  std::vector<calib::SphereSweep> sweeps;
+  for (const SphereSweepEntry& e : chosen->sweeps) {
+    std::filesystem::path full = dir / e.profiles_file;
+    if (!std::filesystem::exists(full)) full = dir.parent_path() / e.profiles_file;
+    const ProfileSet profiles = ReadProfiles(full.string());
+    if (profiles.header.joint_count == 0) {
+      throw FileError(full.string(),
+                      "the profiles carry no joint values; joint identification "
+                      "and hand-eye need the robot joints of every profile");
+    }
+    if (static_cast<int>(profiles.header.image_width) != camera.width_px() ||
+        static_cast<int>(profiles.header.image_height) != camera.height_px()) {
+      throw FileError(full.string(), "image size " + std::to_string(profiles.header.image_width) +
+                                         "x" + std::to_string(profiles.header.image_height) +
+                                         " differs from the camera model's");
+    }
+    calib::SphereSweep sweep;
+    sweep.name = e.profiles_file;
+    sweep.sphere = e.aimed_at_sphere;
+    for (const Profile& p : profiles.profiles) {
+      sweep.profiles.push_back(
+          {p.joints_rad, ProfilePoints(triangulator, profiles.header.first_column, p)});
+    }
+    sweeps.push_back(std::move(sweep));
+  }
+  return sweeps;
+}
+
+}  // namespace lasercell::triangulation
