@@ -82,14 +82,14 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
   }
   // A linear sweep placed in a cell frame: target <- sensor (at t0) through static edges.
   const bool placed = options.motion == SweepMotion::kLinear && !options.target_frame.empty();
-  Eigen::Isometry3d target_from_sensor_t0 = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d target_from_sensor = Eigen::Isometry3d::Identity();
   if (placed) {
     if (graph == nullptr) {
       throw InputError("a linear sweep placed in frame '" + options.target_frame +
                        "' needs the cell's frame graph (cell.yaml)");
     }
     CheckTargetFrame(*graph, options.target_frame, options.motion);
-    target_from_sensor_t0 = graph->Transform(options.target_frame, "sensor");
+    target_from_sensor = graph->Transform(options.target_frame, "sensor");
   }
   const std::int64_t t0_ns =
       options.t0_ns ? *options.t0_ns : (count > 0 ? set.profiles.front().timestamp_ns : 0);
@@ -113,7 +113,7 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
     }
     // Two steps (not one composed pose) so a placed sweep is the unplaced one moved, bit for bit.
     if (placed) {
-      for (Eigen::Vector3d& q : points[i]) q = target_from_sensor_t0 * q;
+      for (Eigen::Vector3d& q : points[i]) q = target_from_sensor * q;
     }
   };
   // Per profile into its own slots: the result does not depend on the thread count.

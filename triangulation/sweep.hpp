@@ -8,10 +8,10 @@
 //    the sweep's time t0 (the frame cell.yaml edges to `sensor` name for a linear sweep, e.g. the
 //    handling_base <- sensor edge of `calibrate spheres`); the sensor moves with `velocity_mm_s`
 //    (expressed in that frame), so profile i, exposed at t_i = (timestamp_ns_i - t0_ns) * 1e-9 s,
-//    is placed by sensor_t0_from_sensor_i = Translation(velocity * t_i) (offset per profile =
+//    is placed by sensor(t0) <- sensor(t_i) = Translation(velocity * t_i) (offset per profile =
 //    timestamp x velocity). With a `target_frame` the sweep is then placed in that frame of a
 //    FrameGraph through static edges only: target_from_sensor_i = graph.Transform(target_frame,
-//    "sensor") * sensor_t0_from_sensor_i. Such an edge to `sensor` holds for the one trajectory
+//    "sensor") * Translation(velocity * t_i). Such an edge to `sensor` holds for the one trajectory
 //    it was measured on (the sensor at t0 of that sweep), not for the sensor in general.
 //  - kRobot: the sensor rides a robot whose joints each profile records; the sweep frame is
 //    `target_frame` of a FrameGraph and sweep_from_sensor_i = graph.Transform(target_frame,
