@@ -19,7 +19,15 @@ std::string Num(double v) {
 }
 
 std::string Vec(const Eigen::Vector3d& v) {
-  return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
+  // Appends (not "[" + std::string): GCC 12 -O2 reports a false -Wrestrict on the latter.
+  std::string s = "[";
+  s += Num(v.x());
+  s += ", ";
+  s += Num(v.y());
+  s += ", ";
+  s += Num(v.z());
+  s += "]";
+  return s;
 }
 
 std::string Pose(const Eigen::Isometry3d& p) { return PoseToFileNotation(p); }
