@@ -21,10 +21,7 @@ using lasercell::triangulation::Triangulator;
 const Triangulator& SimTriangulator() {
   static const Triangulator tri = [] {
     const auto sensor = lasercell::datasets::MakeSensor({});
-    const auto v = sensor.camera.intrinsics().MrcalVector();
-    lasercell::calib::CameraModel camera("LENSMODEL_OPENCV8",
-                                         std::vector<double>(v.begin(), v.end()), 1024, 1024);
-    return Triangulator(camera, sensor.laser.Coefficients());
+    return Triangulator(sensor.camera, sensor.laser.Coefficients());
   }();
   return tri;
 }
@@ -75,7 +72,7 @@ BENCHMARK(BM_BuildTriangulator)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 // Peak detection on a 1024 x 1024 8-bit stripe image (per image = per profile).
 void BM_DetectPeaks(benchmark::State& state) {
-  const lasercell::datasets::ImageRenderer renderer{lasercell::datasets::CameraModel{}};
+  const lasercell::datasets::ImageRenderer renderer{lasercell::datasets::MakeCameraModel()};
   lasercell::datasets::ExposureTruth ex;
   const std::vector<float> rows = ProfileRows();
   ex.row_px.assign(rows.begin(), rows.end());

@@ -320,7 +320,7 @@ HandEyeImageSet PlanHandEyeImages(const SimConfig& config, const CellTruth& trut
       SensorLookingDown(truth.sensor.laser, Eigen::Vector3d::UnitX());
   const std::vector<std::vector<double>> seeds = Ur5Seeds();
   const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
-  const CameraModel& camera = truth.sensor.camera;
+  const calib::CameraModel& camera = truth.sensor.camera;
   const double margin_px = 25.0;
   Rng rng(seed);
   for (int i = 0; i < options.images; ++i) {
@@ -354,10 +354,10 @@ HandEyeImageSet PlanHandEyeImages(const SimConfig& config, const CellTruth& trut
       bool inside = true;
       for (const Eigen::Vector3d& p : corners) {
         const Eigen::Vector3d pc = im.camera_from_board * p;
-        const auto px = pc.z() > 0 ? camera.Project(pc) : std::nullopt;
+        const auto px = pc.z() > 0 ? ProjectInView(camera, pc) : std::nullopt;
         if (!px || px->x() < margin_px || px->y() < margin_px ||
-            px->x() > camera.intrinsics().width_px - 1 - margin_px ||
-            px->y() > camera.intrinsics().height_px - 1 - margin_px) {
+            px->x() > camera.width_px() - 1 - margin_px ||
+            px->y() > camera.height_px() - 1 - margin_px) {
           inside = false;
           break;
         }

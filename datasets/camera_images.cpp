@@ -116,19 +116,17 @@ void ImageRenderOptions::Check(const std::string& what) const {
   }
 }
 
-ImageRenderer::ImageRenderer(const CameraModel& camera) : camera_(camera) {
-  const int w = camera.intrinsics().width_px;
-  const int h = camera.intrinsics().height_px;
+ImageRenderer::ImageRenderer(const calib::CameraModel& camera) : camera_(camera) {
+  const int w = camera.width_px();
+  const int h = camera.height_px();
   std::vector<mrcal_point2_t> q;
   q.reserve(static_cast<std::size_t>(w + 1) * (h + 1));
   for (int y = 0; y <= h; ++y) {
     for (int x = 0; x <= w; ++x) q.push_back({{x - 0.5, y - 0.5}});
   }
   std::vector<mrcal_point3_t> v(q.size());
-  mrcal_lensmodel_t lens;
-  lens.type = MRCAL_LENSMODEL_OPENCV8;
-  const std::array<double, 12> intrinsics = camera.intrinsics().MrcalVector();
-  if (!mrcal_unproject(v.data(), q.data(), static_cast<int>(q.size()), &lens, intrinsics.data())) {
+  if (!mrcal_unproject(v.data(), q.data(), static_cast<int>(q.size()), &camera.mrcal_lensmodel(),
+                       camera.intrinsics().data())) {
     throw InternalError("mrcal_unproject failed for the pixel-corner grid");
   }
   corner_rays_.resize(q.size());
@@ -143,8 +141,8 @@ GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& board,
                                           std::uint64_t seed) const {
   board.Check();
   options.Check();
-  const int w = camera_.intrinsics().width_px;
-  const int h = camera_.intrinsics().height_px;
+  const int w = camera_.width_px();
+  const int h = camera_.height_px();
   // (x, y, 1) ~ [r1 r2 t] (bx, by, 1): the board plane's homography and its inverse.
   Eigen::Matrix3d hom;
   hom << camera_from_board.linear().col(0), camera_from_board.linear().col(1),
@@ -223,8 +221,8 @@ GrayImage ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
                                          const ImageRenderOptions& options,
                                          std::uint64_t seed) const {
   options.Check();
-  const int w = camera_.intrinsics().width_px;
-  const int h = camera_.intrinsics().height_px;
+  const int w = camera_.width_px();
+  const int h = camera_.height_px();
   LASERCELL_CHECK(static_cast<int>(exposure.row_px.size()) == w, "exposure width matches camera");
   std::vector<float> img(static_cast<std::size_t>(w) * h, static_cast<float>(options.ambient));
   const auto stripe = [&](int x, double row, double width_px, double intensity) {
@@ -250,12 +248,12 @@ GrayImage ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
 }
 
 std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board,
-                                                   const CameraModel& camera, int count,
+                                                   const calib::CameraModel& camera, int count,
                                                    std::uint64_t seed) {
   board.Check();
   Rng rng(seed);
-  const int w = camera.intrinsics().width_px;
-  const int h = camera.intrinsics().height_px;
+  const int w = camera.width_px();
+  const int h = camera.height_px();
   const double sx = board.squares_x * board.square_mm;
   const double sy = board.squares_y * board.square_mm;
   const Eigen::Vector3d center(sx / 2, sy / 2, 0);
@@ -287,11 +285,11 @@ std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board
     pose.translation() = distance * camera.Unproject(pixel) - r * center;
     bool ok = true;
     for (const Eigen::Vector3d& p : plate) {
-      const auto q = camera.Project(pose * p);
+      const auto q = ProjectInView(camera, pose * p);
       ok = ok && q && camera.InImage(*q);
     }
     for (const Eigen::Vector3d& p : corners) {
-      const auto q = camera.Project(pose * p);
+      const auto q = ProjectInView(camera, pose * p);
       ok = ok && q && q->x() >= 25 && q->y() >= 25 && q->x() <= w - 26 && q->y() <= h - 26;
     }
     if (ok) poses.push_back(pose);

@@ -62,7 +62,7 @@ using lasercell::GrayImage;
 /// Renders images through one camera. Construction unprojects every pixel corner once.
 class ImageRenderer {
  public:
-  explicit ImageRenderer(const CameraModel& camera);
+  explicit ImageRenderer(const calib::CameraModel& camera);
 
   /// The chessboard at camera_from_board; noise from `seed`.
   GrayImage RenderChessboard(const ChessboardTarget& board,
@@ -75,17 +75,17 @@ class ImageRenderer {
   GrayImage RenderLaserLine(const ExposureTruth& exposure, const ImageRenderOptions& options,
                             std::uint64_t seed) const;
 
-  const CameraModel& camera() const { return camera_; }
+  const calib::CameraModel& camera() const { return camera_; }
 
  private:
-  CameraModel camera_;
+  calib::CameraModel camera_;
   std::vector<Eigen::Vector2d> corner_rays_;  // normalized (x/z, y/z) at pixel corners
 };
 
 /// `count` varied board poses (distance 550..850 mm, tilt 5..40 deg, any yaw, spread over the
 /// image) with the whole plate in view and every inner corner >= 25 px inside the image.
 std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board,
-                                                   const CameraModel& camera, int count,
+                                                   const calib::CameraModel& camera, int count,
                                                    std::uint64_t seed);
 
 /// PNG bytes of an image (OpenCV imgcodecs; deterministic).

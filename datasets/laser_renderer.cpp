@@ -1,9 +1,5 @@
 #include "datasets/laser_renderer.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -13,6 +9,7 @@
 #include <optional>
 
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 #include "datasets/rng.hpp"
 
 namespace lasercell::datasets {
@@ -106,9 +103,9 @@ LaserRenderer::LaserRenderer(const Scene& scene, const SensorModel& sensor,
 }
 
 ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sensor) const {
-  const CameraModel& camera = sensor_.camera;
+  const calib::CameraModel& camera = sensor_.camera;
   const LaserPlane& laser = sensor_.laser;
-  const int width = camera.intrinsics().width_px;
+  const int width = camera.width_px();
   const Eigen::Isometry3d sensor_from_scene = scene_from_sensor.inverse();
   const Eigen::Matrix3d& rot = scene_from_sensor.linear();
   const Eigen::Vector3d emitter = scene_from_sensor * laser.origin_in_sensor;
@@ -129,7 +126,7 @@ ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sen
     return rot * laser.RayDirection(alpha);
   };
   const auto project = [&](const Eigen::Vector3d& p_in_scene) {
-    return camera.Project(sensor_from_scene * p_in_scene);
+    return ProjectInView(camera, sensor_from_scene * p_in_scene);
   };
 
   // 1. Cast the fan.
@@ -243,7 +240,7 @@ ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sen
         continue;
       }
       const Eigen::Vector3d p_in_sensor = sensor_from_scene * p;
-      const double spread = camera.intrinsics().fy_px * options_.sheet_thickness_mm * cos_view /
+      const double spread = camera.intrinsics()[1] * options_.sheet_thickness_mm * cos_view /
                             (std::max(cos_incidence, 0.05) * p_in_sensor.z());
       out.row_px[c] = pixel.y();
       out.intensity[c] = intensity;
@@ -262,8 +259,8 @@ void LaserRenderer::AddReflections(const std::vector<FanSampleRef>& fan,
                                    const Eigen::Vector3d& camera_center,
                                    const Eigen::Isometry3d& sensor_from_scene,
                                    ExposureTruth& out) const {
-  const CameraModel& camera = sensor_.camera;
-  const int width = camera.intrinsics().width_px;
+  const calib::CameraModel& camera = sensor_.camera;
+  const int width = camera.width_px();
   const double cos_view_min = std::cos(options_.max_view_angle_deg * kDegToRad);
   out.reflection_row_px.assign(width, kNaN);
   out.reflection_intensity.assign(width, 0.0);
@@ -284,7 +281,7 @@ void LaserRenderer::AddReflections(const std::vector<FanSampleRef>& fan,
     const double camera_distance = to_camera.norm();
     const Eigen::Vector3d view = to_camera / camera_distance;
     if (qn.dot(view) <= cos_view_min) continue;
-    const auto pixel = camera.Project(sensor_from_scene * q->point);
+    const auto pixel = ProjectInView(camera, sensor_from_scene * q->point);
     if (!pixel || !camera.InImage(*pixel)) continue;
     const int c = static_cast<int>(std::lround(pixel->x()));
     if (c < 0 || c >= width) continue;
@@ -332,7 +329,7 @@ triangulation::Profile LaserRenderer::ApplyNoise(const ExposureTruth& truth,
   const auto columns = static_cast<std::uint32_t>(truth.row_px.size());
   triangulation::Profile p = triangulation::Profile::Empty(columns);
   Rng rng(seed);
-  const double rows_max = sensor_.camera.intrinsics().height_px - 1;
+  const double rows_max = sensor_.camera.height_px() - 1;
   // Speckle is a property of the whole lit line of one exposure: drawn for every column (lit or
   // not) from its own stream, so it neither shifts nor depends on the white noise draws.
   std::vector<double> speckle_row, speckle_intensity;
@@ -389,11 +386,11 @@ SweepResult RenderSweep(const LaserRenderer& renderer,
                         const std::string& robot, int threads, const ProgressCallback& progress) {
   timing.Check();
   const int n = timing.profiles;
-  const auto& intrinsics = renderer.sensor().camera.intrinsics();
+  const calib::CameraModel& camera = renderer.sensor().camera;
   SweepResult result;
   triangulation::ProfileHeader& header = result.profiles.header;
-  header.image_width = static_cast<std::uint32_t>(intrinsics.width_px);
-  header.image_height = static_cast<std::uint32_t>(intrinsics.height_px);
+  header.image_width = static_cast<std::uint32_t>(camera.width_px());
+  header.image_height = static_cast<std::uint32_t>(camera.height_px());
   header.first_column = 0;
   header.columns = header.image_width;
   header.joint_count = joint_count;
@@ -435,13 +432,11 @@ SweepResult RenderSweep(const LaserRenderer& renderer,
     }
   };
 
-  const int max_threads = threads > 0 ? threads : tbb::this_task_arena::max_concurrency();
-  tbb::task_arena arena(max_threads);
-  arena.execute([&] {
-    tbb::parallel_for(tbb::blocked_range<int>(0, n, 4), [&](const tbb::blocked_range<int>& r) {
-      for (int i = r.begin(); i < r.end(); ++i) render_one(i);
-    });
-  });
+  // Profile i writes slot i only (its own noise stream): the same sweep for any thread count.
+  ParallelForChunks(threads, static_cast<std::size_t>(n), 4,
+                    [&](std::size_t begin, std::size_t end) {
+                      for (std::size_t i = begin; i < end; ++i) render_one(static_cast<int>(i));
+                    });
   for (std::size_t v : valid) result.valid_peaks += v;
   return result;
 }

@@ -18,12 +18,6 @@ namespace lasercell::datasets {
 
 namespace {
 
-mrcal_lensmodel_t Opencv8() {
-  mrcal_lensmodel_t lens;
-  lens.type = MRCAL_LENSMODEL_OPENCV8;
-  return lens;
-}
-
 std::string Number(double v) {
   char buf[64];
   const auto r = std::to_chars(buf, buf + sizeof(buf), v);
@@ -72,37 +66,25 @@ void CameraIntrinsics::Check(const std::string& what) const {
   }
 }
 
-CameraModel::CameraModel(const CameraIntrinsics& intrinsics)
-    : intrinsics_(intrinsics), mrcal_intrinsics_(intrinsics.MrcalVector()) {}
+calib::CameraModel MakeCameraModel(const CameraIntrinsics& intrinsics) {
+  const std::array<double, 12> v = intrinsics.MrcalVector();
+  return calib::CameraModel("LENSMODEL_OPENCV8", std::vector<double>(v.begin(), v.end()),
+                            intrinsics.width_px, intrinsics.height_px);
+}
 
-std::optional<Eigen::Vector2d> CameraModel::Project(const Eigen::Vector3d& p) const {
+std::optional<Eigen::Vector2d> ProjectInView(const calib::CameraModel& camera,
+                                             const Eigen::Vector3d& p) {
   if (!(p.z() > 1e-9)) return std::nullopt;
   // Outside ~70 deg off-axis the rational model folds back; treat as not imaged.
   if (p.head<2>().norm() > 3.0 * p.z()) return std::nullopt;
-  const mrcal_lensmodel_t lens = Opencv8();
-  const mrcal_point3_t pp = {{p.x(), p.y(), p.z()}};
-  mrcal_point2_t q;
-  if (!mrcal_project(&q, nullptr, nullptr, &pp, 1, &lens, mrcal_intrinsics_.data())) {
+  Eigen::Vector2d pixel;
+  try {
+    pixel = camera.Project(p);
+  } catch (const InternalError&) {  // mrcal_project failed
     return std::nullopt;
   }
-  const Eigen::Vector2d pixel(q.x, q.y);
   if (!pixel.allFinite()) return std::nullopt;
   return pixel;
-}
-
-Eigen::Vector3d CameraModel::Unproject(const Eigen::Vector2d& pixel) const {
-  const mrcal_lensmodel_t lens = Opencv8();
-  const mrcal_point2_t q = {{pixel.x(), pixel.y()}};
-  mrcal_point3_t v;
-  if (!mrcal_unproject(&v, &q, 1, &lens, mrcal_intrinsics_.data())) {
-    throw InternalError("mrcal_unproject failed");
-  }
-  return Eigen::Vector3d(v.x, v.y, v.z).normalized();
-}
-
-bool CameraModel::InImage(const Eigen::Vector2d& q) const {
-  return q.x() >= 0 && q.y() >= 0 && q.x() <= intrinsics_.width_px - 1 &&
-         q.y() <= intrinsics_.height_px - 1;
 }
 
 Eigen::Vector3d LaserPlane::RayDirection(double alpha_rad) const {
@@ -132,7 +114,7 @@ void SensorOptions::Check(const std::string& what) const {
 
 SensorModel MakeSensor(const SensorOptions& options) {
   options.Check();
-  SensorModel s{CameraModel(options.camera), LaserPlane{}, {0, 0}};
+  SensorModel s{MakeCameraModel(options.camera), LaserPlane{}, {0, 0}};
   const double b = options.baseline_mm;
   const double d = options.standoff_mm;
   const double len = std::hypot(b, d);

@@ -19,6 +19,8 @@
 #include <string>
 #include <vector>
 
+#include "calib/camera_model.hpp"
+
 namespace lasercell::datasets {
 
 /// Camera intrinsics in mrcal's LENSMODEL_OPENCV8 parametrisation.
@@ -38,25 +40,16 @@ struct CameraIntrinsics {
   void Check(const std::string& what = "camera") const;
 };
 
-/// Projection and unprojection through mrcal.
-class CameraModel {
- public:
-  /// The default camera (CameraIntrinsics defaults).
-  CameraModel() : CameraModel(CameraIntrinsics{}) {}
-  explicit CameraModel(const CameraIntrinsics& intrinsics);
-  const CameraIntrinsics& intrinsics() const { return intrinsics_; }
-  /// Pixel of a point in the camera frame; nullopt when it is not in front of the camera
-  /// (z <= 1e-9 mm) or projects outside a generous margin around the image.
-  std::optional<Eigen::Vector2d> Project(const Eigen::Vector3d& p_in_camera) const;
-  /// Unit ray direction (camera frame) of a pixel, via mrcal_unproject.
-  Eigen::Vector3d Unproject(const Eigen::Vector2d& pixel) const;
-  /// True when the pixel lies on the sensor: 0 <= u <= width-1, 0 <= v <= height-1.
-  bool InImage(const Eigen::Vector2d& pixel) const;
+/// The camera of these intrinsics: calib::CameraModel with mrcal LENSMODEL_OPENCV8 (the one
+/// camera wrapper of lasercell; the simulator renders through it). InputError when a value is
+/// not finite or the imager size is not positive (CameraIntrinsics::Check is stricter).
+calib::CameraModel MakeCameraModel(const CameraIntrinsics& intrinsics = {});
 
- private:
-  CameraIntrinsics intrinsics_;
-  std::array<double, 12> mrcal_intrinsics_;
-};
+/// The simulator's projection: the pixel of a point in the camera frame, or nullopt when it is
+/// not in front of the camera (z <= 1e-9 mm), more than atan(3) (~72 deg) off the optical axis
+/// (where the rational OPENCV8 model folds back) or does not project to a finite pixel.
+std::optional<Eigen::Vector2d> ProjectInView(const calib::CameraModel& camera,
+                                             const Eigen::Vector3d& p_in_camera);
 
 /// The laser's fan plane in the sensor frame.
 struct LaserPlane {
@@ -86,7 +79,7 @@ struct SensorOptions {
 
 /// Camera + laser.
 struct SensorModel {
-  CameraModel camera;
+  calib::CameraModel camera = MakeCameraModel();  ///< mrcal LENSMODEL_OPENCV8.
   LaserPlane laser;
   /// The measuring range along the laser's central ray that the image rows cover at the
   /// central column, mm from the emitter: [near, far] (far may be +inf).

@@ -1,8 +1,5 @@
 #include "datasets/simulate.hpp"
 
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -14,12 +11,14 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "core/parallel.hpp"
 #include "core/se3.hpp"
 #include "datasets/calibration_captures.hpp"
 #include "datasets/camera_images.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/rng.hpp"
 #include "datasets/robots.hpp"
+#include "datasets/simulate_records.hpp"
 #include "datasets/stl.hpp"
 #include "triangulation/profile_io.hpp"
 #include "triangulation/sphere_sweeps.hpp"
@@ -28,8 +27,11 @@ namespace lasercell::datasets {
 
 namespace {
 
+using sim_text::Num;
+using sim_text::Pose;
+using sim_text::Vec;
+
 constexpr double kDegToRad = std::numbers::pi / 180.0;
-constexpr double kRadToDeg = 180.0 / std::numbers::pi;
 // Random streams (rng.hpp StreamSeed): one per purpose, so adding a capture never changes the
 // others.
 constexpr std::uint64_t kRobotStream = 0x0B07;
@@ -56,17 +58,6 @@ Eigen::Isometry3d YawPose(const Eigen::Vector3d& t, double yaw_deg) {
   return p;
 }
 
-// Shortest round-trip text; infinities in YAML spelling.
-std::string Num(double v) {
-  if (std::isinf(v)) return v > 0 ? ".inf" : "-.inf";
-  return FormatDouble(v);
-}
-
-std::string Vec(const Eigen::Vector3d& v) {
-  return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
-}
-
-std::string Pose(const Eigen::Isometry3d& p) { return PoseToFileNotation(p); }
 
 StaticEdge Edge(const std::string& parent, const std::string& child,
                 const Eigen::Isometry3d& parent_from_child, const std::string& note) {
@@ -151,140 +142,6 @@ CaptureReport WriteSweep(const SweepJob& job, const SweepResult& result, const S
   return r;
 }
 
-std::string LinearSweepTruth(const LinearSweep& sweep, const Eigen::Isometry3d& hb_from_cell,
-                             const SimConfig& config) {
-  std::ostringstream o;
-  o << "    sweep:\n      type: linear\n"
-    << "      t0_ns: " << config.timing.start_ns << "\n"
-    << "      cell_from_sensor_at_t0: " << Pose(sweep.cell_from_sensor_start) << "\n"
-    << "      velocity_mm_s_in_cell: " << Vec(sweep.velocity_mm_s) << "\n"
-    << "      handling_base_from_sensor_at_t0: " << Pose(hb_from_cell * sweep.cell_from_sensor_start)
-    << "\n      velocity_mm_s_in_handling_base: " << Vec(hb_from_cell.linear() * sweep.velocity_mm_s)
-    << "\n";
-  return o.str();
-}
-
-// What a cell with a linear axis knows of its sweeps (no truth): when the motion starts and its
-// velocity in the sensor frame (the axis direction as the sensor is mounted on it, and the
-// commanded speed). `lasercell scan triangulate --velocity-mm-s` takes the latter.
-std::string LinearSweepRecord(const LinearSweep& sweep, const SimConfig& config) {
-  const Eigen::Vector3d v_sensor = sweep.cell_from_sensor_start.linear().transpose() * sweep.velocity_mm_s;
-  std::ostringstream o;
-  o << "format: lasercell.linear_sweep\nversion: 1\n"
-    << "# Every linear capture (profiles/plane_*, spheres, seat_*) uses this motion: the sensor\n"
-    << "# frame at t0 moves with constant velocity; points of the profile stamped t_ns lie at\n"
-    << "# p_in_sensor_t0 = p_in_sensor + velocity_mm_s_in_sensor * (t_ns - t0_ns) * 1e-9.\n"
-    << "t0_ns: " << config.timing.start_ns << "\n"
-    << "velocity_mm_s_in_sensor: " << Vec(v_sensor) << "\n"
-    << "speed_mm_s: " << Num(sweep.velocity_mm_s.norm()) << "\n";
-  return o.str();
-}
-
-std::string ExposureTimesTruth(const SweepResult& result, const SimConfig& config) {
-  if (config.timing.timestamp_noise_s <= 0) return "";  // timestamps are the true times
-  std::ostringstream o;
-  o << "      true_exposure_ns: [";
-  for (std::size_t i = 0; i < result.exposure_time_s.size(); ++i) {
-    o << (i ? ", " : "")
-      << config.timing.start_ns + static_cast<std::int64_t>(std::llround(result.exposure_time_s[i] * 1e9));
-  }
-  o << "]\n";
-  return o.str();
-}
-
-std::string CaptureHeader(const CaptureReport& r) {
-  return "  - name: " + r.name + "\n    kind: " + r.kind + "\n    profiles_file: " +
-         r.profiles_file + "\n    profiles: " + std::to_string(r.profiles) +
-         "\n    valid_peaks: " + std::to_string(r.valid_peaks) + "\n";
-}
-
-struct SeatCapture {
-  std::string name;
-  SeatPlacement placement;
-};
-
-std::string SeatTruth(const SeatCapture& s, const CellTruth& truth,
-                      const Eigen::Isometry3d& hb_from_cell) {
-  const Eigen::Isometry3d hb_from_part = hb_from_cell * s.placement.cell_from_part;
-  std::ostringstream o;
-  o << "    part: seat\n    part_frame: " << s.name << "\n"
-    << "    placement: {shift_x_mm: " << Num(s.placement.shift_x_mm)
-    << ", shift_y_mm: " << Num(s.placement.shift_y_mm)
-    << ", tilt_x_deg: " << Num(s.placement.tilt_x_rad * kRadToDeg)
-    << ", tilt_y_deg: " << Num(s.placement.tilt_y_rad * kRadToDeg)
-    << ", yaw_deg: " << Num(s.placement.yaw_rad * kRadToDeg) << "}\n"
-    << "    cell_from_part: " << Pose(s.placement.cell_from_part) << "\n"
-    << "    handling_base_from_part: " << Pose(hb_from_part) << "\n"
-    << "    hole_center_in_handling_base: " << Vec(hb_from_part * truth.seat.hole_center_in_part)
-    << "\n    hole_axis_in_handling_base: "
-    << Vec(hb_from_part.linear() * truth.seat.hole_axis_in_part) << "\n"
-    << "    hole_center_in_cell: " << Vec(s.placement.cell_from_part * truth.seat.hole_center_in_part)
-    << "\n";
-  return o.str();
-}
-
-std::string SensorTruth(const CellTruth& t, const SimConfig& c) {
-  const LaserPlane& l = t.sensor.laser;
-  const Eigen::Vector4d coeff = l.Coefficients();
-  const auto& cam = c.sensor.camera;
-  std::ostringstream o;
-  o << "format: lasercell.sim_sensor\nversion: 1\n"
-    << "# The sensor frame is the camera frame (mrcal convention: x columns, y rows, z optical\n"
-    << "# axis); the laser plane is n . p + d = 0 in it, mm.\n"
-    << "sensor_from_camera: " << Pose(Eigen::Isometry3d::Identity()) << "\n"
-    << "vision_flange_from_sensor: " << Pose(t.vision_flange_from_sensor) << "\n"
-    << "laser_plane_in_sensor:\n"
-    << "  normal: " << Vec(l.normal_in_sensor) << "\n"
-    << "  d_mm: " << Num(coeff[3]) << "\n"
-    << "  point_mm: " << Vec(l.origin_in_sensor) << "\n"
-    << "laser:\n  emitter_in_sensor_mm: " << Vec(l.origin_in_sensor) << "\n"
-    << "  central_ray_in_sensor: " << Vec(l.center_in_sensor) << "\n"
-    << "  fan_angle_rad: " << Num(l.fan_angle_rad) << "\n"
-    << "  wavelength_nm: 660\n"
-    << "measuring_range_along_laser_mm: [" << Num(t.sensor.central_range_mm[0]) << ", "
-    << Num(t.sensor.central_range_mm[1]) << "]\n"
-    << "camera:\n  model_file: camera.cameramodel\n  lensmodel: LENSMODEL_OPENCV8\n"
-    << "  imagersize: [" << cam.width_px << ", " << cam.height_px << "]\n"
-    << "  intrinsics: [";
-  const auto v = cam.MrcalVector();
-  for (std::size_t i = 0; i < v.size(); ++i) o << (i ? ", " : "") << Num(v[i]);
-  o << "]\n  pixel_pitch_um: 10.6\n  focal_length_mm: " << Num(cam.fx_px * 10.6e-3) << "\n";
-  o << "noise:\n  row_sigma_px: " << Num(c.render.row_sigma_px) << "\n  intensity_sigma: "
-    << Num(c.render.intensity_sigma) << "\n  dropout_probability: "
-    << Num(c.render.dropout_probability) << "\n  speckle_sigma_px: "
-    << Num(c.render.speckle_sigma_px) << "\n  speckle_correlation_px: "
-    << Num(c.render.speckle_correlation_px) << "\n  speckle_intensity_sigma: "
-    << Num(c.render.speckle_intensity_sigma) << "\n  min_intensity: " << Num(c.render.min_intensity)
-    << "\n  timing_jitter_s: " << Num(c.timing.jitter_s) << "\n  timestamp_noise_s: "
-    << Num(c.timing.timestamp_noise_s) << "\n";
-  return o.str();
-}
-
-std::string RobotsTruth(const CellTruth& t) {
-  std::ostringstream o;
-  o << "format: lasercell.sim_robots\nversion: 1\n"
-    << "vision_robot:\n  model: UR5 (core NominalUr5, standard DH)\n"
-    << "  # The true robot = nominal DH table + these offsets added to every joint angle.\n"
-    << "  joint_offsets_rad: [";
-  for (std::size_t i = 0; i < t.joint_offsets_rad.size(); ++i) {
-    o << (i ? ", " : "") << Num(t.joint_offsets_rad[i]);
-  }
-  o << "]\n  joint_offsets_deg: [";
-  for (std::size_t i = 0; i < t.joint_offsets_rad.size(); ++i) {
-    o << (i ? ", " : "") << Num(t.joint_offsets_rad[i] * kRadToDeg);
-  }
-  o << "]\n  # ... and these errors added to the nominal a_i and d_i (mm).\n  dh_a_errors_mm: [";
-  for (std::size_t i = 0; i < t.dh_a_errors_mm.size(); ++i) {
-    o << (i ? ", " : "") << Num(t.dh_a_errors_mm[i]);
-  }
-  o << "]\n  dh_d_errors_mm: [";
-  for (std::size_t i = 0; i < t.dh_d_errors_mm.size(); ++i) {
-    o << (i ? ", " : "") << Num(t.dh_d_errors_mm[i]);
-  }
-  o << "]\nhandling_robot:\n  model: Nachi SC15F stand-in (datasets ApproximateNachiSc15f)\n";
-  return o.str();
-}
-
 TriangleMesh SphereTargetsMesh(const CellTruth& truth, const SimConfig& config) {
   const Scene scene = MakeSphereScene(truth.layout, config.spheres);
   MeshPart all;
@@ -320,17 +177,10 @@ void RunSeats(const SimConfig& config, const CellTruth& truth,
         {seats[i].name, "seat", "SimConfig.seats.* (placement " + std::to_string(i) + ")"},
         result, config, out);
     report.captures.push_back(r);
-    captures_yaml += CaptureHeader(r) + LinearSweepTruth(sweep, hb_from_cell, config) +
-                     ExposureTimesTruth(result, config) + SeatTruth(seats[i], truth, hb_from_cell);
+    captures_yaml += CaptureHeaderYaml(r) + LinearSweepTruthYaml(sweep, hb_from_cell, config) +
+                     ExposureTimesTruthYaml(result, config) + SeatTruthYaml(seats[i], truth, hb_from_cell);
     ReportProgress(progress, "seats", static_cast<double>(i + 1) / seats.size());
   }
-}
-
-// Runs f(i) for i in [0, n) on `threads` threads (<= 0: all cores).
-template <typename F>
-void ParallelFor(int n, int threads, F&& f) {
-  tbb::task_arena arena(threads > 0 ? threads : tbb::this_task_arena::max_concurrency());
-  arena.execute([&] { tbb::parallel_for(0, n, [&](int i) { f(i); }); });
 }
 
 ChessboardTarget BoardOf(const SimConfig& config) {
@@ -343,14 +193,17 @@ ChessboardTarget BoardOf(const SimConfig& config) {
 void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output& out,
                          int threads) {
   const ChessboardTarget board = BoardOf(config);
-  const CameraModel& camera = truth.sensor.camera;
+  const calib::CameraModel& camera = truth.sensor.camera;
   const ImageRenderer renderer(camera);
   const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(
       board, camera, config.chessboard_images, StreamSeed(config.seed, kChessboardStream));
   std::vector<std::string> pngs(poses.size());
-  ParallelFor(static_cast<int>(poses.size()), threads, [&](int i) {
-    pngs[i] = EncodePng(renderer.RenderChessboard(
-        board, poses[i], config.images, StreamSeed(config.seed, kChessboardStream + 1 + i)));
+  // One image per index (its own noise stream): the same files for any thread count.
+  ParallelForChunks(threads, poses.size(), 1, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      pngs[i] = EncodePng(renderer.RenderChessboard(
+          board, poses[i], config.images, StreamSeed(config.seed, kChessboardStream + 1 + i)));
+    }
   });
   std::ostringstream o;
   o << "format: lasercell.sim_chessboard\nversion: 1\n"
@@ -370,7 +223,7 @@ void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output
       << "\n    corners_px: [";
     bool first = true;
     for (const Eigen::Vector3d& p : board.InnerCorners()) {
-      const auto q = camera.Project(poses[i] * p);
+      const auto q = ProjectInView(camera, poses[i] * p);
       o << (first ? "" : ", ") << "[" << Num(q->x()) << ", " << Num(q->y()) << "]";
       first = false;
     }
@@ -385,10 +238,12 @@ void RunHandEyeImages(const SimConfig& config, const CellTruth& truth, Output& o
       PlanHandEyeImages(config, truth, board, StreamSeed(config.seed, kHandEyeImageStream));
   const ImageRenderer renderer(truth.sensor.camera);
   std::vector<std::string> pngs(set.images.size());
-  ParallelFor(static_cast<int>(set.images.size()), threads, [&](int i) {
-    pngs[i] = EncodePng(renderer.RenderChessboard(
-        board, set.images[i].camera_from_board, config.images,
-        StreamSeed(config.seed, kHandEyeImageStream + 1 + static_cast<std::uint64_t>(i))));
+  ParallelForChunks(threads, set.images.size(), 1, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      pngs[i] = EncodePng(renderer.RenderChessboard(
+          board, set.images[i].camera_from_board, config.images,
+          StreamSeed(config.seed, kHandEyeImageStream + 1 + static_cast<std::uint64_t>(i))));
+    }
   });
   for (std::size_t i = 0; i < pngs.size(); ++i) out.Write(HandEyeImageFile(i), pngs[i]);
   out.Write("records/hand_eye_images.yaml", HandEyeImagesRecordYaml(board, set));
@@ -476,8 +331,8 @@ void RunPoseSweeps(const SimConfig& config, const CellTruth& truth,
         config, out);
     report.captures.push_back(r);
     records.sets.back().sweeps.push_back({r.profiles_file, plans[i].sphere});
-    captures_yaml += CaptureHeader(r) + PoseSweepTruthYaml(config, truth, plans[i]) +
-                     ExposureTimesTruth(result, config);
+    captures_yaml += CaptureHeaderYaml(r) + PoseSweepTruthYaml(config, truth, plans[i]) +
+                     ExposureTimesTruthYaml(result, config);
     ReportProgress(progress, set, static_cast<double>(i + 1) / plans.size());
   }
 }
@@ -492,8 +347,8 @@ void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
   }
   out.Write("truth/cell.yaml", FrameGraphToYaml(graph));
   out.Write("truth/camera.cameramodel", MrcalCameraModelText(config.sensor.camera));
-  out.Write("truth/sensor.yaml", SensorTruth(truth, config));
-  out.Write("truth/robots.yaml", RobotsTruth(truth));
+  out.Write("truth/sensor.yaml", SensorTruthYaml(truth, config));
+  out.Write("truth/robots.yaml", RobotsTruthYaml(truth));
   out.Write("truth/sim_config.yaml", SimConfigToYaml(config));
   if (config.write_meshes) {
     out.WriteMesh("seat", truth.seat.part.mesh);
@@ -502,15 +357,97 @@ void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
   }
 }
 
-std::string CapturesPreamble(const SimConfig& config, const CellTruth& truth) {
+// The white plane at every planes.heights_mm: profiles and captures.yaml entries.
+void RunPlanes(const SimConfig& config, const CellTruth& truth, const LinearSweep& sweep,
+               const Eigen::Isometry3d& hb_from_cell, Output& out, SimulationReport& report,
+               std::string& captures_yaml, const ProgressCallback& progress, int threads) {
+  for (std::size_t i = 0; i < config.plane_heights_mm.size(); ++i) {
+    const double h = config.plane_heights_mm[i];
+    const Scene scene = MakePlaneScene(truth.layout, h, config.plane_size_mm);
+    const LaserRenderer renderer(scene, truth.sensor, config.render);
+    const SweepResult result = RenderSweep(
+        renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
+        StreamSeed(config.seed, kPlaneStream + i), 0, "", threads);
+    const std::string name = "plane_" + std::to_string(i);
+    const CaptureReport r = WriteSweep(
+        {name, "white_plane", "SimConfig.planes.heights_mm[" + std::to_string(i) + "]"}, result,
+        config, out);
+    report.captures.push_back(r);
+    const Eigen::Vector3d n_hb = hb_from_cell.linear() * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d p_hb = hb_from_cell * Eigen::Vector3d(0, 0, h);
+    captures_yaml += CaptureHeaderYaml(r) + LinearSweepTruthYaml(sweep, hb_from_cell, config) +
+                     ExposureTimesTruthYaml(result, config) + "    plane_height_in_cell_mm: " +
+                     Num(h) + "\n    plane_in_handling_base: {normal: " + Vec(n_hb) +
+                     ", d_mm: " + Num(-n_hb.dot(p_hb)) + "}\n";
+    ReportProgress(progress, "white planes",
+                   static_cast<double>(i + 1) / config.plane_heights_mm.size());
+  }
+}
+
+// The sphere targets: profiles and the captures.yaml entry.
+void RunSpheres(const SimConfig& config, const CellTruth& truth, const LinearSweep& sweep,
+                const Eigen::Isometry3d& hb_from_cell, Output& out, SimulationReport& report,
+                std::string& captures_yaml, const ProgressCallback& progress, int threads) {
+  const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+  const LaserRenderer renderer(scene, truth.sensor, config.render);
+  const SweepResult result = RenderSweep(
+      renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
+      StreamSeed(config.seed, kSphereStream), 0, "", threads);
+  const CaptureReport r =
+      WriteSweep({"spheres", "spheres", "SimConfig.spheres.*"}, result, config, out);
+  report.captures.push_back(r);
+  std::string centers_cell, centers_hb;
+  for (const Eigen::Vector3d& c : config.spheres.CentersInCell()) {
+    centers_cell += (centers_cell.empty() ? "" : ", ") + Vec(c);
+    centers_hb += (centers_hb.empty() ? "" : ", ") + Vec(hb_from_cell * c);
+  }
+  captures_yaml += CaptureHeaderYaml(r) + LinearSweepTruthYaml(sweep, hb_from_cell, config) +
+                   ExposureTimesTruthYaml(result, config) +
+                   "    sphere_radius_mm: " + Num(config.spheres.radius_mm) +
+                   "\n    sphere_centers_in_cell: [" + centers_cell +
+                   "]\n    sphere_centers_in_handling_base: [" + centers_hb + "]\n";
+  ReportProgress(progress, "spheres", 1.0);
+}
+
+// The robot sweep over the first seat: profiles (joints in each) and the captures.yaml entry.
+void RunTrajectory(const SimConfig& config, const CellTruth& truth,
+                   const JointTrajectory& trajectory, const SeatCapture& seat,
+                   const Eigen::Isometry3d& hb_from_cell, Output& out, SimulationReport& report,
+                   std::string& captures_yaml, const ProgressCallback& progress, int threads) {
+  const Scene scene = MakeSeatScene(truth.layout, truth.seat, seat.placement.cell_from_part);
+  const LaserRenderer renderer(scene, truth.sensor, config.render);
+  const Eigen::Isometry3d& cell_from_base = truth.layout.cell_from_vision_base;
+  const auto state_at = [&](double t) {
+    SensorState s;
+    s.joints_rad = trajectory.At(t);
+    s.scene_from_sensor = cell_from_base * truth.true_vision_robot.BaseFromFlange(s.joints_rad) *
+                          truth.vision_flange_from_sensor;
+    return s;
+  };
+  const SweepResult result =
+      RenderSweep(renderer, state_at, config.timing, StreamSeed(config.seed, kTrajectoryStream),
+                  6, "vision_robot", threads);
+  const std::string name = "trajectory_" + seat.name;
+  const CaptureReport r = WriteSweep(
+      {name, "seat_trajectory", "SimConfig.trajectory.* and SimConfig.seats.*"}, result, config,
+      out);
+  report.captures.push_back(r);
   std::ostringstream o;
-  o << "format: lasercell.sim_truth\nversion: 1\nseed: " << config.seed << "\n"
-    << "# Poses: parent_from_child as {translation_mm, rotation_wxyz}; frames as in cell.yaml.\n"
-    << "cell_from_handling_base: " << Pose(truth.layout.cell_from_handling_base) << "\n"
-    << "cell_from_vision_base: " << Pose(truth.layout.cell_from_vision_base) << "\n"
-    << "hole_center_in_part: " << Vec(truth.seat.hole_center_in_part) << "\n"
-    << "captures:\n";
-  return o.str();
+  o << "    sweep:\n      type: joints\n      robot: vision_robot\n"
+    << "      interpolation: linear in joint space between waypoints\n"
+    << "      t0_ns: " << config.timing.start_ns << "\n      waypoint_times_s: [";
+  for (std::size_t k = 0; k < trajectory.times_s.size(); ++k) {
+    o << (k ? ", " : "") << Num(trajectory.times_s[k]);
+  }
+  o << "]\n      waypoints_rad:\n";
+  for (const auto& q : trajectory.joints_rad) {
+    o << "        - [";
+    for (std::size_t j = 0; j < q.size(); ++j) o << (j ? ", " : "") << Num(q[j]);
+    o << "]\n";
+  }
+  captures_yaml += CaptureHeaderYaml(r) + o.str() + ExposureTimesTruthYaml(result, config) +
+                   SeatTruthYaml({seat.name, seat.placement}, truth, hb_from_cell);
+  ReportProgress(progress, "robot trajectory", 1.0);
 }
 
 }  // namespace
@@ -681,7 +618,7 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
   SimulationReport report;
   const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();
   const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
-  std::string captures_yaml = CapturesPreamble(config, truth);
+  std::string captures_yaml = CapturesPreambleYaml(config, truth);
 
   // Solve the robot trajectory first: an unreachable arc is a config error worth failing early.
   JointTrajectory trajectory;
@@ -700,48 +637,10 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
   }
 
   if (config.capture_planes) {
-    for (std::size_t i = 0; i < config.plane_heights_mm.size(); ++i) {
-      const double h = config.plane_heights_mm[i];
-      const Scene scene = MakePlaneScene(truth.layout, h, config.plane_size_mm);
-      const LaserRenderer renderer(scene, truth.sensor, config.render);
-      const SweepResult result = RenderSweep(
-          renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
-          StreamSeed(config.seed, kPlaneStream + i), 0, "", threads);
-      const std::string name = "plane_" + std::to_string(i);
-      const CaptureReport r = WriteSweep(
-          {name, "white_plane", "SimConfig.planes.heights_mm[" + std::to_string(i) + "]"}, result,
-          config, out);
-      report.captures.push_back(r);
-      const Eigen::Vector3d n_hb = hb_from_cell.linear() * Eigen::Vector3d::UnitZ();
-      const Eigen::Vector3d p_hb = hb_from_cell * Eigen::Vector3d(0, 0, h);
-      captures_yaml += CaptureHeader(r) + LinearSweepTruth(sweep, hb_from_cell, config) +
-                       ExposureTimesTruth(result, config) + "    plane_height_in_cell_mm: " +
-                       Num(h) + "\n    plane_in_handling_base: {normal: " + Vec(n_hb) +
-                       ", d_mm: " + Num(-n_hb.dot(p_hb)) + "}\n";
-      ReportProgress(progress, "white planes",
-                     static_cast<double>(i + 1) / config.plane_heights_mm.size());
-    }
+    RunPlanes(config, truth, sweep, hb_from_cell, out, report, captures_yaml, progress, threads);
   }
   if (config.capture_spheres) {
-    const Scene scene = MakeSphereScene(truth.layout, config.spheres);
-    const LaserRenderer renderer(scene, truth.sensor, config.render);
-    const SweepResult result = RenderSweep(
-        renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
-        StreamSeed(config.seed, kSphereStream), 0, "", threads);
-    const CaptureReport r =
-        WriteSweep({"spheres", "spheres", "SimConfig.spheres.*"}, result, config, out);
-    report.captures.push_back(r);
-    std::string centers_cell, centers_hb;
-    for (const Eigen::Vector3d& c : config.spheres.CentersInCell()) {
-      centers_cell += (centers_cell.empty() ? "" : ", ") + Vec(c);
-      centers_hb += (centers_hb.empty() ? "" : ", ") + Vec(hb_from_cell * c);
-    }
-    captures_yaml += CaptureHeader(r) + LinearSweepTruth(sweep, hb_from_cell, config) +
-                     ExposureTimesTruth(result, config) +
-                     "    sphere_radius_mm: " + Num(config.spheres.radius_mm) +
-                     "\n    sphere_centers_in_cell: [" + centers_cell +
-                     "]\n    sphere_centers_in_handling_base: [" + centers_hb + "]\n";
-    ReportProgress(progress, "spheres", 1.0);
+    RunSpheres(config, truth, sweep, hb_from_cell, out, report, captures_yaml, progress, threads);
   }
   std::vector<SeatCapture> seats;
   if (config.capture_seats || config.capture_trajectory) {
@@ -752,7 +651,8 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
              threads);
   }
   if (config.capture_planes || config.capture_spheres || config.capture_seats) {
-    out.Write("records/linear_sweep.yaml", LinearSweepRecord(sweep, config));
+    out.Write("records/linear_sweep.yaml",
+              triangulation::LinearSweepRecordYaml(LinearSweepRecordOf(sweep, config)));
   }
   if (config.capture_planes) {
     // What the height fixture provides for `calibrate laser --planes`: the plate heights and the
@@ -764,41 +664,8 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
     out.Write("records/planes.yaml", calib::PlaneHeightsYaml({config.plane_heights_mm, up_in_sensor}));
   }
   if (config.capture_trajectory) {
-    const SeatCapture& seat = seats.front();
-    const Scene scene = MakeSeatScene(truth.layout, truth.seat, seat.placement.cell_from_part);
-    const LaserRenderer renderer(scene, truth.sensor, config.render);
-    const Eigen::Isometry3d& cell_from_base = truth.layout.cell_from_vision_base;
-    const auto state_at = [&](double t) {
-      SensorState s;
-      s.joints_rad = trajectory.At(t);
-      s.scene_from_sensor = cell_from_base * truth.true_vision_robot.BaseFromFlange(s.joints_rad) *
-                            truth.vision_flange_from_sensor;
-      return s;
-    };
-    const SweepResult result =
-        RenderSweep(renderer, state_at, config.timing, StreamSeed(config.seed, kTrajectoryStream),
-                    6, "vision_robot", threads);
-    const std::string name = "trajectory_" + seat.name;
-    const CaptureReport r = WriteSweep(
-        {name, "seat_trajectory", "SimConfig.trajectory.* and SimConfig.seats.*"}, result, config,
-        out);
-    report.captures.push_back(r);
-    std::ostringstream o;
-    o << "    sweep:\n      type: joints\n      robot: vision_robot\n"
-      << "      interpolation: linear in joint space between waypoints\n"
-      << "      t0_ns: " << config.timing.start_ns << "\n      waypoint_times_s: [";
-    for (std::size_t k = 0; k < trajectory.times_s.size(); ++k) {
-      o << (k ? ", " : "") << Num(trajectory.times_s[k]);
-    }
-    o << "]\n      waypoints_rad:\n";
-    for (const auto& q : trajectory.joints_rad) {
-      o << "        - [";
-      for (std::size_t j = 0; j < q.size(); ++j) o << (j ? ", " : "") << Num(q[j]);
-      o << "]\n";
-    }
-    captures_yaml += CaptureHeader(r) + o.str() + ExposureTimesTruth(result, config) +
-                     SeatTruth({seat.name, seat.placement}, truth, hb_from_cell);
-    ReportProgress(progress, "robot trajectory", 1.0);
+    RunTrajectory(config, truth, trajectory, seats.front(), hb_from_cell, out, report,
+                  captures_yaml, progress, threads);
   }
   if (config.capture_touches) RunTouches(config, truth, out);
   if (config.capture_eye_in_hand || config.capture_joint_poses) {

@@ -29,6 +29,7 @@
 
 #include "calib/camera_model.hpp"
 #include "calib/hand_eye.hpp"
+#include "calib/kuka2_set.hpp"
 #include "calib/pose_io.hpp"
 #include "calib/target_detection.hpp"
 #include "core/error.hpp"
@@ -244,10 +245,7 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   board.light_albedo = config.albedo.chessboard_light;
   const datasets::HandEyeImageSet set =
       datasets::PlanHandEyeImages(config, truth, board, args.seed * 7919 + 3);
-  const auto& ci = truth.sensor.camera.intrinsics();
-  const auto mv = ci.MrcalVector();
-  const calib::CameraModel camera("LENSMODEL_OPENCV8", std::vector<double>(mv.begin(), mv.end()),
-                                  ci.width_px, ci.height_px);
+  const calib::CameraModel& camera = truth.sensor.camera;
   const Eigen::Isometry3d x_true = truth.vision_flange_from_sensor;
   const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
   std::mt19937_64 rng(args.seed);
@@ -417,65 +415,27 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
 // kuka2: detections + intrinsics from the images when present; otherwise the table is skipped
 // with a message (the set is not redistributable: no licence stated).
 nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
-  calib::ChessboardDetections det;
-  std::string source;
-  std::unique_ptr<calib::CameraModel> camera;
-  calib::RobotPoses poses;
-  if (!fs::exists(args.kuka2_dir + "/im_01.png") ||
-      !fs::exists(args.kuka2_dir + "/RobotPosesVec.txt")) {
+  if (!calib::HasKuka2Set(args.kuka2_dir)) {
     const std::string why = "real data set handeye_kuka2 not found at " + args.kuka2_dir +
                             " (not redistributable: no licence); put the development data at "
                             "../shared/data, set LASERCELL_SHARED_DATA or pass --kuka2";
     std::printf("\n### Real kuka2: SKIPPED: %s\n", why.c_str());
     return {{"skipped", why}};
   }
-  {
-    source = args.kuka2_dir + " (images; corners detected now)";
-    det.cols = 24;
-    det.rows = 17;
-    det.square_mm = 15.0;
-    const calib::BoardSpec spec = det.Board();
-    const std::vector<Eigen::Vector3d> board = spec.Corners();
-    std::vector<std::vector<cv::Point3f>> obj;
-    std::vector<std::vector<cv::Point2f>> img;
-    for (int i = 1; i <= 28; ++i) {
-      char name[32];
-      std::snprintf(name, sizeof name, "im_%02d.png", i);
-      const std::string path = args.kuka2_dir + "/" + name;
-      const calib::TargetDetection found =
-          calib::DetectTargetInEncodedImage(io::ReadFileBytes(path), spec);
-      if (found.status == calib::DetectionStatus::kUnreadable) {
-        throw FileError(path, found.message);
-      }
-      if (!found.found()) throw InputError("kuka2: " + path + ": " + found.message);
-      det.width_px = found.width;
-      det.height_px = found.height;
-      det.images.push_back(name);
-      det.corners_px.push_back(found.corners_px);
-      std::vector<cv::Point3f> o;
-      std::vector<cv::Point2f> p;
-      for (std::size_t k = 0; k < found.corners_px.size(); ++k) {
-        const Eigen::Vector2d& c = found.corners_px[k];
-        o.emplace_back(static_cast<float>(board[k].x()), static_cast<float>(board[k].y()), 0.f);
-        p.emplace_back(static_cast<float>(c.x()), static_cast<float>(c.y()));
-      }
-      obj.push_back(o);
-      img.push_back(p);
-    }
-    cv::Mat k, d;
-    std::vector<cv::Mat> rv, tv;
-    const double rms = cv::calibrateCamera(obj, img, cv::Size(det.width_px, det.height_px), k, d,
-                                           rv, tv);
-    std::vector<double> intr = {k.at<double>(0, 0), k.at<double>(1, 1), k.at<double>(0, 2),
-                                k.at<double>(1, 2)};
-    for (int i = 0; i < 5; ++i) intr.push_back(d.at<double>(i));
-    camera = std::make_unique<calib::CameraModel>("LENSMODEL_OPENCV5", intr, det.width_px,
-                                                  det.height_px);
-    std::printf("\nkuka2 intrinsics (stand-in): OpenCV calibrateCamera on the same 28 images, "
-                "k1 k2 p1 p2 k3, RMS %.3f px: fx %.2f fy %.2f cx %.2f cy %.2f\n",
-                rms, intr[0], intr[1], intr[2], intr[3]);
-    poses = calib::LoadRobotPoses(args.kuka2_dir + "/RobotPosesVec.txt", "kuka");
+  const std::string source = args.kuka2_dir + " (images; corners detected now)";
+  const calib::Kuka2Set set = calib::LoadKuka2Set(args.kuka2_dir);
+  if (set.error_status == calib::DetectionStatus::kUnreadable) {
+    throw FileError(args.kuka2_dir, set.error);
   }
+  if (!set.error.empty()) throw InputError(set.error);
+  const calib::ChessboardDetections& det = set.detections;
+  const calib::CameraModel& camera = *set.camera;
+  const std::vector<double>& intr = camera.intrinsics();
+  std::printf("\nkuka2 intrinsics (stand-in): OpenCV calibrateCamera on the same 28 images, "
+              "k1 k2 p1 p2 k3, RMS %.3f px: fx %.2f fy %.2f cx %.2f cy %.2f\n",
+              set.calibration_rms_px, intr[0], intr[1], intr[2], intr[3]);
+  const calib::RobotPoses poses =
+      calib::LoadRobotPoses(args.kuka2_dir + "/RobotPosesVec.txt", "kuka");
   if (poses.base_from_flange.size() != det.images.size()) {
     throw InputError("kuka2: " + std::to_string(poses.base_from_flange.size()) + " poses but " +
                      std::to_string(det.images.size()) + " images");
@@ -486,7 +446,7 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
     views.push_back({poses.base_from_flange[i], det.corners_px[i], board});
   }
   calib::HandEyeResult ours;
-  const std::vector<Row> rows = RunMethods(views, *camera, &ours);
+  const std::vector<Row> rows = RunMethods(views, camera, &ours);
   std::printf("\n### Real kuka2 (%s): %zu views, 24x17 inner corners (25x18 squares), 15 mm; "
               "no ground truth\n\n",
               source.c_str(), views.size());
@@ -499,7 +459,7 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
       j.push_back({{"method", r.method}, {"threw", true}});
       continue;
     }
-    const Consistency c = Evaluate(r, views, ours.camera_from_board, *camera);
+    const Consistency c = Evaluate(r, views, ours.camera_from_board, camera);
     const Eigen::Vector3d t = r.x.translation();
     std::printf("| %s | %.4f | %.3f | %.3f | [%.1f, %.1f, %.1f] |\n", r.method.c_str(),
                 c.axxb_rot_deg, c.axxb_trans_mm, c.reproj_rms_px, t.x(), t.y(), t.z());

@@ -39,7 +39,7 @@ struct Stats {
 
 void RunPeaksBench(const PeaksBenchArgs& args) {
   if (args.width_px < 1 || args.width_px > 20) throw OptionError("--width-px must be in [1, 20]");
-  const datasets::ImageRenderer renderer{datasets::CameraModel{}};
+  const datasets::ImageRenderer renderer{datasets::MakeCameraModel()};
   const int w = 1024;
   const double s = args.width_px / 2.3548200450309493;
   const double sigma_n = std::sqrt(args.noise * args.noise + 1.0 / 12);  // + quantization

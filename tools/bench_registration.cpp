@@ -156,15 +156,8 @@ class PclPointToPlaneIcp {
 
 double CpuMs() { return 1000.0 * static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 
-double Median(std::vector<double> v) {
-  if (v.empty()) return -1.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 std::string Ms(double ms) {
-  if (ms < 0.0) return "-";
+  if (!(ms >= 0.0)) return "-";
   char b[32];
   std::snprintf(b, sizeof b, ms < 100.0 ? "%.1f" : "%.0f", ms);
   return b;

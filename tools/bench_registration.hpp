@@ -17,6 +17,7 @@
 
 #include "core/point_cloud.hpp"
 #include "core/se3.hpp"
+#include "core/stats.hpp"
 #include "registration/kdtree.hpp"
 #include "registration/ppf_model.hpp"
 
@@ -71,9 +72,8 @@ std::vector<BenchRow> RunPclPpf(const PointCloud& model, const PointCloud& scene
 /// One PCL point-to-plane ICP run for the ICP-only comparison.
 /// Process CPU time, ms (std::clock): with one thread, the time the work needed on an idle core.
 double CpuMs();
-/// Median (of a copy); -1 for an empty vector.
-double Median(std::vector<double> values);
-/// Milliseconds for the tables: "-" when negative, 1 decimal below 100 ms.
+/// Milliseconds for the tables: "-" when negative or NaN, 1 decimal below 100 ms. (Medians are
+/// core/stats.hpp's Median: the element n/2.)
 std::string Ms(double ms);
 
 /// Pose error of a scene_from_model against the reference, in the table's terms.

@@ -21,6 +21,7 @@
 
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
+#include "core/json_io.hpp"
 #include "core/se3.hpp"
 #include "datasets/rng.hpp"
 #include "datasets/synthetic_scan.hpp"
@@ -74,14 +75,6 @@ double Percentile(const std::vector<double>& sorted, double q) {
   if (sorted.empty()) return std::numeric_limits<double>::quiet_NaN();
   const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(sorted.size())));
   return sorted[std::clamp<std::size_t>(rank, 1, sorted.size()) - 1];
-}
-
-nlohmann::json PoseJson(const Eigen::Isometry3d& pose) {
-  nlohmann::json rows = nlohmann::json::array();
-  for (int r = 0; r < 4; ++r) {
-    for (int c = 0; c < 4; ++c) rows.push_back(pose.matrix()(r, c));
-  }
-  return rows;
 }
 
 struct LevelStats {
@@ -160,7 +153,7 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
       nlohmann::json t;
       t["noise_mm"] = stats.noise_mm;
       t["placement"] = i;
-      t["scene_from_model_true"] = PoseJson(truth);
+      t["scene_from_model_true"] = json::MatrixFlat(truth);
       t["scene_points"] = scan.cloud.size();
       t["part_points"] = scan.part_points;
       t["unoccluded_fraction"] = unoccluded;
@@ -172,7 +165,7 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
         t["add_mm"] = add;
         t["rotation_error_deg"] = RotationDistance(best.scene_from_model, truth) * 180.0 / 3.14159265358979323846;
         t["translation_error_mm"] = TranslationDistance(best.scene_from_model, truth);
-        t["scene_from_model_found"] = PoseJson(best.scene_from_model);
+        t["scene_from_model_found"] = json::MatrixFlat(best.scene_from_model);
         t["support"] = best.verification.support;
         t["icp_rmse_mm"] = best.icp.rmse_mm;
       } else {

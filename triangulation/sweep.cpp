@@ -3,10 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <thread>
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/parallel.hpp"
 
 namespace lasercell::triangulation {
 
@@ -20,11 +20,39 @@ void SweepOptions::Check(const std::string& what) const {
 }
 
 std::string SweepResult::Summary() const {
-  char b[160];
-  std::snprintf(b, sizeof b, "%zu profiles (%zu lost by sequence gaps) in frame '%s': ", profiles,
-                sequence_gaps, frame.c_str());
+  char b[256];
+  const bool placed = motion == SweepMotion::kLinear && frame != "sensor";
+  std::snprintf(b, sizeof b, "%zu profiles (%zu lost by sequence gaps) in frame '%s'%s: ", profiles,
+                sequence_gaps, frame.c_str(),
+                placed ? " (linear sweep placed through static edges)" : "");
   return b + counts.Summary();
 }
+
+namespace {
+
+// Throws InputError unless the graph reaches `target` from "sensor" (and, for a linear sweep,
+// through static edges only: the sensor at t0 is a fixed frame, a robot joint state is unknown).
+void CheckTargetFrame(const FrameGraph& graph, const std::string& target, SweepMotion motion) {
+  if (!graph.HasFrame("sensor") || !graph.HasFrame(target) || !graph.Connected("sensor", target)) {
+    throw InputError("the cell has no path from frame 'sensor' to '" + target +
+                     (motion == SweepMotion::kRobot
+                          ? "'; calibrate the hand-eye (vision_flange_from_sensor) first or choose "
+                            "another --frame"
+                          : "'; calibrate the sensor's place (calibrate spheres writes "
+                            "handling_base <- sensor) or choose another --frame"));
+  }
+  if (motion == SweepMotion::kLinear) {
+    const std::vector<std::string> robots = graph.RobotsOnPath(target, "sensor");
+    if (!robots.empty()) {
+      throw InputError("the path from 'sensor' to '" + target + "' passes robot '" +
+                       robots.front() +
+                       "'; a linear sweep is placed through static edges only (calibrate "
+                       "spheres writes one)");
+    }
+  }
+}
+
+}  // namespace
 
 SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulator,
                           const SweepOptions& options, const FrameGraph* graph) {
@@ -50,12 +78,18 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
           "the profiles record no robot joints (joint_count 0): a robot sweep needs "
           "them; use a linear sweep (velocity) instead");
     }
-    if (!graph->HasFrame("sensor") || !graph->HasFrame(options.target_frame) ||
-        !graph->Connected("sensor", options.target_frame)) {
-      throw InputError("the cell has no path from frame 'sensor' to '" + options.target_frame +
-                       "'; calibrate the hand-eye (vision_flange_from_sensor) first or choose "
-                       "another --frame");
+    CheckTargetFrame(*graph, options.target_frame, options.motion);
+  }
+  // A linear sweep placed in a cell frame: target <- sensor (at t0) through static edges.
+  const bool placed = options.motion == SweepMotion::kLinear && !options.target_frame.empty();
+  Eigen::Isometry3d target_from_sensor = Eigen::Isometry3d::Identity();
+  if (placed) {
+    if (graph == nullptr) {
+      throw InputError("a linear sweep placed in frame '" + options.target_frame +
+                       "' needs the cell's frame graph (cell.yaml)");
     }
+    CheckTargetFrame(*graph, options.target_frame, options.motion);
+    target_from_sensor = graph->Transform(options.target_frame, "sensor");
   }
   const std::int64_t t0_ns =
       options.t0_ns ? *options.t0_ns : (count > 0 ? set.profiles.front().timestamp_ns : 0);
@@ -77,38 +111,20 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
     if (options.motion != SweepMotion::kNone) {
       for (Eigen::Vector3d& q : points[i]) q = sweep_from_sensor * q;  // NaN stays NaN
     }
+    // Two steps (not one composed pose) so a placed sweep is the unplaced one moved, bit for bit.
+    if (placed) {
+      for (Eigen::Vector3d& q : points[i]) q = target_from_sensor * q;
+    }
   };
-  const int threads = options.threads > 0
-                          ? options.threads
-                          : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  if (threads <= 1 || count < 2) {
-    for (std::size_t i = 0; i < count; ++i) work(i);
-  } else {
-    std::vector<std::thread> pool;
-    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(threads));
-    for (int w = 0; w < threads; ++w) {
-      pool.emplace_back([&, w] {
-        try {
-          for (std::size_t i = static_cast<std::size_t>(w); i < count;
-               i += static_cast<std::size_t>(threads)) {
-            work(i);
-          }
-        } catch (...) {
-          errors[static_cast<std::size_t>(w)] = std::current_exception();
-        }
-      });
-    }
-    for (std::thread& t : pool) t.join();
-    for (const std::exception_ptr& e : errors) {
-      if (e) std::rethrow_exception(e);
-    }
-  }
+  // Per profile into its own slots: the result does not depend on the thread count.
+  ParallelForChunks(options.threads, count, 1, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) work(i);
+  });
 
   SweepResult result;
   result.profiles = count;
-  result.frame = options.motion == SweepMotion::kRobot    ? options.target_frame
-                 : options.motion == SweepMotion::kLinear ? "sensor_t0"
-                                                          : "sensor";
+  result.motion = options.motion;
+  result.frame = options.motion == SweepMotion::kRobot || placed ? options.target_frame : "sensor";
   for (std::size_t i = 0; i < count; ++i) {
     result.counts += counts[i];
     if (i > 0 && set.profiles[i].sequence > set.profiles[i - 1].sequence + 1) {
@@ -138,6 +154,53 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
     }
   }
   return result;
+}
+
+ScanSetup ScanSetupFromCell(const FrameGraph* cell, const std::string& cell_name,
+                            const LaserPlaneSource& source, const SweepOptions& options) {
+  options.Check();
+  ScanSetup setup;
+  setup.options = options;
+  if (source.plane) {
+    setup.laser_plane = *source.plane;
+    setup.laser_plane_source = source.plane_label;
+  } else if (cell != nullptr) {
+    const auto it = cell->laser_planes().find(source.laser);
+    if (it == cell->laser_planes().end()) {
+      throw FileError(
+          cell_name,
+          cell->laser_planes().empty()
+              ? std::string("has no laser_planes section; run `lasercell calibrate "
+                            "laser` or give --laser-plane nx,ny,nz,d")
+              : "has no laser plane named '" + source.laser + "' in laser_planes.planes");
+    }
+    const LaserPlaneEntry& plane = it->second;
+    if (plane.frame != "sensor") {
+      throw FileError(cell_name, "laser plane '" + source.laser + "' is given in frame '" +
+                                     plane.frame +
+                                     "'; scan triangulate needs it in 'sensor' (the camera frame)");
+    }
+    setup.laser_plane = {plane.normal.x(), plane.normal.y(), plane.normal.z(), plane.OffsetMm()};
+    setup.laser_plane_source = cell_name;
+  } else {
+    throw InputError(
+        "no laser plane: give a cell file with a calibrated laser plane "
+        "(laser_planes section) or the plane (n, d) in the sensor frame");
+  }
+  const bool needs_frame =
+      options.motion == SweepMotion::kRobot ||
+      (options.motion == SweepMotion::kLinear && !options.target_frame.empty());
+  if (needs_frame) {
+    if (cell == nullptr) {
+      throw InputError("frame '" + options.target_frame +
+                       "' needs the cell's frame graph (cell.yaml)");
+    }
+    // A robot sweep's path is checked with its profiles (AssembleSweep: joints first).
+    if (options.motion == SweepMotion::kLinear) {
+      CheckTargetFrame(*cell, options.target_frame, options.motion);
+    }
+  }
+  return setup;
 }
 
 }  // namespace lasercell::triangulation

@@ -121,6 +121,13 @@ Triangulator::Triangulator(calib::CameraModel camera, const Eigen::Vector4d& pla
   BuildTables();
 }
 
+// The ray-plane rule of core/ray_plane.hpp (IntersectRayPlane), inlined for the hot path on the
+// ray r = (x, y, 1) and the unit plane (n, d): parallel when |n . r| < sin(min_ray_plane_angle)
+// |r| (IntersectRayPlane's min_abs_cos = sin of the smallest ray-plane angle), behind when
+// t = -d / (n . r) <= 0 (here w = 1/t = -(n . r) / d), and the point t r = (x z, y z, z) with
+// z = t. On top of that rule the triangulator keeps only depths z in [min_depth_mm,
+// max_depth_mm]. The fast path forms z as 1 / w instead of -d / (n . r): the same point to a few
+// ulp (triangulator_test checks both paths against IntersectRayPlane).
 Triangulator::Reject Triangulator::Classify(double x, double y) const {
   const double nr = plane_[0] * x + plane_[1] * y + plane_[2];
   if (nr * nr < sin2_min_ * (x * x + y * y + 1.0) || nr == 0.0) return Reject::kParallel;

@@ -556,10 +556,7 @@ TEST(HandEyeSim, SimulatorPlanWithinTarget) {
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
   datasets::ChessboardTarget board = config.chessboard;
   const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
-  const auto& ci = truth.sensor.camera.intrinsics();
-  const auto mv = ci.MrcalVector();
-  const CameraModel camera("LENSMODEL_OPENCV8", std::vector<double>(mv.begin(), mv.end()),
-                           ci.width_px, ci.height_px);
+  const CameraModel& camera = truth.sensor.camera;
   std::mt19937_64 rng(5);
   std::normal_distribution<double> noise(0.0, 0.03);
   std::vector<HandEyeView> views;

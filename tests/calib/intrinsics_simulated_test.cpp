@@ -13,7 +13,7 @@ namespace {
 
 TEST(CalibrateIntrinsicsSimulatedImages, RenderedBoardsGiveIntrinsicsInsideThreeSigma) {
   const datasets::CameraIntrinsics truth;
-  const datasets::CameraModel camera{truth};
+  const calib::CameraModel camera = datasets::MakeCameraModel(truth);
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
   const BoardSpec board = BoardOf(target);

@@ -26,7 +26,7 @@ struct Synthetic {
 
 Synthetic MakeSynthetic(int num_views, std::uint64_t seed) {
   Synthetic s;
-  const datasets::CameraModel camera{s.truth};
+  const calib::CameraModel camera = datasets::MakeCameraModel(s.truth);
   const datasets::ChessboardTarget target;
   s.board = BoardOf(target);
   const Eigen::Vector3d offset(target.square_mm, target.square_mm, 0);  // target -> BoardSpec
@@ -34,7 +34,7 @@ Synthetic MakeSynthetic(int num_views, std::uint64_t seed) {
     s.camera_from_board.push_back(pose * Eigen::Translation3d(offset));
     std::vector<Eigen::Vector2d> q;
     for (const Eigen::Vector3d& c : s.board.Corners()) {
-      q.push_back(*camera.Project(s.camera_from_board.back() * c));
+      q.push_back(*datasets::ProjectInView(camera, s.camera_from_board.back() * c));
     }
     s.exact.push_back(q);
   }
@@ -192,7 +192,7 @@ TEST(CalibrateIntrinsics, FocalLengthOneSigmaCoversTheTruthAsOftenAsItShould) {
 // defined) scatters around the true pixel as the reported 1 sigma says.
 TEST(CalibrateIntrinsics, ProjectionUncertaintyMatchesTheSpreadOverNoiseDraws) {
   const Synthetic s = MakeSynthetic(7, 11);
-  const datasets::CameraModel truth{s.truth};
+  const calib::CameraModel truth = datasets::MakeCameraModel(s.truth);
   IntrinsicsOptions options;
   options.max_outlier_rounds = 0;
   options.uncertainty_grid_x = 4;
@@ -274,12 +274,12 @@ TEST(CalibrateIntrinsics, OutliersAreRejected) {
 TEST(CalibrateIntrinsics, BoardWarpIsEstimated) {
   Synthetic s = MakeSynthetic(10, 8);
   // Bow the board by 1.5 mm along x and -0.8 mm along y, then re-project.
-  const datasets::CameraModel camera{s.truth};
+  const calib::CameraModel camera = datasets::MakeCameraModel(s.truth);
   for (std::size_t v = 0; v < s.exact.size(); ++v) {
     for (int i = 0; i < s.board.NumCorners(); ++i) {
       const Eigen::Vector3d c = s.board.Corner(i);
       const double dz = BoardWarpBasis(c, s.board.Extent()).dot(Eigen::Vector2d(1.5, -0.8));
-      s.exact[v][i] = *camera.Project(s.camera_from_board[v] * (c + Eigen::Vector3d(0, 0, dz)));
+      s.exact[v][i] = *datasets::ProjectInView(camera, s.camera_from_board[v] * (c + Eigen::Vector3d(0, 0, dz)));
     }
   }
   IntrinsicsOptions options;
@@ -315,13 +315,13 @@ TEST(CalibrateIntrinsics, SplinedModelFitsTheOpencv8TruthToTheNoise) {
   // Where the boards were seen, the splined camera projects like the truth, up to a small
   // motion of the camera frame (which the spline and the poses can trade: mrcal compares models
   // the same way, after fitting the implied transform).
-  const datasets::CameraModel truth{s.truth};
+  const calib::CameraModel truth = datasets::MakeCameraModel(s.truth);
   std::vector<Eigen::Vector3d> rays;
   std::vector<Eigen::Vector2d> expected;
   for (const CornerResidual& c : r.corners) {
     if (c.corner_id % 5 != 0) continue;
     rays.push_back(truth.Unproject(c.observed_px));
-    expected.push_back(truth.Project(700 * rays.back()).value());
+    expected.push_back(datasets::ProjectInView(truth, 700 * rays.back()).value());
   }
   struct RotationFit {
     const CameraModel* model;
@@ -393,7 +393,7 @@ TEST(CalibrateIntrinsics, CornerIdsOutsideTheBoardAreAnInputError) {
 TEST(CalibrateIntrinsics, ParallelViewsFlagTheFocalLengthUnobservable) {
   Synthetic s;
   s.board = ParseBoardSpec("chessboard:9x6:40");
-  const datasets::CameraModel camera{s.truth};
+  const calib::CameraModel camera = datasets::MakeCameraModel(s.truth);
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-1, 1);
   for (int v = 0; v < 8; ++v) {
@@ -404,7 +404,7 @@ TEST(CalibrateIntrinsics, ParallelViewsFlagTheFocalLengthUnobservable) {
     pose.translation() = Eigen::Vector3d(-160 + 60 * u(rng), -100 + 60 * u(rng), 700 + 80 * u(rng));
     s.camera_from_board.push_back(pose);
     std::vector<Eigen::Vector2d> q;
-    for (const Eigen::Vector3d& c : s.board.Corners()) q.push_back(*camera.Project(pose * c));
+    for (const Eigen::Vector3d& c : s.board.Corners()) q.push_back(*datasets::ProjectInView(camera, pose * c));
     s.exact.push_back(q);
   }
   const IntrinsicsResult r = CalibrateIntrinsics(NoisyViews(s, 0.2, 2), s.board, 1024, 1024);

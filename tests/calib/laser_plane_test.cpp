@@ -417,7 +417,7 @@ StripeScene MakeStripeScene(int count, std::uint64_t seed) {
   StripeScene scene;
   const datasets::CellTruth truth = datasets::MakeCellTruth(datasets::SimConfig{});
   TruthPlane(truth.sensor.laser, &scene.laser_n, &scene.laser_d);
-  const datasets::CameraModel sim_camera(scene.intrinsics);
+  const CameraModel sim_camera = datasets::MakeCameraModel(scene.intrinsics);
   const datasets::ImageRenderer renderer(sim_camera);
   const auto poses = datasets::DrawChessboardPoses(scene.board, sim_camera, count, seed);
   for (int i = 0; i < count; ++i) {
@@ -466,7 +466,7 @@ TEST(LaserPlaneStripes, WithExactCornersOnlyTheStripePeaksLimitThePlane) {
   // Same rendered views, but the board corners replaced by their true projections: what is left
   // is the stripe peaks (8-bit Gaussian stripe, three-point estimator) and the fit.
   const StripeScene& scene = SharedScene();
-  const datasets::CameraModel sim_camera(scene.intrinsics);
+  const CameraModel sim_camera = datasets::MakeCameraModel(scene.intrinsics);
   const auto poses = datasets::DrawChessboardPoses(scene.board, sim_camera, 4, 31);
   const auto corners_board = scene.board.InnerCorners();
   std::vector<StripeObservation> observations;
@@ -551,7 +551,7 @@ TEST(LaserPlaneStripes, PlaneThroughTheCameraCentreIsFlagged) {
   const Eigen::Vector3d n = Eigen::Vector3d(0, -1, 0.02).normalized();
   std::vector<StripeObservation> observations;
   const datasets::ChessboardTarget board;
-  const datasets::CameraModel sim_camera{datasets::CameraIntrinsics{}};
+  const CameraModel sim_camera = datasets::MakeCameraModel();
   const auto poses = datasets::DrawChessboardPoses(board, sim_camera, 3, 61);
   const auto corners_board = board.InnerCorners();
   for (const auto& pose : poses) {
@@ -613,7 +613,7 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
   const datasets::CameraIntrinsics intrinsics;
   const CameraModel camera = SimCamera(intrinsics);
   const datasets::ChessboardTarget board;
-  const datasets::CameraModel sim_camera(intrinsics);
+  const CameraModel sim_camera = datasets::MakeCameraModel(intrinsics);
   Eigen::Vector3d n;
   double d = 0;
   TruthPlane(datasets::MakeCellTruth(datasets::SimConfig{}).sensor.laser, &n, &d);

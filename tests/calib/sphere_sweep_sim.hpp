@@ -2,7 +2,7 @@
 // Test helper (not library code): the simulated spheres sweep as a point cloud in the sweep
 // frame, built the way `lasercell scan triangulate` will (issue 7 brief): render the spheres
 // capture with the datasets API, triangulate every peak with the TRUE camera
-// (datasets::CameraModel::Unproject) and the TRUE laser plane, and place it by the linear sweep
+// (calib::CameraModel::Unproject) and the TRUE laser plane, and place it by the linear sweep
 // motion. Sweep frame = the sensor frame at the sweep start (t = 0):
 //   p_in_sweep = cell_from_sensor(0)^-1 * cell_from_sensor(t) * p_in_sensor
 //              = p_in_sensor + R0^T * velocity * t           (pure translation, linear sweep)

@@ -114,7 +114,7 @@ TEST(TargetDetection, BlankImageIsNotFound) {
 // RMS distance of detected corners from the true projections, in the best of the 4 orderings:
 // the simulator's board frame has +z towards the camera (a left-handed grid in the image), and a
 // marker-less board has no preferred origin.
-double RmsToTruth(const TargetDetection& d, const datasets::CameraModel& camera,
+double RmsToTruth(const TargetDetection& d, const CameraModel& camera,
                   const Eigen::Isometry3d& camera_from_board,
                   const std::vector<Eigen::Vector3d>& corners, int nx, int ny) {
   double best = 1e300;
@@ -123,7 +123,7 @@ double RmsToTruth(const TargetDetection& d, const datasets::CameraModel& camera,
     for (int r = 0; r < ny; ++r) {
       for (int c = 0; c < nx; ++c) {
         const int rr = (flip & 1) ? ny - 1 - r : r, cc = (flip & 2) ? nx - 1 - c : c;
-        const Eigen::Vector2d truth = *camera.Project(camera_from_board * corners[r * nx + c]);
+        const Eigen::Vector2d truth = *datasets::ProjectInView(camera, camera_from_board * corners[r * nx + c]);
         ss += (d.corners_px[rr * nx + cc] - truth).squaredNorm();
       }
     }
@@ -136,7 +136,7 @@ double RmsToTruth(const TargetDetection& d, const datasets::CameraModel& camera,
 // against the true projections. The noise-free detector bias is < 0.05 px (cornerSubPix, see
 // tests/datasets/camera_images_test.cpp); read noise adds ~0.02 px.
 TEST(TargetDetection, RenderedChessboardCornersMatchTheTruth) {
-  const datasets::CameraModel camera{datasets::CameraIntrinsics{}};
+  const CameraModel camera = datasets::MakeCameraModel();
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
   const BoardSpec board = BoardOf(target);
@@ -160,7 +160,7 @@ TEST(TargetDetection, RenderedChessboardCornersMatchTheTruth) {
 // so the corners meet the same bound against the truth as the full-resolution search (the
 // search's own corners, ~0.5 px off, would not).
 TEST(TargetDetection, SearchOnAShrunkImageRefinesAtFullResolution) {
-  const datasets::CameraModel camera{datasets::CameraIntrinsics{}};
+  const CameraModel camera = datasets::MakeCameraModel();
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
   const BoardSpec board = BoardOf(target);
@@ -173,7 +173,7 @@ TEST(TargetDetection, SearchOnAShrunkImageRefinesAtFullResolution) {
         FromDatasets(renderer.RenderChessboard(target, poses[k], {}, 11 + k)), board, options);
     ASSERT_TRUE(d.found()) << d.message;
     ASSERT_EQ(d.corners_px.size(), corners.size());
-    EXPECT_EQ(d.width, camera.intrinsics().width_px);
+    EXPECT_EQ(d.width, camera.width_px());
     EXPECT_GT(d.refine_half_window_px, 0);
     EXPECT_LT(RmsToTruth(d, camera, poses[k], corners, board.cols, board.rows), 0.06)
         << "view " << k;

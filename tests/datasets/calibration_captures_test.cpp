@@ -287,15 +287,15 @@ TEST(HandEyeImages, TruthIsTheTrueChainAndPosesRotateAboutSeveralAxes) {
     ASSERT_EQ(im.corners_px.size(), corners.size());
     for (std::size_t k = 0; k < corners.size(); ++k) {
       const Eigen::Vector3d p_in_cell = set.cell_from_board * corners[k];
-      const auto q = truth.sensor.camera.Project(cell_from_camera.inverse() * p_in_cell);
+      const auto q = ProjectInView(truth.sensor.camera, cell_from_camera.inverse() * p_in_cell);
       const auto q_nominal =
-          truth.sensor.camera.Project(nominal_cell_from_camera.inverse() * p_in_cell);
+          ProjectInView(truth.sensor.camera, nominal_cell_from_camera.inverse() * p_in_cell);
       ASSERT_TRUE(q && q_nominal);
       worst_px = std::max(worst_px, (*q - im.corners_px[k]).norm());
       largest_offset_effect_px =
           std::max(largest_offset_effect_px, (*q_nominal - im.corners_px[k]).norm());
       EXPECT_GT(q->x(), 25.0);
-      EXPECT_LT(q->y(), truth.sensor.camera.intrinsics().height_px - 26.0);
+      EXPECT_LT(q->y(), truth.sensor.camera.height_px() - 26.0);
     }
     const Eigen::Isometry3d camera_from_board = cell_from_camera.inverse() * set.cell_from_board;
     EXPECT_LT((camera_from_board.matrix() - im.camera_from_board.matrix()).norm(), 1e-9);

@@ -24,11 +24,11 @@ cv::Mat ToMat(const GrayImage& image) {
       .clone();
 }
 
-std::vector<cv::Point2f> TrueCorners(const ChessboardTarget& board, const CameraModel& camera,
+std::vector<cv::Point2f> TrueCorners(const ChessboardTarget& board, const calib::CameraModel& camera,
                                      const Eigen::Isometry3d& camera_from_board) {
   std::vector<cv::Point2f> out;
   for (const Eigen::Vector3d& p : board.InnerCorners()) {
-    const auto q = camera.Project(camera_from_board * p);
+    const auto q = ProjectInView(camera, camera_from_board * p);
     out.emplace_back(static_cast<float>(q->x()), static_cast<float>(q->y()));
   }
   return out;
@@ -82,7 +82,7 @@ struct ExactRendering {
     k.distortion.fill(0.0);
     return k;
   }();
-  CameraModel camera{intrinsics};
+  calib::CameraModel camera = MakeCameraModel(intrinsics);
   ImageRenderer renderer{camera};
   ChessboardTarget board;
   ImageRenderOptions options = [] {
@@ -102,7 +102,7 @@ struct ExactRendering {
 // contrast (a regular ns x ns grid would only reach 1 / (2 ns): 0.031 px at 16 samples).
 TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
   const ExactRendering exact;
-  const CameraModel& camera = exact.camera;
+  const calib::CameraModel& camera = exact.camera;
   const ChessboardTarget& board = exact.board;
   Eigen::Isometry3d camera_from_board = Eigen::Isometry3d::Identity();
   camera_from_board.translation() = Eigen::Vector3d(-183.3, -121.7, 700.0);
@@ -116,7 +116,7 @@ TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
     double worst = 0;
     int edges = 0;
     const auto project = [&](double bx, double by) {
-      return *camera.Project(camera_from_board * Eigen::Vector3d(bx, by, 0));
+      return *ProjectInView(camera, camera_from_board * Eigen::Vector3d(bx, by, 0));
     };
     // Vertical edges (board x = i s) crossed by the middle row of each square row, and
     // horizontal edges (board y = j s) crossed by the middle column of each square column.
@@ -172,7 +172,7 @@ double TiltDeg(const Eigen::Isometry3d& camera_from_board) {
 // cornerSubPix within 0.05 px on every view, SB bounded on all.
 TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
   constexpr double kSbExactTiltDeg = 26.0;
-  const CameraModel camera{CameraIntrinsics{}};
+  const calib::CameraModel camera = MakeCameraModel();
   const ImageRenderer renderer(camera);
   const ChessboardTarget board;
   ImageRenderOptions options;
@@ -273,12 +273,12 @@ cv::Mat RenderPinholeBySupersampling(const ChessboardTarget& board, const Camera
 TEST(CameraImages, AnIndependentRendererGivesFindChessboardCornersSbTheSameCorners) {
   const ExactRendering exact;
   const CameraIntrinsics& intrinsics = exact.intrinsics;
-  const CameraModel& camera = exact.camera;
+  const calib::CameraModel& camera = exact.camera;
   const ImageRenderer& renderer = exact.renderer;
   const ChessboardTarget& board = exact.board;
   const ImageRenderOptions& options = exact.options;
   const std::vector<Eigen::Isometry3d> poses =
-      DrawChessboardPoses(board, CameraModel{CameraIntrinsics{}}, 8, 17);
+      DrawChessboardPoses(board, MakeCameraModel(), 8, 17);
   const cv::Size pattern(board.squares_x - 1, board.squares_y - 1);
   for (const std::size_t k : {std::size_t{3}, std::size_t{7}, std::size_t{2}}) {
     const auto truth = TrueCorners(board, camera, poses[k]);
@@ -317,7 +317,7 @@ TEST(CameraImages, AnIndependentRendererGivesFindChessboardCornersSbTheSameCorne
 
 TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
   const CameraIntrinsics intrinsics;
-  const CameraModel camera{intrinsics};
+  const calib::CameraModel camera = MakeCameraModel(intrinsics);
   const ImageRenderer renderer(camera);
   const ChessboardTarget board;
   const ImageRenderOptions options;  // blur, noise, vignetting on
@@ -353,7 +353,7 @@ TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
 }
 
 TEST(CameraImages, PngsAreDeterministicAndDecodable) {
-  const CameraModel camera{CameraIntrinsics{}};
+  const calib::CameraModel camera = MakeCameraModel();
   const ImageRenderer renderer(camera);
   const ChessboardTarget board;
   const auto pose = DrawChessboardPoses(board, camera, 1, 5).front();

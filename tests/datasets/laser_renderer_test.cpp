@@ -91,7 +91,7 @@ TEST(LaserRenderer, PlanePeaksAreExact) {
     const Eigen::Vector3d p_cell = cell_from_sensor * p;
     EXPECT_NEAR(p_cell.z(), height, kExactMm) << "column " << c;
     EXPECT_NEAR(laser.head<3>().dot(p) + laser[3], 0.0, kExactMm) << "column " << c;
-    const auto q = f.sensor.camera.Project(p);
+    const auto q = ProjectInView(f.sensor.camera, p);
     ASSERT_TRUE(q.has_value());
     EXPECT_NEAR(q->x(), c, 1e-6);
     EXPECT_NEAR(q->y(), truth.row_px[c], 1e-6);
@@ -433,7 +433,7 @@ TEST(LaserRenderer, SpecularReflectionsGiveWeakerGhostPeaksOnlyWhenEnabled) {
         EXPECT_LT((seen->point - q_cell).norm(), 1e-6) << c;
         EXPECT_EQ(seen->object, b.reflection_object[c]);
         if (std::abs(laser_plane.head<3>().dot(q) + laser_plane[3]) > 0.5) ++off_plane;
-        const Eigen::Vector2d px = *f.sensor.camera.Project(q);
+        const Eigen::Vector2d px = *ProjectInView(f.sensor.camera, q);
         worst_projection_px = std::max(
             {worst_projection_px, std::abs(px.y() - b.reflection_row_px[c]), std::abs(px.x() - c) - 0.5});
         // Weaker than a direct hit of that surface: at most reflection_intensity * gain * albedo.

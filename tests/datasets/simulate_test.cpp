@@ -15,8 +15,10 @@
 #include "core/yaml_fields.hpp"
 #include "datasets/robots.hpp"
 #include "datasets/sim_config.hpp"
+#include "datasets/simulate_records.hpp"
 #include "datasets/stl.hpp"
 #include "tests/cli_util.hpp"
+#include "triangulation/linear_sweep.hpp"
 #include "triangulation/profile_io.hpp"
 
 namespace lasercell::datasets {
@@ -325,20 +327,20 @@ TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
   SimulateCell(config, dir, {}, 2);
   const CellTruth truth = MakeCellTruth(config);
   const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
-  yaml::Fields linear = yaml::Fields::Load(dir + "/records/linear_sweep.yaml");
-  linear.ExpectFormat("lasercell.linear_sweep", 1);
-  std::int64_t t0_ns = 0;
-  Eigen::Vector3d v = Eigen::Vector3d::Zero();
-  double speed = 0;
-  linear.ReadRequired("t0_ns", &t0_ns);
-  linear.ReadRequired("velocity_mm_s_in_sensor", &v);
-  linear.ReadRequired("speed_mm_s", &speed);
-  linear.Done();
-  EXPECT_EQ(t0_ns, config.timing.start_ns);
+  // The simulator's file read through triangulation's reader of the linear sweep motion.
+  const triangulation::LinearSweepRecord linear =
+      triangulation::ReadLinearSweepRecord(dir + "/records/linear_sweep.yaml");
+  EXPECT_EQ(linear.t0_ns, config.timing.start_ns);
   // The sensor-frame velocity moves the sensor like the true sweep does.
-  const Eigen::Vector3d v_cell = sweep.cell_from_sensor_start.linear() * v;
+  const Eigen::Vector3d v_cell = sweep.cell_from_sensor_start.linear() * linear.velocity_mm_s_in_sensor;
   EXPECT_LT((v_cell - sweep.velocity_mm_s).norm(), 1e-9);
-  EXPECT_NEAR(speed, sweep.velocity_mm_s.norm(), 1e-9);
+  EXPECT_NEAR(linear.speed_mm_s, sweep.velocity_mm_s.norm(), 1e-9);
+  EXPECT_EQ(linear.Options().velocity_mm_s, linear.velocity_mm_s_in_sensor);
+  // truth/sensor.yaml read back beside its writer: the true laser plane, exactly.
+  const SimSensorTruth sensor = ReadSensorTruth(dir + "/truth/sensor.yaml");
+  EXPECT_EQ(sensor.LaserPlane(), truth.sensor.laser.Coefficients());
+  ASSERT_TRUE(sensor.laser_point_in_sensor_mm.has_value());
+  EXPECT_EQ(*sensor.laser_point_in_sensor_mm, truth.sensor.laser.origin_in_sensor);
   yaml::Fields planes = yaml::Fields::Load(dir + "/records/planes.yaml");
   planes.ExpectFormat("lasercell.plane_heights", 1);
   std::vector<double> heights;

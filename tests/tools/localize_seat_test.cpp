@@ -12,6 +12,7 @@
 
 #include "core/se3.hpp"
 #include "tests/cli_util.hpp"
+#include "triangulation/linear_sweep.hpp"
 
 namespace lasercell::test {
 namespace {
@@ -40,11 +41,11 @@ TEST(LocalizeSeat, TheSimulatedSeatsHoleIsFoundWithinAMillimetreAndAHalf) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
 
   const YAML::Node truth = YAML::LoadFile(sim + "/truth/captures.yaml");
-  const YAML::Node sweep = YAML::LoadFile(sim + "/records/linear_sweep.yaml");
-  const YAML::Node v = sweep["velocity_mm_s_in_sensor"];
+  const Eigen::Vector3d v =
+      triangulation::ReadLinearSweepRecord(sim + "/records/linear_sweep.yaml")
+          .velocity_mm_s_in_sensor;
   char velocity[128];
-  std::snprintf(velocity, sizeof velocity, "%.17g,%.17g,%.17g", v[0].as<double>(),
-                v[1].as<double>(), v[2].as<double>());
+  std::snprintf(velocity, sizeof velocity, "%.17g,%.17g,%.17g", v[0], v[1], v[2]);
   const Eigen::Vector3d hole_in_part = Vec3(truth["hole_center_in_part"]);
 
   int seats = 0;

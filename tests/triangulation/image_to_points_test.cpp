@@ -38,10 +38,7 @@ TEST(ImageToPoints, RawImageOfThePlaneTriangulatesOntoThePlane) {
       DetectPeaks(ImageView8{img.pixels.data(), img.width, img.height, 0}, po);
   EXPECT_EQ(peaks.profile.ValidCount(), ex.ValidCount()) << peaks.Summary();
 
-  const auto v = truth.sensor.camera.intrinsics().MrcalVector();
-  const Triangulator tri(
-      calib::CameraModel("LENSMODEL_OPENCV8", std::vector<double>(v.begin(), v.end()), 1024, 1024),
-      truth.sensor.laser.Coefficients());
+  const Triangulator tri(truth.sensor.camera, truth.sensor.laser.Coefficients());
   std::vector<Eigen::Vector3d> points(1024);
   tri.Triangulate(peaks.profile.row_px, 0, points);
   const Eigen::Vector3d m = cell_from_sensor.linear().transpose() * Eigen::Vector3d::UnitZ();

@@ -77,7 +77,7 @@ TEST(PeakDetection, EstimatorsOnNoiseFreeStripes) {
 // sqrt(2 s / sqrt(pi)) (s the Gaussian sigma; noise incl. quantization 1/12), and within a
 // small factor of it; the error averages to zero over the subpixel phases.
 TEST(PeakDetection, SimulatedStripeImagesScatterNearTheCramerRaoBound) {
-  const datasets::ImageRenderer renderer{datasets::CameraModel{}};
+  const datasets::ImageRenderer renderer{datasets::MakeCameraModel()};
   datasets::ExposureTruth ex;
   const int w = 1024;
   ex.row_px.resize(w);

@@ -46,7 +46,7 @@ class ScanCli : public ::testing::Test {
     valid_ = r.valid_peaks;
     WriteProfiles((dir_ / "plane.lcp").string(), r.profiles);
     io::WriteFileAtomically((dir_ / "camera.cameramodel").string(),
-                            datasets::MrcalCameraModelText(truth_.sensor.camera.intrinsics()));
+                            datasets::MrcalCameraModelText(config_.sensor.camera));
     plane_ = truth_.sensor.laser.Coefficients();
     velocity_ = sweep_.At(0).linear().transpose() * sweep_.velocity_mm_s;
   }

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/frame_graph.hpp"
 #include "datasets/calibration_captures.hpp"
 #include "datasets/cell.hpp"
 #include "datasets/laser_renderer.hpp"
@@ -15,12 +16,7 @@
 namespace lasercell::triangulation {
 namespace {
 
-calib::CameraModel SimCamera(const datasets::SensorModel& sensor) {
-  const auto v = sensor.camera.intrinsics().MrcalVector();
-  return calib::CameraModel("LENSMODEL_OPENCV8", std::vector<double>(v.begin(), v.end()),
-                            sensor.camera.intrinsics().width_px,
-                            sensor.camera.intrinsics().height_px);
-}
+calib::CameraModel SimCamera(const datasets::SensorModel& sensor) { return sensor.camera; }
 
 struct SimCell {
   datasets::SimConfig config;
@@ -61,7 +57,7 @@ TEST(Sweep, LinearSweepOfTheWhitePlaneIsFlatInTheSweepFrame) {
   o.t0_ns = timing.start_ns;
   o.threads = 2;
   const SweepResult result = AssembleSweep(r.profiles, s.tri, o);
-  EXPECT_EQ(result.frame, "sensor_t0");
+  EXPECT_EQ(result.frame, "sensor");  // the sensor frame at t0
   EXPECT_EQ(result.profiles, 20u);
   EXPECT_EQ(result.cloud.size(), result.counts.points);
   EXPECT_EQ(result.counts.points, r.valid_peaks);
@@ -168,6 +164,101 @@ TEST(Sweep, RobotSweepThroughTheFrameGraphLandsOnThePlaneInTheCell) {
   for (auto& p : no_joints.profiles) p.joints_rad.clear();
   o.target_frame = "cell";
   EXPECT_THROW(AssembleSweep(no_joints, s.tri, o, &graph), InputError);
+}
+
+TEST(Sweep, LinearSweepPlacedInACellFrameIsTheSensorSweepMovedThroughStaticEdges) {
+  SimCell s;
+  const datasets::Scene scene = datasets::MakePlaneScene(s.truth.layout, 250.0, {2000, 2000});
+  const datasets::LaserRenderer renderer(scene, s.truth.sensor, s.config.render);
+  const datasets::LinearSweep sweep = datasets::MakeLinearSweep(s.config, s.truth.sensor);
+  datasets::SweepTiming timing = s.config.timing;
+  timing.profiles = 6;
+  const auto state_at = [&](double t) {
+    datasets::SensorState st;
+    st.scene_from_sensor = sweep.At(t);
+    return st;
+  };
+  const datasets::SweepResult r = datasets::RenderSweep(renderer, state_at, timing, 5, 0, "", 1);
+  SweepOptions o;
+  o.motion = SweepMotion::kLinear;
+  o.velocity_mm_s = sweep.At(0.0).linear().transpose() * sweep.velocity_mm_s;
+  o.t0_ns = timing.start_ns;
+  const SweepResult at_t0 = AssembleSweep(r.profiles, s.tri, o);
+  // handling_base <- sensor (as calibrate spheres writes it) and a robot elsewhere in the graph.
+  FrameGraph graph = s.truth.Graph();
+  graph.RemoveEdge("vision_flange", "sensor");
+  StaticEdge edge;
+  edge.parent = "handling_base";
+  edge.child = "sensor";
+  const Eigen::Isometry3d hb_from_sensor =
+      s.truth.layout.cell_from_handling_base.inverse() * sweep.At(0.0);
+  edge.SetParentFromChild(hb_from_sensor);
+  graph.SetStaticEdge(edge);
+  o.target_frame = "cell";
+  o.threads = 2;
+  const SweepResult placed = AssembleSweep(r.profiles, s.tri, o, &graph);
+  EXPECT_EQ(placed.frame, "cell");
+  EXPECT_NE(placed.Summary().find("placed through static edges"), std::string::npos);
+  ASSERT_EQ(placed.cloud.size(), at_t0.cloud.size());
+  ASSERT_GT(placed.cloud.size(), 1000u);
+  const Eigen::Isometry3d cell_from_sensor = graph.Transform("cell", "sensor");
+  for (std::size_t k = 0; k < placed.cloud.size(); ++k) {
+    ASSERT_EQ(placed.cloud.positions[k], cell_from_sensor * at_t0.cloud.positions[k]) << k;
+  }
+  EXPECT_EQ(placed.cloud.timestamp_s, at_t0.cloud.timestamp_s);
+  // The cell has no plane: ScanSetupFromCell takes the given one and checks the frame first.
+  LaserPlaneSource source;
+  source.plane = s.truth.sensor.laser.Coefficients();
+  source.plane_label = "given";
+  const ScanSetup setup = ScanSetupFromCell(&graph, "cell.yaml", source, o);
+  EXPECT_EQ(setup.laser_plane, *source.plane);
+  EXPECT_EQ(setup.laser_plane_source, "given");
+  EXPECT_EQ(setup.options.target_frame, "cell");
+  // Through a robot (the hand-eye edge instead): refused, naming the robot.
+  FrameGraph robot_path = s.truth.Graph();
+  o.target_frame = "vision_base";
+  try {
+    AssembleSweep(r.profiles, s.tri, o, &robot_path);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("passes robot 'vision_robot'"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(ScanSetupFromCell(&robot_path, "cell.yaml", source, o), InputError);
+  EXPECT_THROW(AssembleSweep(r.profiles, s.tri, o, nullptr), InputError);
+}
+
+TEST(Sweep, ScanSetupTakesTheGivenPlaneOrTheCellsNamedPlane) {
+  SweepOptions o;
+  FrameGraph cell;
+  LaserPlaneEntry entry;
+  entry.normal = Eigen::Vector3d(0, 0.9, -0.3).normalized();
+  entry.point_mm = -400.0 * entry.normal;
+  cell.SetLaserPlane("laser", entry);
+  LaserPlaneSource source;
+  ScanSetup setup = ScanSetupFromCell(&cell, "cell.yaml", source, o);
+  EXPECT_EQ(setup.laser_plane.head<3>(), entry.normal);
+  EXPECT_NEAR(setup.laser_plane[3], entry.OffsetMm(), 0.0);
+  EXPECT_EQ(setup.laser_plane_source, "cell.yaml");
+  source.plane = Eigen::Vector4d(0, 1, 0, -5);
+  source.plane_label = "--laser-plane";
+  setup = ScanSetupFromCell(&cell, "cell.yaml", source, o);
+  EXPECT_EQ(setup.laser_plane, *source.plane);
+  EXPECT_EQ(setup.laser_plane_source, "--laser-plane");
+  source.plane.reset();
+  source.laser = "other";
+  try {
+    ScanSetupFromCell(&cell, "cell.yaml", source, o);
+    FAIL();
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("no laser plane named 'other'"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(ScanSetupFromCell(nullptr, "", source, o), InputError);
+  o.motion = SweepMotion::kRobot;
+  o.target_frame = "vision_base";
+  source.plane = Eigen::Vector4d(0, 1, 0, -5);
+  EXPECT_THROW(ScanSetupFromCell(nullptr, "", source, o), InputError);
 }
 
 TEST(Sweep, BadOptionsNameTheField) {

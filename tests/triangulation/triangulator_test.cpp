@@ -4,10 +4,13 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
+#include <optional>
 #include <vector>
 
 #include "calib/camera_model.hpp"
 #include "core/error.hpp"
+#include "core/ray_plane.hpp"
 #include "datasets/cell.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/sensor.hpp"
@@ -17,12 +20,7 @@ namespace lasercell::triangulation {
 namespace {
 
 // The simulator's 1024 x 1024 OPENCV8 camera as a calib::CameraModel, and its true laser plane.
-calib::CameraModel SimCamera(const datasets::SensorModel& sensor) {
-  const auto v = sensor.camera.intrinsics().MrcalVector();
-  return calib::CameraModel("LENSMODEL_OPENCV8", std::vector<double>(v.begin(), v.end()),
-                            sensor.camera.intrinsics().width_px,
-                            sensor.camera.intrinsics().height_px);
-}
+calib::CameraModel SimCamera(const datasets::SensorModel& sensor) { return sensor.camera; }
 
 struct SimSensor {
   datasets::SensorModel sensor = datasets::MakeSensor(datasets::SensorOptions{});
@@ -46,6 +44,41 @@ TEST(Triangulator, ExactPointsLieOnTheLaserPlaneAndProjectToTheirPixel) {
     }
   }
   EXPECT_GT(valid, 300);
+}
+
+// The triangulator's inline ray-plane steps are core/ray_plane.hpp's rule (min_abs_cos = sin of
+// the smallest ray-plane angle), plus the depth window: same accept/reject, same point.
+TEST(Triangulator, InlineRayPlaneStepsAreTheRuleOfCoreIntersectRayPlane) {
+  SimSensor s;
+  TriangulatorOptions options;
+  options.min_ray_plane_angle_deg = 2.0;
+  const Triangulator tri(s.camera, s.plane, options);
+  const Eigen::Vector3d n = tri.plane().head<3>();
+  const double d = tri.plane()[3];
+  const double min_abs_cos = std::sin(options.min_ray_plane_angle_deg * std::numbers::pi / 180.0);
+  int accepted = 0, rejected = 0;
+  for (int u = 0; u < 1024; u += 53) {
+    for (double v = 0.5; v < 1023; v += 29.7) {
+      const Eigen::Vector3d r = s.camera.Unproject(Eigen::Vector2d(u, v));
+      const Eigen::Vector3d ray(r.x() / r.z(), r.y() / r.z(), 1.0);
+      const std::optional<Eigen::Vector3d> p = IntersectRayPlane(ray, n, d, min_abs_cos);
+      const bool in_range = p && p->z() >= options.min_depth_mm && p->z() <= options.max_depth_mm;
+      const Eigen::Vector3d exact = tri.TriangulateExact(u, v);
+      const Eigen::Vector3d fast = tri.TriangulateFast(u, v);
+      if (!in_range) {
+        EXPECT_TRUE(std::isnan(exact.x())) << u << " " << v;
+        EXPECT_TRUE(std::isnan(fast.x())) << u << " " << v;
+        ++rejected;
+        continue;
+      }
+      ++accepted;
+      ASSERT_FALSE(std::isnan(exact.x())) << u << " " << v;
+      EXPECT_LT((exact - *p).norm(), 1e-12 * p->norm()) << u << " " << v;
+      EXPECT_LT((fast - *p).norm(), 1e-4) << u << " " << v;
+    }
+  }
+  EXPECT_GT(accepted, 100);
+  EXPECT_GT(rejected, 10);
 }
 
 // The requirement: fast and exact paths agree within 1e-4 mm over the whole image, every
