@@ -60,6 +60,15 @@ Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& src,
   // Umeyama 1991 (eqs. 34-43) without scale: weighted centroids, SVD of the cross-covariance,
   // reflection guard S = diag(1, 1, det(U V^T)).
   const std::size_t n = src.size();
+  if (dst.size() != n || (!weights.empty() && weights.size() != n)) {
+    throw InputError("rigid fit (closed form): " + std::to_string(n) + " source points, " +
+                     std::to_string(dst.size()) + " target points and " +
+                     std::to_string(weights.size()) + " weights do not correspond");
+  }
+  if (n < 3) {
+    throw InputError("rigid fit (closed form): " + std::to_string(n) +
+                     " points: a rigid transform needs at least 3 non-collinear points");
+  }
   double wsum = 0;
   Eigen::Vector3d ms = Eigen::Vector3d::Zero(), md = Eigen::Vector3d::Zero();
   for (std::size_t i = 0; i < n; ++i) {
@@ -76,6 +85,13 @@ Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& src,
     h += w * (dst[i] - md) * (src[i] - ms).transpose();
   }
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  // Rank <= 1: the points (source or target) coincide or lie on one line, up to rounding.
+  if (!(wsum > 0) || !h.allFinite() ||
+      !(svd.singularValues()[1] > 1e-12 * svd.singularValues()[0])) {
+    throw InputError("rigid fit (closed form): the " + std::to_string(n) +
+                     " points coincide or lie on one line (or their weights are not positive): "
+                     "the rotation about that line is unobservable; add a point off the line");
+  }
   Eigen::Matrix3d s = Eigen::Matrix3d::Identity();
   if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) s(2, 2) = -1;
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();

@@ -10,18 +10,12 @@
 
 #include "calib/cost_functions/sphere_distance_cost.hpp"
 #include "core/error.hpp"
+#include "core/stats.hpp"
 
 namespace lasercell::calib {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 // One Ceres pass over the points with mask[i] != 0; returns the summary.
 ceres::Solver::Summary SolvePass(std::span<const Eigen::Vector3d> points,
@@ -127,11 +121,9 @@ SphereFitResult FitSphere(std::span<const Eigen::Vector3d> points,
   result.outlier.assign(n, 0);
   result.residuals_mm.assign(n, 0.0);
   if (n < num_params + 1) {
-    result.failure = std::to_string(n) + " points: a sphere fit needs at least " +
-                     std::to_string(num_params + 1) + (result.radius_fixed
-                                                           ? " with the radius known"
-                                                           : " with a free radius");
-    return result;
+    throw InputError(std::to_string(n) + " points: a sphere fit needs at least " +
+                     std::to_string(num_params + 1) +
+                     (result.radius_fixed ? " with the radius known" : " with a free radius"));
   }
 
   // Initialisation: Kasa. With the radius known, place the centre on the Kasa centre's line
@@ -147,10 +139,9 @@ SphereFitResult FitSphere(std::span<const Eigen::Vector3d> points,
     radius = algebraic->second;
   } else {
     if (!result.radius_fixed) {
-      result.failure = "the " + std::to_string(n) +
+      throw InputError("the " + std::to_string(n) +
                        " points lie on a plane: the radius of a free-radius sphere is undefined; "
-                       "give the radius";
-      return result;
+                       "give the radius");
     }
     // Coplanar with a known radius: start from the plane's normal side (either is a solution).
     Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
