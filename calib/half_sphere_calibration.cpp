@@ -270,8 +270,8 @@ void HalfSphereCalibrationOptions::Check() const {
 std::vector<SweptSphere> SweptSpheresFrom(const SphereSegmentationResult& segmentation) {
   std::vector<SweptSphere> out;
   for (const SegmentedSphere& s : segmentation.spheres) {
-    out.push_back({s.fit.center, s.fit.CenterCovariance(), s.fit.radius_mm,
-                   s.fit.radius_sigma_mm, s.fit.covariance.block<3, 1>(0, 3)});
+    out.push_back({s.fit.center, s.fit.CenterCovariance(), s.fit.radius_mm, s.fit.radius_sigma_mm,
+                   s.fit.covariance.block<3, 1>(0, 3)});
   }
   return out;
 }

@@ -85,12 +85,9 @@ Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& src,
     h += w * (dst[i] - md) * (src[i] - ms).transpose();
   }
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  // Rank <= 1: the points (source or target) coincide or lie on one line, up to rounding.
-  if (!(wsum > 0) || !h.allFinite() ||
-      !(svd.singularValues()[1] > 1e-12 * svd.singularValues()[0])) {
-    throw InputError("rigid fit (closed form): the " + std::to_string(n) +
-                     " points coincide or lie on one line (or their weights are not positive): "
-                     "the rotation about that line is unobservable; add a point off the line");
+  if (!(wsum > 0) || !std::isfinite(wsum)) {
+    throw InputError("rigid fit (closed form): the weights must be positive (their sum is " +
+                     std::to_string(wsum) + ")");
   }
   Eigen::Matrix3d s = Eigen::Matrix3d::Identity();
   if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) s(2, 2) = -1;

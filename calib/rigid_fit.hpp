@@ -76,8 +76,9 @@ RigidFitResult FitRigidTransform(const std::vector<Eigen::Vector3d>& p_in_source
 
 /// Unweighted-or-scalar-weighted closed form (Horn/Umeyama without scale): target_from_source
 /// minimising sum w_i |t_i - (R s_i + t)|^2. Throws InputError for mismatched sizes, fewer than
-/// 3 points, non-positive weights, or points that lie exactly on one line (a cross-covariance of
-/// rank <= 1; FitRigidTransform's min_off_line_mm test is the tolerant one).
+/// 3 points or weights that do not sum to a positive number. Collinearity is not checked here
+/// (the correspondence search scores many assignments; a rank-deficient cross-covariance there
+/// means a wrong assignment, not degenerate data): FitRigidTransform checks it.
 Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& p_in_source,
                                      const std::vector<Eigen::Vector3d>& p_in_target,
                                      const std::vector<double>& weights = {});

@@ -292,9 +292,10 @@ std::string ShapeRejection(const CandidateContext& ctx, const SphereFitResult& f
                options.min_cap_half_angle_deg);
   }
   if (fit.rms_mm > options.max_rms_fraction * thr) {
-    return Fmt("residuals fill the +-%.3f mm band evenly (rms %.3f mm): a surface "
-               "crossing a sphere, not a sphere",
-               thr, fit.rms_mm);
+    return Fmt(
+        "residuals fill the +-%.3f mm band evenly (rms %.3f mm): a surface "
+        "crossing a sphere, not a sphere",
+        thr, fit.rms_mm);
   }
   // Shell test inside the cap's cone: inliers / points within 3 inlier distances.
   const double cos_cap = std::cos(fit.cap_half_angle_deg / kRadToDeg);
@@ -310,18 +311,19 @@ std::string ShapeRejection(const CandidateContext& ctx, const SphereFitResult& f
   const double fraction = shell > 0 ? static_cast<double>(on_sphere) / shell : 0.0;
   *shell_fraction = fraction;
   if (fraction < options.min_shell_fraction) {
-    return Fmt("only %.0f %% of the points near its shell lie on it (< %.0f %%): "
-               "a surface crossing a sphere, not a sphere",
-               100 * fraction, 100 * options.min_shell_fraction);
+    return Fmt(
+        "only %.0f %% of the points near its shell lie on it (< %.0f %%): "
+        "a surface crossing a sphere, not a sphere",
+        100 * fraction, 100 * options.min_shell_fraction);
   }
   if (ctx.towards.norm() > 0) {
-    const double tilt =
-        std::acos(std::clamp(fit.cap_axis.dot(ctx.towards), -1.0, 1.0)) * kRadToDeg;
+    const double tilt = std::acos(std::clamp(fit.cap_axis.dot(ctx.towards), -1.0, 1.0)) * kRadToDeg;
     if (tilt > options.max_cap_tilt_deg) {
-      return Fmt("cap axis %.1f deg from the sensor direction (> %.1f deg): a "
-                 "stand, a ring or a concave patch, not a sphere seen from the "
-                 "sensor",
-                 tilt, options.max_cap_tilt_deg);
+      return Fmt(
+          "cap axis %.1f deg from the sensor direction (> %.1f deg): a "
+          "stand, a ring or a concave patch, not a sphere seen from the "
+          "sensor",
+          tilt, options.max_cap_tilt_deg);
     }
   }
   return "";
@@ -402,9 +404,10 @@ std::optional<SegmentedSphere> ExamineCandidate(const CandidateContext& ctx,
     fit.covariance *= kappa;
     fit.radius_sigma_mm *= std::sqrt(kappa);
     if (kappa > 1.5) {
-      fit.warnings.push_back(Fmt("residuals are correlated along the laser line (speckle?): "
-                                 "covariance inflated %.2fx",
-                                 kappa));
+      fit.warnings.push_back(
+          Fmt("residuals are correlated along the laser line (speckle?): "
+              "covariance inflated %.2fx",
+              kappa));
     }
   }
   return SegmentedSphere{std::move(fit), component, votes, shell_fraction, thr, kappa};
@@ -493,17 +496,16 @@ SphereSegmentationResult SegmentSpheres(const PointCloud& cloud,
   for (const Peak& peak : peaks) {
     if (static_cast<int>(result.candidates) >= options.max_candidates) break;
     if (result.spheres.size() >= options.max_spheres) break;
-    const Eigen::Vector3d guess =
-        (Eigen::Vector3d(peak.cell[0], peak.cell[1], peak.cell[2]) + Eigen::Vector3d::Constant(0.5)) *
-        options.vote_cell_mm;
+    const Eigen::Vector3d guess = (Eigen::Vector3d(peak.cell[0], peak.cell[1], peak.cell[2]) +
+                                   Eigen::Vector3d::Constant(0.5)) *
+                                  options.vote_cell_mm;
     bool near_kept = false;
     for (const auto& c : kept_centers) near_kept = near_kept || (c - guess).norm() < r_nom;
     if (near_kept) continue;
     ++result.candidates;
     std::string reason;
-    std::optional<SegmentedSphere> sphere =
-        ExamineCandidate(ctx, guess, peak.sum, used, options.seed * 0x1000193ull + result.candidates,
-                         &reason);
+    std::optional<SegmentedSphere> sphere = ExamineCandidate(
+        ctx, guess, peak.sum, used, options.seed * 0x1000193ull + result.candidates, &reason);
     if (!sphere) {
       result.rejected.push_back({guess, peak.sum, reason});
       continue;

@@ -159,7 +159,8 @@ LocalizeOptions DerivedOptions(const LocalizeOptions& options_in, const PpfModel
 
 // Steps 1-2: clean, region of interest, small clusters (Skotheim IV-A), normals toward the
 // sensor (IV-B).
-PointCloud PreprocessScene(const PointCloud& scene_in, const LocalizeOptions& options, LocalizationResult* result) {
+PointCloud PreprocessScene(const PointCloud& scene_in, const LocalizeOptions& options,
+                           LocalizationResult* result) {
   auto t = Clock::now();
   PointCloud scene = CleanScene(scene_in, &result->dropped_points);
   if (options.use_roi) scene = CropBox(scene, options.roi, options.roi_from_scene);
@@ -185,8 +186,8 @@ PointCloud PreprocessScene(const PointCloud& scene_in, const LocalizeOptions& op
 
 // Steps 3-5: voxel grid at the model's sampling step (IV-C), PPF voting (IV-D, Drost 2010),
 // pose clustering (IV-E).
-ClusteringResult MatchAndCluster(const PointCloud& scene, const PpfModel& model, const LocalizeOptions& options,
-                                 LocalizationResult* result) {
+ClusteringResult MatchAndCluster(const PointCloud& scene, const PpfModel& model,
+                                 const LocalizeOptions& options, LocalizationResult* result) {
   auto t = Clock::now();
   VoxelGridOptions voxel;
   voxel.voxel_size_mm = options.scene_sampling_step_mm > 0.0 ? options.scene_sampling_step_mm : model.sampling_step_mm();
@@ -227,13 +228,15 @@ struct Pending {
 // primaries passed, each followed by the orientations it suppressed at the same place with
 // nearly its score (symmetric or ambiguous views: ICP and the final support decide between
 // them, and the result says so). Candidates failing the coarse check go to result->rejected.
-std::vector<Pending> CoarseBatch(const RefineContext& ctx, const ClusteringResult& clustering, std::size_t batch_size,
-                                 std::size_t* next_cluster, std::size_t* examined, LocalizationResult* result) {
+std::vector<Pending> CoarseBatch(const RefineContext& ctx, const ClusteringResult& clustering,
+                                 std::size_t batch_size, std::size_t* next_cluster,
+                                 std::size_t* examined, LocalizationResult* result) {
   const LocalizeOptions& options = ctx.options;
   auto examine = [&](std::size_t index, bool primary, std::vector<Pending>* batch) {
     Pending p{CandidateFromCluster(clustering, index, ctx.model), {}, primary};
     p.candidate.coarse_verification =
-        VerifyPose(ctx.points, ctx.model, p.candidate.scene_from_model, options.viewpoint, options.verification, &p.overlap);
+        VerifyPose(ctx.points, ctx.model, p.candidate.scene_from_model, options.viewpoint,
+                   options.verification, &p.overlap);
     p.candidate.verification = p.candidate.coarse_verification;
     if (!p.candidate.coarse_verification.accepted) {
       p.candidate.rejection_reason = "before ICP: " + p.candidate.coarse_verification.rejection_reason;
@@ -254,7 +257,9 @@ std::vector<Pending> CoarseBatch(const RefineContext& ctx, const ClusteringResul
     std::size_t alternatives = 0;
     for (std::size_t a = c + 1; a < clustering.clusters.size() && alternatives < 2; ++a) {
       const PoseCluster& alt = clustering.clusters[a];
-      if (alt.suppressed_by != static_cast<int>(c) || alt.score < options.ambiguity_score_ratio * clustering.clusters[c].score) continue;
+      if (alt.suppressed_by != static_cast<int>(c) ||
+          alt.score < options.ambiguity_score_ratio * clustering.clusters[c].score)
+        continue;
       examine(a, false, &batch);
       ++alternatives;
     }
@@ -268,7 +273,8 @@ std::vector<Pending> CoarseBatch(const RefineContext& ctx, const ClusteringResul
 // always refined, the others only when their coarse support is close to the best seen. Another
 // batch follows while fewer than max_instances candidates pass the final check (up to
 // max_verified_clusters clusters). Returns the refined candidates (accepted or not).
-std::vector<LocalizationCandidate> VerifyAndRefine(const RefineContext& ctx, const ClusteringResult& clustering,
+std::vector<LocalizationCandidate> VerifyAndRefine(const RefineContext& ctx,
+                                                   const ClusteringResult& clustering,
                                                    LocalizationResult* result) {
   const LocalizeOptions& options = ctx.options;
   const std::size_t batch_size = options.max_instances + options.extra_refined_candidates;
@@ -277,7 +283,8 @@ std::vector<LocalizationCandidate> VerifyAndRefine(const RefineContext& ctx, con
   double best_coarse_support = 0.0;
   while (final_accepted < options.max_instances) {
     const auto t = Clock::now();
-    std::vector<Pending> batch = CoarseBatch(ctx, clustering, batch_size, &next_cluster, &examined, result);
+    std::vector<Pending> batch =
+        CoarseBatch(ctx, clustering, batch_size, &next_cluster, &examined, result);
     result->timings.verification_ms += MillisecondsSince(t);
     if (batch.empty()) break;
     for (const Pending& p : batch) best_coarse_support = std::max(best_coarse_support, p.candidate.coarse_verification.support);
@@ -307,12 +314,13 @@ std::vector<LocalizationCandidate> VerifyAndRefine(const RefineContext& ctx, con
 // Ranking by support after refinement (ties: cluster score); one instance per place. A second
 // orientation at the same place with nearly the winner's support makes the result ambiguous; so
 // does a planar model, whatever the scene (rotations about its normal are unobservable).
-void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& model, const LocalizeOptions& options,
-                    LocalizationResult* result) {
+void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& model,
+                    const LocalizeOptions& options, LocalizationResult* result) {
   const Eigen::Vector3d& var = model.principal_variances();
   if (var(0) > 0.0 && var(2) / var(0) < options.planarity_ratio) {
     result->ambiguous = true;
-    result->ambiguity_reason = "planar model (principal variance ratio " + std::to_string(var(2) / var(0)) +
+    result->ambiguity_reason = "planar model (principal variance ratio " +
+                               std::to_string(var(2) / var(0)) +
                                "): rotations about its normal are not observable";
   }
   std::stable_sort(refined.begin(), refined.end(), [](const LocalizationCandidate& a, const LocalizationCandidate& b) {
@@ -338,9 +346,11 @@ void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& 
     if (same_place != nullptr) {
       const double turn = RotationDistance(same_place->scene_from_model, candidate.scene_from_model);
       if (!result->ambiguous && turn > options.clustering.rotation_threshold_rad &&
-          candidate.verification.support >= options.ambiguity_score_ratio * same_place->verification.support) {
+          candidate.verification.support >=
+              options.ambiguity_score_ratio * same_place->verification.support) {
         result->ambiguous = true;
-        result->ambiguity_reason = "two orientations " + std::to_string(Deg(turn)) + " deg apart at the same place have support " +
+        result->ambiguity_reason = "two orientations " + std::to_string(Deg(turn)) +
+                                   " deg apart at the same place have support " +
                                    std::to_string(same_place->verification.support) + " and " +
                                    std::to_string(candidate.verification.support);
       }
@@ -366,21 +376,28 @@ std::string NotFoundMessage(const LocalizationResult& result, const ClusteringRe
   const LocalizationCandidate* strongest = nullptr;
   double runner_up = 0.0;
   for (const LocalizationCandidate& c : result.rejected) {
-    if (strongest == nullptr || c.score > strongest->score || (c.score == strongest->score && c.cluster < strongest->cluster)) {
+    if (strongest == nullptr || c.score > strongest->score ||
+        (c.score == strongest->score && c.cluster < strongest->cluster)) {
       if (strongest != nullptr) runner_up = std::max(runner_up, strongest->score);
       strongest = &c;
     } else {
       runner_up = std::max(runner_up, c.score);
     }
   }
-  if (clustering.clusters.empty()) return "no pose hypotheses: no scene pair matched the model's features";
+  if (clustering.clusters.empty())
+    return "no pose hypotheses: no scene pair matched the model's features";
   if (strongest == nullptr) return "no cluster could be examined";
   std::ostringstream m;
-  m << "no candidate passed verification (" << result.rejected.size() << " rejected); the strongest, cluster "
-    << strongest->cluster << " (score " << strongest->score;
-  if (runner_up > 0.0) m << ", " << std::setprecision(2) << std::fixed << strongest->score / runner_up << "x the next";
-  m << std::setprecision(3) << std::fixed << ", coarse support " << strongest->coarse_verification.support;
-  if (strongest->icp_run) m << ", support after ICP " << strongest->verification.support << ", ICP rmse " << strongest->icp.rmse_mm << " mm";
+  m << "no candidate passed verification (" << result.rejected.size()
+    << " rejected); the strongest, cluster " << strongest->cluster << " (score "
+    << strongest->score;
+  if (runner_up > 0.0)
+    m << ", " << std::setprecision(2) << std::fixed << strongest->score / runner_up << "x the next";
+  m << std::setprecision(3) << std::fixed << ", coarse support "
+    << strongest->coarse_verification.support;
+  if (strongest->icp_run)
+    m << ", support after ICP " << strongest->verification.support << ", ICP rmse "
+      << strongest->icp.rmse_mm << " mm";
   m << "), was rejected: " << strongest->rejection_reason;
   return m.str();
 }
@@ -389,41 +406,53 @@ std::string NotFoundMessage(const LocalizationResult& result, const ClusteringRe
 
 void LocalizeOptions::Check() const {
   viewpoint.Check("LocalizeOptions.viewpoint");
-  if (use_roi && roi.Empty()) throw OptionError("LocalizeOptions.roi is empty (min > max) while use_roi is set");
+  if (use_roi && roi.Empty())
+    throw OptionError("LocalizeOptions.roi is empty (min > max) while use_roi is set");
   if (remove_small_clusters) cluster_filter.Check();
   normals.Check();
   if (!(scene_sampling_step_mm >= 0.0) || !std::isfinite(scene_sampling_step_mm)) {
-    throw OptionError("LocalizeOptions.scene_sampling_step_mm = " + std::to_string(scene_sampling_step_mm) +
-                      ": must be >= 0 mm (0 = the model's sampling step)");
+    throw OptionError(
+        "LocalizeOptions.scene_sampling_step_mm = " + std::to_string(scene_sampling_step_mm) +
+        ": must be >= 0 mm (0 = the model's sampling step)");
   }
   matching.Check();
   clustering.Check();
   verification.Check();
   icp.Check();
   auto non_negative = [](double v, const char* field) {
-    if (!(v >= 0.0) || !std::isfinite(v)) throw OptionError(std::string("LocalizeOptions.") + field + " = " + std::to_string(v) + ": must be >= 0");
+    if (!(v >= 0.0) || !std::isfinite(v))
+      throw OptionError(std::string("LocalizeOptions.") + field + " = " + std::to_string(v) +
+                        ": must be >= 0");
   };
   non_negative(cluster_radius_relative, "cluster_radius_relative");
   non_negative(support_distance_relative, "support_distance_relative");
   non_negative(icp_max_distance_relative, "icp_max_distance_relative");
   non_negative(verification_cell_relative, "verification_cell_relative");
-  if (!(refined_support_distance_relative > 0.0) || !std::isfinite(refined_support_distance_relative)) {
-    throw OptionError("LocalizeOptions.refined_support_distance_relative = " + std::to_string(refined_support_distance_relative) +
+  if (!(refined_support_distance_relative > 0.0) ||
+      !std::isfinite(refined_support_distance_relative)) {
+    throw OptionError("LocalizeOptions.refined_support_distance_relative = " +
+                      std::to_string(refined_support_distance_relative) +
                       ": must be > 0 (fraction of the model diameter)");
   }
   if (!(refined_min_support >= 0.0 && refined_min_support <= 1.0)) {
-    throw OptionError("LocalizeOptions.refined_min_support = " + std::to_string(refined_min_support) + ": must be in [0, 1]");
+    throw OptionError("LocalizeOptions.refined_min_support = " +
+                      std::to_string(refined_min_support) + ": must be in [0, 1]");
   }
-  if (max_verified_clusters < 1) throw OptionError("LocalizeOptions.max_verified_clusters must be >= 1");
+  if (max_verified_clusters < 1)
+    throw OptionError("LocalizeOptions.max_verified_clusters must be >= 1");
   if (!(extra_refined_min_relative_support >= 0.0 && extra_refined_min_relative_support <= 1.0)) {
-    throw OptionError("LocalizeOptions.extra_refined_min_relative_support = " + std::to_string(extra_refined_min_relative_support) +
-                      ": must be in [0, 1]");
+    throw OptionError("LocalizeOptions.extra_refined_min_relative_support = " +
+                      std::to_string(extra_refined_min_relative_support) + ": must be in [0, 1]");
   }
-  if (icp_rounds < 1 || icp_rounds > 10) throw OptionError("LocalizeOptions.icp_rounds = " + std::to_string(icp_rounds) + ": must be in [1, 10]");
-  if (max_icp_source_points < 10) throw OptionError("LocalizeOptions.max_icp_source_points must be >= 10");
+  if (icp_rounds < 1 || icp_rounds > 10)
+    throw OptionError("LocalizeOptions.icp_rounds = " + std::to_string(icp_rounds) +
+                      ": must be in [1, 10]");
+  if (max_icp_source_points < 10)
+    throw OptionError("LocalizeOptions.max_icp_source_points must be >= 10");
   if (max_instances < 1) throw OptionError("LocalizeOptions.max_instances must be >= 1");
   if (!(ambiguity_score_ratio > 0.0 && ambiguity_score_ratio <= 1.0)) {
-    throw OptionError("LocalizeOptions.ambiguity_score_ratio = " + std::to_string(ambiguity_score_ratio) + ": must be in (0, 1]");
+    throw OptionError("LocalizeOptions.ambiguity_score_ratio = " +
+                      std::to_string(ambiguity_score_ratio) + ": must be in (0, 1]");
   }
   non_negative(planarity_ratio, "planarity_ratio");
 }
@@ -434,21 +463,27 @@ std::string LocalizationResult::Summary() const {
     s << "not found: " << message;
   } else {
     const LocalizationCandidate& best = candidates.front();
-    s << "found " << candidates.size() << " instance(s); best support " << best.verification.support;
-    if (best.icp_run) s << ", icp rmse " << best.icp.rmse_mm << " mm, " << best.icp.inliers << " inliers";
+    s << "found " << candidates.size() << " instance(s); best support "
+      << best.verification.support;
+    if (best.icp_run)
+      s << ", icp rmse " << best.icp.rmse_mm << " mm, " << best.icp.inliers << " inliers";
   }
   if (ambiguous) s << "; AMBIGUOUS: " << ambiguity_reason;
-  s << "; " << timings.total_ms << " ms (match " << timings.matching_ms << ", icp " << timings.icp_ms << ")";
+  s << "; " << timings.total_ms << " ms (match " << timings.matching_ms << ", icp "
+    << timings.icp_ms << ")";
   return s.str();
 }
 
-LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& model, const LocalizeOptions& options_in) {
+LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& model,
+                                   const LocalizeOptions& options_in) {
   options_in.Check();
   const auto start = Clock::now();
   LocalizationResult result;
   result.scene_points = scene_in.size();
-  if (scene_in.empty()) throw InputError("LocalizeInCloud: the scene cloud is empty; nothing to search");
-  if (model.points().empty()) throw InputError("LocalizeInCloud: the PPF model is empty; build it from a model cloud");
+  if (scene_in.empty())
+    throw InputError("LocalizeInCloud: the scene cloud is empty; nothing to search");
+  if (model.points().empty())
+    throw InputError("LocalizeInCloud: the PPF model is empty; build it from a model cloud");
   const LocalizeOptions options = DerivedOptions(options_in, model);
 
   // Steps 1-2: preprocessing and normals.
@@ -469,7 +504,8 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
   std::vector<Eigen::Vector3d> thinned;
   const std::vector<Eigen::Vector3d>* check_points = &scene.positions;
   if (options.verification_cell_relative > 0.0) {
-    thinned = SpatiallyThinned(scene.positions, options.verification_cell_relative * refined_support_mm);
+    thinned =
+        SpatiallyThinned(scene.positions, options.verification_cell_relative * refined_support_mm);
     check_points = &thinned;
   }
   result.timings.verification_ms = MillisecondsSince(t);

@@ -199,7 +199,8 @@ TEST_F(CliTest, LocalizeFindsTheParasaurolophusInRs1) {
   ASSERT_EQ(best["scene_from_model"]["translation_mm"].size(), 3u);
   ASSERT_EQ(best["scene_from_model"]["rotation_wxyz"].size(), 4u);
   double q2 = 0;
-  for (const auto& c : best["scene_from_model"]["rotation_wxyz"]) q2 += c.get<double>() * c.get<double>();
+  for (const auto& c : best["scene_from_model"]["rotation_wxyz"])
+    q2 += c.get<double>() * c.get<double>();
   EXPECT_NEAR(q2, 1.0, 1e-12);
   ASSERT_EQ(best["scene_from_model_matrix"].size(), 4u);  // rows of a 4x4 matrix
   ASSERT_EQ(best["scene_from_model_matrix"][3].size(), 4u);
