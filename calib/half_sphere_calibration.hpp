@@ -1,6 +1,6 @@
 #pragma once
-// Half-sphere calibration of the sweep frame into the handling robot's base (issue 7, item 2;
-// Skotheim et al., calibration step 3).
+// Half-sphere calibration of the sweep frame into the handling robot's base (Skotheim et al. 2012,
+// calibration step 3).
 //
 // Frames: `sweep` = the frame the sweep cloud is in; for a linear sweep (triangulation's
 // linear assembly) this is the `sensor` frame at the sweep start, so the result is
@@ -25,7 +25,12 @@
 // assignment of the smaller set into the larger is scored by the RMS of a closed-form rigid fit;
 // the best wins if it is consistent (rms <= max_match_rms_mm) and no other assignment is
 // (otherwise: InputError, "ambiguous"). Fewer than 3 matched spheres or collinear spheres:
-// InputError naming the degeneracy.
+// InputError naming the degeneracy. Outcomes on valid data (unmatched spheres, a weighted fit
+// that did not converge, chi2 beyond the stated sigmas) are warnings in the result.
+//
+// CalibrateHalfSpheresInSweep composes the whole step from a sweep cloud and a touches file's
+// contents: SegmentSpheres, then CalibrateHalfSpheres; half_sphere_report.hpp writes its JSON
+// and HTML report.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -130,5 +135,63 @@ std::vector<SweptSphere> SweptSpheresFrom(const SphereSegmentationResult& segmen
 /// The static edge handling_base <- sweep_frame with the result's pose and covariance.
 StaticEdge HalfSphereEdge(const HalfSphereCalibrationResult& result,
                           const std::string& sweep_frame, const EdgeProvenance& provenance);
+
+/// Options of CalibrateHalfSpheresInSweep: what the touches file may leave open. Units mm.
+struct HalfSphereSweepOptions {
+  double radius_mm = 0;       ///< Nominal sphere radius (> 0); 0: the touches' sphere_radius_mm.
+  bool free_radius = false;   ///< Fit each sphere's radius instead of fixing it to radius_mm.
+  double touch_sigma_mm = 0;  ///< Per-axis 1-sigma of a touch (> 0); 0: stated_sigma_mm.
+  /// Direction against gravity in handling_base (HalfSphereCalibrationOptions).
+  Eigen::Vector3d up_in_handling_base = Eigen::Vector3d::UnitZ();
+  /// Appended to the failure when no sphere is found, e.g. the cloud reader's unit hint
+  /// (io::ReadReport::unit_hint); may be empty.
+  std::string sweep_unit_hint;
+};
+
+/// Names of a run's inputs, for messages, the result JSON and the report (paths, usually).
+struct HalfSphereInputNames {
+  std::string cell;                    ///< The cell file the edge goes to.
+  std::string sweep = "sweep";         ///< The sweep cloud.
+  std::string touches = "touches";     ///< The touches file.
+  std::string sweep_frame = "sensor";  ///< Frame of the sweep cloud (the edge's child).
+};
+
+/// Outcome of CalibrateHalfSpheresInSweep.
+struct HalfSphereSweepResult {
+  /// False when no sphere of the radius was found in the sweep (an outcome, see `failure`).
+  bool calibrated = false;
+  /// Why nothing was calibrated: the radius, the segmentation summary, the unit hint and the
+  /// strongest rejected candidate's reason.
+  std::string failure;
+  SphereSegmentationResult segmentation;  ///< Spheres found in the sweep.
+  /// The calibration (when calibrated); its warnings include the matched spheres' fit warnings,
+  /// as "sphere N: ...".
+  HalfSphereCalibrationResult calibration;
+  double radius_mm = 0;       ///< Radius used (option or touches file).
+  double touch_sigma_mm = 0;  ///< Touch sigma used (option or touches file).
+  Eigen::Vector3d up_in_handling_base = Eigen::Vector3d::UnitZ();  ///< Normalized.
+};
+
+/// Segments the spheres out of `sweep` (SegmentSpheres, radius fixed unless free_radius) and
+/// calibrates handling_base_from_sweep against the touches (CalibrateHalfSpheres). Throws
+/// InputError when neither the options nor the touches give the radius, and, prefixed with the
+/// sweep and touches names, the degeneracies CalibrateHalfSpheres names; OptionError for bad
+/// options. No sphere in the sweep is reported (calibrated = false), not thrown.
+HalfSphereSweepResult CalibrateHalfSpheresInSweep(const PointCloud& sweep,
+                                                  const SphereTouches& touches,
+                                                  const HalfSphereSweepOptions& options,
+                                                  const HalfSphereInputNames& names = {});
+
+/// Throws InputError (naming `cell_name`) when handling_base and `sweep_frame` are already
+/// joined by other edges than their own (the new edge would close a cycle), e.g. through a
+/// hand-eye edge: a half-sphere calibration holds for one sweep and needs a frame of its own.
+void CheckHalfSphereEdgeFits(const FrameGraph& graph, const std::string& sweep_frame,
+                             const std::string& cell_name);
+
+/// Provenance of the edge: tool "lasercell calibrate spheres VERSION", the UTC date,
+/// `input_digest` (InputDigest over the sweep file and the touches text) and the residual line
+/// "rms R mm over N spheres, chi2/dof X/D".
+EdgeProvenance HalfSphereProvenance(const HalfSphereCalibrationResult& result,
+                                    const std::string& input_digest);
 
 }  // namespace lasercell::calib

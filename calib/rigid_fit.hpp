@@ -1,5 +1,5 @@
 #pragma once
-// Weighted rigid fit between corresponding 3-D points (issue 7, item 2).
+// Weighted rigid fit between corresponding 3-D points.
 //
 // Finds target_from_source minimising sum_i e_i^T S_i^-1 e_i, e_i = t_i - (R s_i + t), with
 // S_i = C_target,i + R C_source,i R^T (the points' 3x3 covariances, mm^2).
@@ -75,7 +75,10 @@ RigidFitResult FitRigidTransform(const std::vector<Eigen::Vector3d>& p_in_source
                                  const RigidFitOptions& options = {});
 
 /// Unweighted-or-scalar-weighted closed form (Horn/Umeyama without scale): target_from_source
-/// minimising sum w_i |t_i - (R s_i + t)|^2. Needs >= 3 non-collinear points (not checked).
+/// minimising sum w_i |t_i - (R s_i + t)|^2. Throws InputError for mismatched sizes, fewer than
+/// 3 points or weights that do not sum to a positive number. Collinearity is not checked here
+/// (the correspondence search scores many assignments; a rank-deficient cross-covariance there
+/// means a wrong assignment, not degenerate data): FitRigidTransform checks it.
 Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& p_in_source,
                                      const std::vector<Eigen::Vector3d>& p_in_target,
                                      const std::vector<double>& weights = {});

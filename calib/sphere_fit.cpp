@@ -10,18 +10,12 @@
 
 #include "calib/cost_functions/sphere_distance_cost.hpp"
 #include "core/error.hpp"
+#include "core/stats.hpp"
 
 namespace lasercell::calib {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
-
-double Median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
-  std::nth_element(v.begin(), mid, v.end());
-  return *mid;
-}
 
 // One Ceres pass over the points with mask[i] != 0; returns the summary.
 ceres::Solver::Summary SolvePass(std::span<const Eigen::Vector3d> points,
@@ -58,6 +52,59 @@ std::string Fmt(const char* format, double a, double b = 0, double c = 0) {
   char buf[160];
   std::snprintf(buf, sizeof buf, format, a, b, c);
   return buf;
+}
+
+// Initialisation: Kasa. With the radius known, place the centre on the Kasa centre's line
+// through the points' mean at the known radius from it (the Kasa radius is biased on caps).
+// Throws InputError for coplanar points with a free radius.
+void InitialSphere(std::span<const Eigen::Vector3d> points, const SphereFitOptions& options,
+                   Eigen::Vector3d* center_out, double* radius_out) {
+  const std::size_t n = points.size();
+  const bool radius_fixed = options.radius_mm.has_value();
+  Eigen::Vector3d center;
+  double radius;
+  const auto algebraic = AlgebraicSphere(points);
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : points) mean += p;
+  mean /= static_cast<double>(n);
+  if (algebraic) {
+    center = algebraic->first;
+    radius = algebraic->second;
+  } else {
+    if (!radius_fixed) {
+      throw InputError("the " + std::to_string(n) +
+                       " points lie on a plane: the radius of a free-radius sphere is undefined; "
+                       "give the radius");
+    }
+    // Coplanar with a known radius: start from the plane's normal side (either is a solution).
+    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+    for (const auto& p : points) scatter += (p - mean) * (p - mean).transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
+    center = mean + *options.radius_mm * eig.eigenvectors().col(0);
+    radius = *options.radius_mm;
+  }
+  if (radius_fixed) {
+    radius = *options.radius_mm;
+    Eigen::Vector3d dir = center - mean;
+    if (dir.norm() < 1e-12) dir = Eigen::Vector3d::UnitZ();
+    // Keep the Kasa centre when it is plausible; else move it to the known radius.
+    if (std::abs(dir.norm() - radius) > 0.5 * radius) center = mean + radius * dir.normalized();
+  }
+  *center_out = center;
+  *radius_out = radius;
+}
+
+// Half-angle (deg) of the cone about `axis` holding 95 % of the unit directions.
+double CapHalfAngleDeg(const std::vector<Eigen::Vector3d>& dirs, const Eigen::Vector3d& axis) {
+  std::vector<double> angles;
+  angles.reserve(dirs.size());
+  for (const auto& u : dirs) {
+    angles.push_back(std::acos(std::clamp(u.dot(axis), -1.0, 1.0)) * kRadToDeg);
+  }
+  if (angles.empty()) return 0;
+  const auto k = static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(angles.size() - 1));
+  std::nth_element(angles.begin(), angles.begin() + k, angles.end());
+  return angles[static_cast<std::size_t>(k)];
 }
 
 }  // namespace
@@ -127,45 +174,15 @@ SphereFitResult FitSphere(std::span<const Eigen::Vector3d> points,
   result.outlier.assign(n, 0);
   result.residuals_mm.assign(n, 0.0);
   if (n < num_params + 1) {
-    result.failure = std::to_string(n) + " points: a sphere fit needs at least " +
-                     std::to_string(num_params + 1) + (result.radius_fixed
-                                                           ? " with the radius known"
-                                                           : " with a free radius");
-    return result;
+    throw InputError(std::to_string(n) + " points: a sphere fit needs at least " +
+                     std::to_string(num_params + 1) +
+                     (result.radius_fixed ? " with the radius known" : " with a free radius"));
   }
 
-  // Initialisation: Kasa. With the radius known, place the centre on the Kasa centre's line
-  // through the points' mean at the known radius from it (the Kasa radius is biased on caps).
+  // Initialisation: Kasa (InitialSphere).
   Eigen::Vector3d center;
   double radius;
-  const auto algebraic = AlgebraicSphere(points);
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (const auto& p : points) mean += p;
-  mean /= static_cast<double>(n);
-  if (algebraic) {
-    center = algebraic->first;
-    radius = algebraic->second;
-  } else {
-    if (!result.radius_fixed) {
-      result.failure = "the " + std::to_string(n) +
-                       " points lie on a plane: the radius of a free-radius sphere is undefined; "
-                       "give the radius";
-      return result;
-    }
-    // Coplanar with a known radius: start from the plane's normal side (either is a solution).
-    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-    for (const auto& p : points) scatter += (p - mean) * (p - mean).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter);
-    center = mean + *options.radius_mm * eig.eigenvectors().col(0);
-    radius = *options.radius_mm;
-  }
-  if (result.radius_fixed) {
-    radius = *options.radius_mm;
-    Eigen::Vector3d dir = center - mean;
-    if (dir.norm() < 1e-12) dir = Eigen::Vector3d::UnitZ();
-    // Keep the Kasa centre when it is plausible; else move it to the known radius.
-    if (std::abs(dir.norm() - radius) > 0.5 * radius) center = mean + radius * dir.normalized();
-  }
+  InitialSphere(points, options, &center, &radius);
 
   // Robust pass over all points.
   std::vector<std::uint8_t> use(n, 1);
@@ -248,16 +265,7 @@ SphereFitResult FitSphere(std::span<const Eigen::Vector3d> points,
   // Cap: mean direction and the 95 % cone about it.
   result.cap_axis = dir_sum.norm() > 1e-12 ? Eigen::Vector3d(dir_sum.normalized())
                                            : Eigen::Vector3d::Zero();
-  std::vector<double> angles;
-  angles.reserve(dirs.size());
-  for (const auto& u : dirs) {
-    angles.push_back(std::acos(std::clamp(u.dot(result.cap_axis), -1.0, 1.0)) * kRadToDeg);
-  }
-  if (!angles.empty()) {
-    const auto k = static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(angles.size() - 1));
-    std::nth_element(angles.begin(), angles.begin() + k, angles.end());
-    result.cap_half_angle_deg = angles[static_cast<std::size_t>(k)];
-  }
+  result.cap_half_angle_deg = CapHalfAngleDeg(dirs, result.cap_axis);
   if (!result.radius_fixed && result.cap_half_angle_deg < options.min_cap_half_angle_deg) {
     result.radius_determined = false;
     result.warnings.push_back(

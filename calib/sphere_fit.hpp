@@ -1,5 +1,5 @@
 #pragma once
-// Sphere fitting to measured surface points (issue 7, item 1).
+// Sphere fitting to measured surface points.
 //
 // Conventions: points and the centre are in one frame, whatever the caller's (`p_in_frame`);
 // units mm. Residuals are signed point-to-surface distances |p - c| - R (positive outside).
@@ -53,7 +53,8 @@ struct SphereFitOptions {
 
 /// Outcome of FitSphere. Covariances are 1-sigma^2, scaled by the residual variance.
 struct SphereFitResult {
-  bool success = false;  ///< False: too few usable points or a degenerate point set (see failure).
+  /// False: too few of the points agree with one sphere, or they do not fix it (see failure).
+  bool success = false;
   std::string failure;   ///< Why not, when !success.
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  ///< Centre, mm (caller's frame).
   double radius_mm = 0;                              ///< Fitted or given radius.
@@ -86,9 +87,11 @@ struct SphereFitResult {
   std::string Summary() const;
 };
 
-/// Fits a sphere to `points` (mm, any frame). Throws InputError for non-finite points or bad
-/// options; an unusable point set (fewer than 4 points, or 3 with the radius known; all points
-/// on a plane with a free radius) is reported in the result (success = false), never thrown.
+/// Fits a sphere to `points` (mm, any frame). Throws OptionError for bad options and
+/// InputError naming the degeneracy for points that cannot determine a sphere: non-finite
+/// points, fewer than 5 points (4 with the radius known), all points on a plane with a free
+/// radius. An outcome on such valid points -- too few of them agree with one sphere, a singular
+/// information matrix -- is reported in the result (success = false, `failure`), never thrown.
 SphereFitResult FitSphere(std::span<const Eigen::Vector3d> points,
                           const SphereFitOptions& options = {});
 

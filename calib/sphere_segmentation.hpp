@@ -1,5 +1,5 @@
 #pragma once
-// Segmentation of calibration (half) spheres out of a sweep point cloud (issue 7, item 1).
+// Segmentation of calibration (half) spheres out of a sweep point cloud.
 //
 // Input: a sweep cloud in one frame (mm), e.g. the sensor frame at the start of a linear sweep,
 // holding spheres on cylindrical stands over a floor or pallet. Output: one FitSphere result per

@@ -1,5 +1,6 @@
 #pragma once
-// LocalizeInCloud: the seven localization steps of Skotheim et al. (SEED.md) over one scene:
+// LocalizeInCloud: the seven localization steps of Skotheim et al. 2012 (section IV) over one
+// scene:
 //   1. region of interest + removal of small connected components (filters.hpp),
 //   2. normals (PCA, toward the sensor) when the scene has none (normals.hpp),
 //   3. voxel-grid subsampling at the model's sampling step (filters.hpp),

@@ -195,6 +195,31 @@ TEST(CalibrateHalfSpheres, TouchOrderDoesNotMatterAndExtraSweptSpheresAreReporte
   EXPECT_FALSE(r.warnings.empty());
 }
 
+// Not converging is an outcome on valid data: reported (warning, fit.converged), not thrown.
+TEST(CalibrateHalfSpheres, ARigidFitThatDoesNotConvergeIsAWarning) {
+  const std::vector<Eigen::Vector3d> centers = {
+      {-250, -140, 600}, {230, -160, 560}, {260, 150, 520}, {-220, 170, 480}};
+  auto touches = TouchesAt(centers, SomePose());
+  const Eigen::Vector3d noise[4] = {
+      {0.3, -0.1, 0.2}, {-0.2, 0.25, -0.1}, {0.1, 0.2, -0.3}, {-0.15, -0.3, 0.1}};
+  for (std::size_t k = 0; k < 4; ++k) touches[k].point_in_handling_base += noise[k];
+  auto swept = SweptAt(centers);
+  // Anisotropic centre covariances: the Mahalanobis optimum is not the closed form's.
+  for (auto& s : swept) s.covariance = Eigen::Vector3d(1e-4, 4e-4, 9e-2).asDiagonal();
+  HalfSphereCalibrationOptions options;
+  options.rigid.max_iterations = 1;
+  const auto r = CalibrateHalfSpheres(swept, touches, options);
+  EXPECT_FALSE(r.fit.converged);
+  bool warned = false;
+  for (const auto& w : r.warnings)
+    warned = warned || w.find("did not converge") != std::string::npos;
+  EXPECT_TRUE(warned);
+  options.rigid.max_iterations = 20;
+  const auto converged = CalibrateHalfSpheres(swept, touches, options);
+  EXPECT_TRUE(converged.fit.converged);
+  for (const auto& w : converged.warnings) EXPECT_EQ(w.find("did not converge"), std::string::npos);
+}
+
 TEST(CalibrateHalfSpheres, FewerThanThreeSpheresIsAnError) {
   const std::vector<Eigen::Vector3d> centers = {{-250, -140, 600}, {230, -160, 560}};
   try {

@@ -117,6 +117,24 @@ TEST(FitRigidTransform, CollinearPointsNameTheDegeneracy) {
   }
 }
 
+// The closed form refuses input that cannot determine a rotation instead of returning garbage.
+TEST(HornRigidTransform, DegenerateInputIsAnInputErrorNamingIt) {
+  const std::vector<Eigen::Vector3d> two = {{0, 0, 0}, {100, 0, 0}};
+  try {
+    HornRigidTransform(two, two);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("2 points: a rigid transform needs at least 3"),
+              std::string::npos)
+        << e.what();
+  }
+  const auto src = Layout();
+  EXPECT_THROW(HornRigidTransform(src, {src[0], src[1], src[2]}), InputError);
+  EXPECT_THROW(HornRigidTransform(src, src, {1.0, 1.0}), InputError);
+  EXPECT_THROW(HornRigidTransform(src, src, std::vector<double>(src.size(), 0.0)), InputError);
+  EXPECT_NO_THROW(HornRigidTransform(src, src));
+}
+
 TEST(FitRigidTransform, MismatchedCountsAndBadCovariancesThrow) {
   const auto src = Layout();
   EXPECT_THROW(FitRigidTransform(src, {src[0], src[1], src[2]}), InputError);

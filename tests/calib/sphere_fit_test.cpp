@@ -139,19 +139,44 @@ TEST(FitSphere, SmallCapWithFreeRadiusSaysTheRadiusIsNotFixed) {
   EXPECT_LE(std::sqrt(err.dot(fixed.CenterCovariance().inverse() * err)), 4.0);
 }
 
-TEST(FitSphere, TooFewOrCoplanarPointsAreReportedNotThrown) {
+// Points that cannot determine a sphere are degenerate input (the error rule): InputError
+// naming the degeneracy. They were reported in the result before.
+TEST(FitSphere, TooFewOrCoplanarPointsAreAnInputErrorNamingTheDegeneracy) {
   const std::vector<Eigen::Vector3d> three = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
-  const SphereFitResult r = FitSphere(three);
-  EXPECT_FALSE(r.success);
-  EXPECT_NE(r.failure.find("at least 5 with a free radius"), std::string::npos) << r.failure;
+  try {
+    FitSphere(three);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 5 with a free radius"), std::string::npos)
+        << e.what();
+  }
+  SphereFitOptions given;
+  given.radius_mm = 10.0;
+  try {
+    FitSphere(three, given);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("at least 4 with the radius known"), std::string::npos)
+        << e.what();
+  }
   std::vector<Eigen::Vector3d> plane;
   for (int i = 0; i < 10; ++i) {
     for (int j = 0; j < 10; ++j) plane.emplace_back(i, j, 3.0);
   }
-  const SphereFitResult p = FitSphere(plane);
-  EXPECT_FALSE(p.success);
-  EXPECT_NE(p.failure.find("lie on a plane"), std::string::npos) << p.failure;
-  EXPECT_NE(p.Summary().find("sphere fit failed"), std::string::npos);
+  try {
+    FitSphere(plane);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("lie on a plane"), std::string::npos) << e.what();
+  }
+  // With the radius known a plane patch has a sphere (either side): fitted, not thrown.
+  EXPECT_NO_THROW(FitSphere(plane, given));
+}
+
+TEST(FitSphere, AFailedFitSaysSoInItsSummary) {
+  SphereFitResult failed;
+  failed.failure = "only 2 of 9 points agree with one sphere";
+  EXPECT_NE(failed.Summary().find("sphere fit failed"), std::string::npos);
 }
 
 TEST(FitSphere, BadOptionsAndPointsThrowNamingTheField) {

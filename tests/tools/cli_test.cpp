@@ -195,9 +195,20 @@ TEST_F(CliTest, LocalizeFindsTheParasaurolophusInRs1) {
   ASSERT_GE(j["candidates"].size(), 1u);
   const auto& best = j["candidates"][0];
   EXPECT_EQ(best["rank"], 1);
-  ASSERT_EQ(best["scene_from_model"].size(), 4u);  // rows of a 4x4 matrix
-  ASSERT_EQ(best["scene_from_model"][3].size(), 4u);
-  EXPECT_EQ(best["scene_from_model"][3], nlohmann::json({0.0, 0.0, 0.0, 1.0}));
+  // The pose in the file notation of every lasercell file; the 4x4 rides along.
+  ASSERT_EQ(best["scene_from_model"]["translation_mm"].size(), 3u);
+  ASSERT_EQ(best["scene_from_model"]["rotation_wxyz"].size(), 4u);
+  double q2 = 0;
+  for (const auto& c : best["scene_from_model"]["rotation_wxyz"])
+    q2 += c.get<double>() * c.get<double>();
+  EXPECT_NEAR(q2, 1.0, 1e-12);
+  ASSERT_EQ(best["scene_from_model_matrix"].size(), 4u);  // rows of a 4x4 matrix
+  ASSERT_EQ(best["scene_from_model_matrix"][3].size(), 4u);
+  EXPECT_EQ(best["scene_from_model_matrix"][3], nlohmann::json({0.0, 0.0, 0.0, 1.0}));
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(best["scene_from_model_matrix"][k][3].get<double>(),
+                best["scene_from_model"]["translation_mm"][k].get<double>(), 1e-9);
+  }
   EXPECT_GT(best["support"].get<double>(), 0.5);
   EXPECT_LT(best["icp"]["rmse_mm"].get<double>(), 2.0);
   EXPECT_TRUE(j["timings_ms"].contains("matching"));
@@ -259,6 +270,8 @@ TEST_F(CliTest, LocalizeSavesAndReusesAPrebuiltModel) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto a = nlohmann::json::parse(Slurp(out1)), b = nlohmann::json::parse(Slurp(out2));
   EXPECT_EQ(a["candidates"][0]["scene_from_model"], b["candidates"][0]["scene_from_model"]);
+  EXPECT_EQ(a["candidates"][0]["scene_from_model_matrix"],
+            b["candidates"][0]["scene_from_model_matrix"]);
 }
 
 TEST_F(CliTest, SimulateSeatIsDeterministicAndReadable) {

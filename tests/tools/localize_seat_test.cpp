@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "core/se3.hpp"
 #include "tests/cli_util.hpp"
@@ -66,13 +67,14 @@ TEST(LocalizeSeat, TheSimulatedSeatsHoleIsFoundWithinAMillimetreAndAHalf) {
 
     const nlohmann::json j = nlohmann::json::parse(Slurp(result));
     ASSERT_TRUE(j["found"].get<bool>()) << name << ": " << j["message"];
-    Eigen::Matrix4d m;
-    for (int row = 0; row < 4; ++row) {
-      for (int col = 0; col < 4; ++col) {
-        m(row, col) = j["candidates"][0]["scene_from_model"][row][col].get<double>();
-      }
-    }
-    const Eigen::Isometry3d sensor_from_seat(m);
+    // The pose in the file notation {translation_mm, rotation_wxyz}, as cell.yaml holds it.
+    const nlohmann::json& pose = j["candidates"][0]["scene_from_model"];
+    const std::vector<double> q = pose["rotation_wxyz"].get<std::vector<double>>();
+    const std::vector<double> t = pose["translation_mm"].get<std::vector<double>>();
+    ASSERT_EQ(q.size(), 4u);
+    ASSERT_EQ(t.size(), 3u);
+    const Eigen::Isometry3d sensor_from_seat = PoseFromQuaternion(
+        Eigen::Quaterniond(q[0], q[1], q[2], q[3]), Eigen::Vector3d(t[0], t[1], t[2]));
     const Eigen::Isometry3d base_from_sensor =
         Pose(capture["sweep"]["handling_base_from_sensor_at_t0"]);
     const Eigen::Vector3d hole_true = Vec3(capture["hole_center_in_handling_base"]);

@@ -1,0 +1,35 @@
+#pragma once
+// The localize options file (YAML, format `lasercell.localize_options`, version 1): every field
+// of LocalizeOptions (localize_in_cloud.hpp) and of the PPF model's PpfModelOptions
+// (ppf_model.hpp, under `model:`), with the names, defaults and units of those structs. Every
+// key is optional; an unknown key or a value of the wrong type is an OptionError naming the file
+// and the dotted field (core/yaml_fields.hpp). The README lists the keys.
+//
+// Not in the file: LocalizeOptions.progress (a callback) and the per-stage `threads` and
+// `viewpoint` fields, which LocalizeInCloud overrides with the top-level `threads` and viewpoint.
+// `roi` present sets use_roi. Values are read, not checked: LocalizeOptions::Check and
+// PpfModelOptions::Check name a field out of range.
+
+#include <string>
+
+#include "registration/localize_in_cloud.hpp"
+#include "registration/ppf_model.hpp"
+
+namespace lasercell::registration {
+
+/// What an options file sets: the localization and the model build (when the model is built
+/// from a cloud or mesh rather than loaded from a .ppfm).
+struct LocalizeSettings {
+  LocalizeOptions localize;  ///< Defaults where the file is silent.
+  PpfModelOptions model;     ///< Defaults where the file is silent.
+};
+
+/// Parses the text of an options file; `name` appears in errors. Throws OptionError naming the
+/// field for unknown keys, wrong types, a wrong format/version or a rotation that is not a unit
+/// quaternion.
+LocalizeSettings ParseLocalizeOptions(const std::string& text, const std::string& name);
+
+/// Reads and parses an options file (FileError when it cannot be read).
+LocalizeSettings ReadLocalizeOptions(const std::string& path);
+
+}  // namespace lasercell::registration

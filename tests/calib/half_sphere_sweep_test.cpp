@@ -1,0 +1,138 @@
+// CalibrateHalfSpheresInSweep (segmentation + calibration), its result JSON and report, and the
+// edge checks `calibrate spheres` runs before it.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "calib/half_sphere_calibration.hpp"
+#include "calib/half_sphere_report.hpp"
+#include "core/error.hpp"
+#include "core/frame_graph.hpp"
+#include "core/se3.hpp"
+#include "tests/calib/sphere_sweep_sim.hpp"
+
+namespace lasercell::calib {
+namespace {
+
+SphereTouches TouchesOf(const testing::SimulatedSphereSweep& sim) {
+  SphereTouches t;
+  t.sphere_radius_mm = sim.radius_mm;
+  t.stated_sigma_mm = 0.05;
+  for (const auto& s : sim.touches) {
+    t.touches.push_back({s.sphere, s.measured_in_handling_base, s.joints_rad});
+  }
+  return t;
+}
+
+TEST(CalibrateHalfSpheresInSweep, ComposesSegmentationAndCalibration) {
+  const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
+  const SphereTouches touches = TouchesOf(sim);
+  const HalfSphereSweepResult run = CalibrateHalfSpheresInSweep(sim.cloud, touches, {});
+  ASSERT_TRUE(run.calibrated) << run.failure;
+  EXPECT_EQ(run.radius_mm, sim.radius_mm);  // from the touches
+  EXPECT_EQ(run.touch_sigma_mm, 0.05);      // stated_sigma_mm
+  EXPECT_EQ(run.segmentation.spheres.size(), 4u);
+  // The same as the two steps by hand.
+  HalfSphereCalibrationOptions options;
+  options.touch_sigma_mm = 0.05;
+  const HalfSphereCalibrationResult by_hand = CalibrateHalfSpheres(
+      SweptSpheresFrom(testing::DefaultSphereSegmentation()), touches.touches, options);
+  EXPECT_TRUE(
+      run.calibration.handling_base_from_sweep.isApprox(by_hand.handling_base_from_sweep, 1e-12));
+  EXPECT_LT(
+      RotationDistance(run.calibration.handling_base_from_sweep, sim.handling_base_from_sweep),
+      1e-3);
+
+  HalfSphereInputNames names{"cell.yaml", "spheres.ply", "touches.yaml", "sweep_start"};
+  const StaticEdge edge = HalfSphereEdge(run.calibration, names.sweep_frame,
+                                         HalfSphereProvenance(run.calibration, "fnv1a64:0"));
+  EXPECT_EQ(edge.child, "sweep_start");
+  EXPECT_EQ(edge.provenance.tool.rfind("lasercell calibrate spheres ", 0), 0u);
+  EXPECT_EQ(edge.provenance.residual_summary.rfind("rms ", 0), 0u);
+  const nlohmann::json j = HalfSphereResultJson(run, names, edge);
+  EXPECT_EQ(j["format"], "lasercell.calibration_spheres");
+  EXPECT_EQ(j["version"], 1);
+  EXPECT_EQ(j["edge"]["child"], "sweep_start");
+  EXPECT_EQ(j["handling_base_from_sweep_start"]["rotation_wxyz"].size(), 4u);
+  EXPECT_EQ(j["pose"], j["handling_base_from_sweep_start"]);
+  EXPECT_EQ(j["inputs"]["digest"], "fnv1a64:0");
+  EXPECT_EQ(j["spheres"].size(), 4u);
+  EXPECT_EQ(j["covariance"]["values"].size(), 36u);
+  const std::string html = HalfSphereReport(run, names).Html();
+  EXPECT_NE(html.find("handling_base_from_sweep_start"), std::string::npos);
+  EXPECT_NE(html.find("Per-sphere residuals"), std::string::npos);
+}
+
+TEST(CalibrateHalfSpheresInSweep, NoSphereInTheSweepIsReportedNotThrown) {
+  PointCloud floor;
+  for (int i = 0; i < 60; ++i) {
+    for (int k = 0; k < 60; ++k) floor.positions.emplace_back(2.0 * i, 2.0 * k, 700.0);
+  }
+  HalfSphereSweepOptions options;
+  options.sweep_unit_hint = "the points look like metres";
+  const HalfSphereSweepResult run = CalibrateHalfSpheresInSweep(
+      floor, TouchesOf(testing::DefaultSphereSweep()), options, {"", "floor.ply", "t.yaml"});
+  EXPECT_FALSE(run.calibrated);
+  EXPECT_EQ(run.failure.rfind("no sphere of radius 25 mm found (0 spheres", 0), 0u) << run.failure;
+  EXPECT_NE(run.failure.find("; the points look like metres"), std::string::npos) << run.failure;
+}
+
+TEST(CalibrateHalfSpheresInSweep, TheRadiusMustComeFromSomewhere) {
+  SphereTouches touches = TouchesOf(testing::DefaultSphereSweep());
+  touches.sphere_radius_mm.reset();
+  try {
+    CalibrateHalfSpheresInSweep(PointCloud{}, touches, {}, {"", "s.ply", "t.yaml"});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "t.yaml: no sphere_radius_mm; give --radius-mm R");
+  }
+}
+
+TEST(CalibrateHalfSpheresInSweep, DegeneraciesNameBothInputs) {
+  const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
+  SphereTouches touches = TouchesOf(sim);
+  touches.touches.resize(2);
+  try {
+    CalibrateHalfSpheresInSweep(sim.cloud, touches, {}, {"", "s.ply", "t.yaml"});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("s.ply + t.yaml: half-sphere calibration: 2 sphere "
+                                          "touches",
+                                          0),
+              0u)
+        << e.what();
+  }
+}
+
+TEST(CheckHalfSphereEdgeFits, RefusesACycleButReplacesItsOwnEdge) {
+  FrameGraph graph;
+  for (const char* f : {"handling_base", "cell", "sensor"}) graph.AddFrame(f);
+  StaticEdge a;
+  a.parent = "cell";
+  a.child = "handling_base";
+  graph.SetStaticEdge(a);
+  StaticEdge b;
+  b.parent = "cell";
+  b.child = "sensor";
+  graph.SetStaticEdge(b);
+  try {
+    CheckHalfSphereEdgeFits(graph, "sensor", "cell.yaml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("cell.yaml: handling_base and 'sensor' are already "
+                                         "connected"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_NO_THROW(CheckHalfSphereEdgeFits(graph, "sweep_start", "cell.yaml"));
+  FrameGraph own;
+  for (const char* f : {"handling_base", "sensor"}) own.AddFrame(f);
+  StaticEdge e;
+  e.parent = "handling_base";
+  e.child = "sensor";
+  own.SetStaticEdge(e);
+  EXPECT_NO_THROW(CheckHalfSphereEdgeFits(own, "sensor", "cell.yaml"));
+}
+
+}  // namespace
+}  // namespace lasercell::calib
