@@ -84,12 +84,8 @@ TEST(SphereSweepList, ReaderIsStrict) {
               testing::ThrowsMessage<OptionError>(HasSubstr("lasercell.sphere_sweeps")));
 }
 
-calib::CameraModel SimCamera(const datasets::SensorModel& sensor) {
-  const auto v = sensor.camera.intrinsics().MrcalVector();
-  return calib::CameraModel("LENSMODEL_OPENCV8", std::vector<double>(v.begin(), v.end()),
-                            sensor.camera.intrinsics().width_px,
-                            sensor.camera.intrinsics().height_px);
-}
+// The simulator renders through a calib::CameraModel, the one the sweeps are triangulated with.
+calib::CameraModel SimCamera(const datasets::SensorModel& sensor) { return sensor.camera; }
 
 // The sweep loader and `scan triangulate --exact` (AssembleSweep, exact path, sensor frame)
 // turn the same profile file into the same points, bit for bit.
