@@ -1,5 +1,5 @@
 // Google Benchmark micro-benchmarks of the registration module on the UWA data (rs1 scene,
-// parasaurolophus model). Speed targets from issue 4 are measured here, never in unit tests:
+// parasaurolophus model). Speed targets are measured here, never in unit tests:
 //   - model build for a ~1000-point model well under 0.3 s,
 //   - rs1 + parasaurolophus_6700 end to end (model prebuilt) <= 40 ms median, single thread.
 // Counters report accuracy next to speed: error_mm is the RMS displacement of the model's

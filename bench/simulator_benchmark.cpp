@@ -1,4 +1,4 @@
-// Workcell simulator speed (issue 5 target: a 350-profile x 1024-column sweep of the seat scene
+// Workcell simulator speed (target: a 350-profile x 1024-column sweep of the seat scene
 // renders in <= 1 s on one core). Run:
 //   build/bench/simulator_benchmark --benchmark_filter=Sweep
 #include <benchmark/benchmark.h>

@@ -1,4 +1,4 @@
-// Triangulation speed (issue 6: >= 100 M points/s per core on the fast path; the sensor's peak
+// Triangulation speed (target: >= 100 M points/s per core on the fast path; the sensor's peak
 // rate is ~4 M/s). One 1024-column profile per iteration on the simulator's 1024 x 1024
 // OPENCV8 camera and true laser plane; items = points (all columns hold a peak).
 //   build-bench/bench/triangulation_benchmark --benchmark_repetitions=3

@@ -1,6 +1,6 @@
 #pragma once
 // Eye-in-hand calibration with a camera on the robot flange observing a fixed chessboard
-// (issue 7, item 3a).
+// (Tsai-Lenz, Park-Martin, Daniilidis closed forms, refined over the reprojection error).
 //
 // Conventions: per view i the robot reports base_from_flange A_i (mm); the camera sees the board
 // at camera_from_board C_i (from PnP through the camera model). Unknowns: X = flange_from_camera

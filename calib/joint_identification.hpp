@@ -1,7 +1,8 @@
 #pragma once
 // Robot joint-offset (and optional DH) identification from laser sweeps of fixed spheres taken
-// from many poses of the vision robot, jointly with the hand-eye transform if asked (SEED.md,
-// calibration chain step 5; issue 7 item 4). Also the engine of the laser eye-in-hand
+// from many poses of the vision robot, jointly with the hand-eye transform if asked (Skotheim et
+// al. 2012 found their eye-in-hand result limited by uncalibrated joint offsets and name this as
+// further work). Also the engine of the laser eye-in-hand
 // calibration (calib/laser_hand_eye.hpp), which is the same problem with the robot held fixed.
 //
 // Frames and conventions:

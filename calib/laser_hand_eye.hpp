@@ -1,5 +1,5 @@
 #pragma once
-// Eye-in-hand calibration of a laser sensor (issue 7 item 3b): sweeps of fixed spheres from
+// Eye-in-hand calibration of a laser sensor: sweeps of fixed spheres from
 // several robot poses; one Ceres problem over vision_flange_from_sensor, the sphere centres (in
 // the robot base) and their common radius, minimising the point-to-sphere distances of every
 // swept point, each placed by FK(joints) * flange_from_sensor (robot model held fixed).

@@ -1,5 +1,5 @@
 #pragma once
-// Robot-side calibration captures of the simulated cell (issue 5 for issue 7): the handling
+// Robot-side calibration captures of the simulated cell: the handling
 // robot's pointing-tool touches of the sphere tops, and short sphere sweeps of the vision robot
 // from many poses (eye-in-hand; joint-offset identification).
 //

@@ -167,13 +167,13 @@ struct SimConfig {
   int chessboard_images = 20;     ///< Chessboard views in a cell capture set.
   ImageRenderOptions images;      ///< Photometry, blur, noise of the images.
 
-  // Robot-side calibration captures (issue 7).
+  // Robot-side calibration captures (hand-eye, joint offsets, half spheres).
   TouchOptions touches;  ///< Handling-robot pointing-tool touches of the sphere tops.
   /// Multi-pose sphere sweeps for eye-in-hand calibration (rotations about several axes).
   PoseSweepOptions eye_in_hand;
   /// >= 50 robot poses, each with a short sphere sweep, for joint-offset identification.
   PoseSweepOptions joint_poses{50, 5.0, 35.0, 180.0, 60.0, 30, {-100.0, 0.0, 100.0}};
-  /// Chessboard images from the sensor camera on the vision robot (eye-in-hand, issue 7 3a).
+  /// Chessboard images from the sensor camera on the vision robot (eye-in-hand).
   HandEyeImageOptions hand_eye_images;
 
   // What a cell capture set contains.

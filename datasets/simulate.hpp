@@ -1,6 +1,6 @@
 #pragma once
 // lasercell workcell simulator: physically plausible capture sets of the whole cell, with ground
-// truth (issue 5). Front functions for the CLI: SimulateCell (every calibration capture and a
+// truth. Front functions for the CLI: SimulateCell (every calibration capture and a
 // few part scenes) and SimulateSeats (Table-I-like part scenes only).
 //
 // Conventions (ARCHITECTURE.md): units mm, rad (degrees only in names ending _deg), time in s or

@@ -1,5 +1,5 @@
 #pragma once
-// Pose clustering exactly as Skotheim et al. IV-E (SEED.md localization step 5): hypotheses are
+// Pose clustering exactly as Skotheim et al. 2012, IV-E: hypotheses are
 // (t, q) pairs; greedily, the highest-voted unassigned hypothesis seeds a cluster that takes every
 // unassigned hypothesis within a fixed translation radius (kd-tree over translations) whose
 // rotation distance theta = 2 acos(|<q1, q2>|) to the seed is below a threshold; the cluster

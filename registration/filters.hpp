@@ -1,5 +1,5 @@
 #pragma once
-// Preprocessing filters (Skotheim et al. IV-A, IV-C; SEED.md localization steps 1 and 3):
+// Preprocessing filters (Skotheim et al. 2012, IV-A and IV-C):
 // region-of-interest box crop, removal of small isolated connected components, and voxel-grid
 // centroid subsampling. Units: mm. Filters return indices into the input (so every attribute
 // can be carried with PointCloud::Subset) or a new cloud; they never modify their input.

@@ -1,6 +1,6 @@
 #pragma once
 // Surface normals by local plane fit (PCA) on k nearest neighbours or a radius (Skotheim et al.
-// IV-B, SEED.md localization step 2), oriented toward the sensor. Units: mm; normals are unit.
+// 2012, IV-B), oriented toward the sensor. Units: mm; normals are unit.
 // Organized clouds (sweeps, depth images) can use their grid neighbours instead of a kd-tree.
 // Multi-threaded with TBB; the result does not depend on the thread count.
 

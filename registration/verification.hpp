@@ -1,5 +1,5 @@
 #pragma once
-// Hypothesis verification (Skotheim et al. IV-F, SEED.md localization step 6):
+// Hypothesis verification (Skotheim et al. 2012, IV-F):
 //  - pose constraints: a supporting plane with allowed tilt of the model's "up" axis, where a
 //    list of up axes describes the part's stable poses; optionally no sinking below the plane;
 //  - the projection grid: scene and posed model are projected orthographically onto an M x N

@@ -1,4 +1,4 @@
-// `lasercell bench robustness`: the synthetic robustness curve of issue 4. The UWA
+// `lasercell bench robustness`: the synthetic robustness curve. The UWA
 // parasaurolophus is rendered at seeded random poses into the real rs1 clutter (its real instance
 // cut out), z-buffered from the scanner, with Gaussian range noise (datasets/synthetic_scan.hpp),
 // and localized with LocalizeInCloud at default options. A trial succeeds when the top candidate's

@@ -66,7 +66,7 @@ TEST(CalibrateHalfSpheres, SimulatedCellAgreesWithTheTruthWithinItsReportedSigma
   EXPECT_TRUE(r.unmatched_touches.empty());
 }
 
-// Issue 7: <= 0.05 mm / 0.01 deg from the truth with 4 spheres. The transform's translation is the
+// Target: <= 0.05 mm / 0.01 deg from the truth with 4 spheres. The transform's translation is the
 // sensor's position at the sweep start, ~0.7 m from the spheres, so rotation noise reaches it
 // through that lever arm: with the simulator's default touch sigma of 0.05 mm per axis the
 // reported 1-sigma of that translation is ~0.11 mm per axis (test above), so 0.05 mm cannot be met

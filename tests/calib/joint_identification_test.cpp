@@ -1,4 +1,4 @@
-// Joint-offset identification (issue 7 item 4): the cost functor's derivatives, the observability
+// Joint-offset identification: the cost functor's derivatives, the observability
 // analysis naming the unidentifiable parameters, recovery of the true offsets from 50 poses,
 // held-out positioning error, Monte-Carlo coverage of the reported 1 sigma, bad input.
 

@@ -1,4 +1,4 @@
-// Laser eye-in-hand calibration (issue 7 item 3b): synthetic exact sweeps on the simulator's
+// Laser eye-in-hand calibration: synthetic exact sweeps on the simulator's
 // planned poses, rendered simulator sweeps through the sweep loader (the triangulator's exact
 // path, as `scan triangulate`), bad motions.
 

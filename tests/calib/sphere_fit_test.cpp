@@ -36,7 +36,7 @@ TEST(SphereDistanceCost, DerivativesMatchNumericDifferences) {
   }
 }
 
-// Issue 7: centre error <= 0.02 mm for a half sphere of r = 25 mm with sigma = 0.05 mm point
+// Target: centre error <= 0.02 mm for a half sphere of r = 25 mm with sigma = 0.05 mm point
 // noise, sampled like the simulated sensor (2.58 mm x 0.54 mm grid, up to 85 deg from the top:
 // ~1400 points). Expected centre sigma ~0.003 mm, so 0.02 mm is > 5 sigma: 20 draws must all pass.
 TEST(FitSphere, HalfSphereCentreWithinTwentyMicrometres) {

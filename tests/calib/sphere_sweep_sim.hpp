@@ -1,6 +1,6 @@
 #pragma once
 // Test helper (not library code): the simulated spheres sweep as a point cloud in the sweep
-// frame, built the way `lasercell scan triangulate` will (issue 7 brief): render the spheres
+// frame, built the way `lasercell scan triangulate` does: render the spheres
 // capture with the datasets API, triangulate every peak with the TRUE camera
 // (calib::CameraModel::Unproject) and the TRUE laser plane, and place it by the linear sweep
 // motion. Sweep frame = the sensor frame at the sweep start (t = 0):

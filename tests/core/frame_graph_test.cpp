@@ -277,7 +277,7 @@ TEST(FrameGraphTest, QuaternionsGivenDirectlyMustBeUnitAndFiniteAndAreKeptAsGive
   for (const auto& [edge, problem] :
        {std::pair{edge_with(Eigen::Quaterniond(1.001, 0, 0, 0), t), "rotation has norm 1.001"},
         std::pair{edge_with(Eigen::Quaterniond(0, 0, 0, 0), t), "rotation has norm 0"},
-        std::pair{edge_with(Eigen::Quaterniond(1 + 2e-9, 0, 0, 0), t), "pass a unit quaternion"},
+        std::pair{edge_with(Eigen::Quaterniond(1 + 2e-6, 0, 0, 0), t), "pass a unit quaternion"},
         std::pair{edge_with(Eigen::Quaterniond(std::nan(""), 0, 0, 0), t), "non-finite"},
         std::pair{edge_with(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0, inf, 0)),
                   "non-finite"}}) {
@@ -290,7 +290,7 @@ TEST(FrameGraphTest, QuaternionsGivenDirectlyMustBeUnitAndFiniteAndAreKeptAsGive
     }
   }
   EXPECT_TRUE(graph.Frames().empty());  // nothing added by a rejected edge
-  // Within 1e-9 of unit norm, any sign: stored bit for bit, normalized only for the matrix.
+  // Within kUnitQuaternionTolerance (1e-6) of unit norm, any sign: stored bit for bit, normalized only for the matrix.
   const Eigen::Quaterniond q(-(0.6 + 5e-10), 0.0, -0.0, 0.8);
   graph.SetStaticEdge(edge_with(q, t));
   const StaticEdge& stored = graph.static_edges()[0];

@@ -322,10 +322,10 @@ TEST(Se3Test, PoseChecksNameTheProblem) {
               }),
               AllOf(StartsWith("m: rotation has norm 1.001"), HasSubstr("unit quaternion")));
   EXPECT_THAT(message([&] {
-                CheckQuaternionPose({Eigen::Quaterniond(1 + 2e-9, 0, 0, 0), t}, "m");
+                CheckQuaternionPose({Eigen::Quaterniond(1 + 2e-6, 0, 0, 0), t}, "m");
               }),
               HasSubstr("unit quaternion"));
-  EXPECT_NO_THROW(CheckQuaternionPose({Eigen::Quaterniond(1 + 9e-10, 0, 0, 0), t}, "m"));
+  EXPECT_NO_THROW(CheckQuaternionPose({Eigen::Quaterniond(1 + 9e-7, 0, 0, 0), t}, "m"));
   EXPECT_THAT(message([&] {
                 CheckQuaternionPose({Eigen::Quaterniond(std::nan(""), 0, 0, 0), t}, "m");
               }),

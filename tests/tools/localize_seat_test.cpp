@@ -1,7 +1,7 @@
 // The product's main job on the reference part, end to end through the command line:
 // `simulate seat` -> `scan triangulate` (the simulator's true camera and laser plane) ->
 // `localize` with the seat's CAD mesh as the model. The gripper needs the 27 mm hole within
-// +-10 mm (SEED.md); the SINTEF cell reached 1.8 mm mean after ICP.
+// +-10 mm (Skotheim et al. 2012); the SINTEF cell reached 1.8 mm mean after ICP.
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
