@@ -3,9 +3,9 @@
 // (UWA rs1, 114k points, mm). Both exact single-tree kd-trees with the same leaf size.
 // Run: build/bench/kdtree_benchmark
 #include <benchmark/benchmark.h>
+
 #include <flann/flann.hpp>
 #include <nanoflann.hpp>
-
 #include <string>
 #include <vector>
 
@@ -32,7 +32,9 @@ struct Adaptor {
   std::size_t kdtree_get_point_count() const { return pts.size(); }
   double kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][static_cast<int>(d)]; }
   template <class B>
-  bool kdtree_get_bbox(B&) const { return false; }
+  bool kdtree_get_bbox(B&) const {
+    return false;
+  }
 };
 using NanoTree =
     nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<double, Adaptor>, Adaptor, 3>;

@@ -40,13 +40,14 @@ struct Data {
 const Data& UwaData() {
   static const Data data = [] {
     Data d;
-    const std::string model = UwaFile("parasaurolophus_6700.ply"), scene = UwaFile("rs1_normals.bin.ply");
+    const std::string model = UwaFile("parasaurolophus_6700.ply"),
+                      scene = UwaFile("rs1_normals.bin.ply");
     if (model.empty() || scene.empty()) return d;
     d.model = io::ReadPointCloud(model);
     d.scene = io::ReadPointCloud(scene);
     d.reference.matrix() << 0.9942892336, -0.08764531701, 0.06088693151, -74.3320341,  //
-        0.09987377689, 0.5631628352, -0.8202882723, -601.364636,                      //
-        0.03760516869, 0.8216848054, 0.5687002127, -292.9836609,                      //
+        0.09987377689, 0.5631628352, -0.8202882723, -601.364636,                       //
+        0.03760516869, 0.8216848054, 0.5687002127, -292.9836609,                       //
         0, 0, 0, 1;  // tests/registration/data/rs1_parasaurolophus_reference.txt
     d.ok = true;
     return d;
@@ -54,10 +55,10 @@ const Data& UwaData() {
   return data;
 }
 
-#define REQUIRE_UWA(state)                                                             \
-  if (!UwaData().ok) {                                                                 \
+#define REQUIRE_UWA(state)                                                                \
+  if (!UwaData().ok) {                                                                    \
     state.SkipWithError("UWA data not found in datasets/real/uwa or ../shared/data/uwa"); \
-    return;                                                                            \
+    return;                                                                               \
   }
 
 // Model build; arg 0 = sampling step in thousandths of the diameter (40 -> 433 points,
@@ -77,7 +78,11 @@ void BM_PpfModelBuild(benchmark::State& state) {
   state.counters["model_points"] = static_cast<double>(points);
   state.counters["pairs"] = static_cast<double>(pairs);
 }
-BENCHMARK(BM_PpfModelBuild)->Args({40, 1})->Args({25, 1})->Args({25, 0})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_PpfModelBuild)
+    ->Args({40, 1})
+    ->Args({25, 1})
+    ->Args({25, 0})
+    ->Unit(benchmark::kMillisecond);
 
 // End to end on rs1 with the model prebuilt; arg = threads (1 or 0 = all cores).
 void BM_LocalizeRs1(benchmark::State& state) {
@@ -94,7 +99,8 @@ void BM_LocalizeRs1(benchmark::State& state) {
   if (result.found) {
     double sum = 0.0;
     for (const auto& p : UwaData().model.positions) {
-      sum += (result.candidates.front().scene_from_model * p - UwaData().reference * p).squaredNorm();
+      sum +=
+          (result.candidates.front().scene_from_model * p - UwaData().reference * p).squaredNorm();
     }
     error = std::sqrt(sum / static_cast<double>(UwaData().model.size()));
   }

@@ -48,10 +48,15 @@ void BM_SeatSweep(benchmark::State& state) {
     benchmark::DoNotOptimize(r.profiles.profiles.data());
   }
   state.counters["valid_peaks"] = static_cast<double>(peaks);
-  state.counters["profiles_per_s"] =
-      benchmark::Counter(static_cast<double>(timing.profiles), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["profiles_per_s"] = benchmark::Counter(
+      static_cast<double>(timing.profiles), benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_SeatSweep)->Arg(512)->Arg(1024)->Arg(2048)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SeatSweep)
+    ->Arg(512)
+    ->Arg(1024)
+    ->Arg(2048)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_SeatExposure(benchmark::State& state) {
   static const SeatSetup setup;
@@ -71,8 +76,8 @@ void BM_SceneBuild(benchmark::State& state) {
     const Scene scene = MakeSeatScene(CellLayout{}, seat, pose);
     benchmark::DoNotOptimize(&scene);
   }
-  state.counters["triangles"] = static_cast<double>(
-      MakeSeatScene(CellLayout{}, seat, pose).TriangleCount());
+  state.counters["triangles"] =
+      static_cast<double>(MakeSeatScene(CellLayout{}, seat, pose).TriangleCount());
 }
 BENCHMARK(BM_SceneBuild)->Unit(benchmark::kMillisecond);
 

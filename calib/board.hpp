@@ -22,10 +22,10 @@ enum class BoardType { kChessboard, kCharuco };
 /// A calibration board. Build with ParseBoardSpec or fill and Check().
 struct BoardSpec {
   BoardType type = BoardType::kChessboard;
-  int cols = 9;              ///< Chessboard: inner corners per row; ChArUco: squares along x.
-  int rows = 6;              ///< Chessboard: inner corners per column; ChArUco: squares along y.
-  double square_mm = 25.0;   ///< Square edge, mm.
-  double marker_mm = 0.0;    ///< ChArUco marker edge, mm (< square_mm); unused for chessboards.
+  int cols = 9;             ///< Chessboard: inner corners per row; ChArUco: squares along x.
+  int rows = 6;             ///< Chessboard: inner corners per column; ChArUco: squares along y.
+  double square_mm = 25.0;  ///< Square edge, mm.
+  double marker_mm = 0.0;   ///< ChArUco marker edge, mm (< square_mm); unused for chessboards.
   std::string dictionary = "DICT_4X4_50";  ///< ChArUco ArUco dictionary name.
 
   /// A chessboard with `cols` x `rows` inner corners and `square_mm` squares.

@@ -73,21 +73,19 @@ CameraModel::CameraModel(std::string lensmodel, std::vector<double> intrinsics, 
   }
 }
 
-bool CameraModel::HasGradients() const {
-  return mrcal_lensmodel_metadata(&lens_).has_gradients;
-}
+bool CameraModel::HasGradients() const { return mrcal_lensmodel_metadata(&lens_).has_gradients; }
 
 Eigen::Vector2d CameraModel::Project(const Eigen::Vector3d& p_in_camera) const {
   return ProjectWithIntrinsics(intrinsics_.data(), p_in_camera, nullptr, nullptr);
 }
 
-Eigen::Vector2d CameraModel::Project(const Eigen::Vector3d& p_in_camera,
-                                     Eigen::Matrix<double, 2, 3>* dq_dp,
-                                     Eigen::Matrix<double, 2, Eigen::Dynamic>* dq_dintrinsics) const {
+Eigen::Vector2d CameraModel::Project(
+    const Eigen::Vector3d& p_in_camera, Eigen::Matrix<double, 2, 3>* dq_dp,
+    Eigen::Matrix<double, 2, Eigen::Dynamic>* dq_dintrinsics) const {
   std::vector<double> dqdi;
   if (dq_dintrinsics != nullptr) dqdi.resize(2 * intrinsics_.size());
-  const Eigen::Vector2d q = ProjectWithIntrinsics(intrinsics_.data(), p_in_camera, dq_dp,
-                                        dq_dintrinsics != nullptr ? dqdi.data() : nullptr);
+  const Eigen::Vector2d q = ProjectWithIntrinsics(
+      intrinsics_.data(), p_in_camera, dq_dp, dq_dintrinsics != nullptr ? dqdi.data() : nullptr);
   if (dq_dintrinsics != nullptr) {
     const int n = NumIntrinsics();
     dq_dintrinsics->resize(2, n);
@@ -105,8 +103,8 @@ Eigen::Vector2d CameraModel::ProjectWithIntrinsics(const double* intrinsics,
   const mrcal_point3_t p = {{p_in_camera.x(), p_in_camera.y(), p_in_camera.z()}};
   mrcal_point2_t q;
   mrcal_point3_t dqdp[2];
-  if (!mrcal_project(&q, dq_dp != nullptr ? dqdp : nullptr, dq_dintrinsics_row_major, &p, 1,
-                     &lens_, intrinsics)) {
+  if (!mrcal_project(&q, dq_dp != nullptr ? dqdp : nullptr, dq_dintrinsics_row_major, &p, 1, &lens_,
+                     intrinsics)) {
     throw InternalError("mrcal_project failed for lens model " + lensmodel_);
   }
   if (dq_dp != nullptr) {
@@ -157,8 +155,9 @@ CameraModel ParseCameraModel(const std::string& text, const std::string& name) {
   mrcal_cameramodel_t* raw =
       mrcal_read_cameramodel_string(text.data(), static_cast<int>(text.size()));
   if (raw == nullptr) {
-    throw FileError(name, "mrcal could not parse this .cameramodel (expected a mrcal camera "
-                          "model text with lensmodel, intrinsics, imagersize, extrinsics)");
+    throw FileError(name,
+                    "mrcal could not parse this .cameramodel (expected a mrcal camera "
+                    "model text with lensmodel, intrinsics, imagersize, extrinsics)");
   }
   const ModelPtr model = Guard(raw);
   return FromMrcal(*model, name);
@@ -174,8 +173,9 @@ void SaveCameraModel(const std::string& path, const CameraModel& model,
   const std::string text = CameraModelText(model, comment);
   // Never write a file that mrcal itself would not read back identically.
   const CameraModel check = ParseCameraModel(text, path);
-  LASERCELL_CHECK(check.intrinsics() == model.intrinsics() && check.lensmodel() == model.lensmodel(),
-                  "camera model text does not round-trip through mrcal's reader");
+  LASERCELL_CHECK(
+      check.intrinsics() == model.intrinsics() && check.lensmodel() == model.lensmodel(),
+      "camera model text does not round-trip through mrcal's reader");
   io::WriteFileAtomically(path, text);
 }
 

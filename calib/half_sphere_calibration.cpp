@@ -49,8 +49,9 @@ void CheckSphereCounts(std::size_t k, const std::vector<SphereTouch>& touches) {
     const bool few_touches = m <= k;
     throw InputError(
         "half-sphere calibration: " +
-        (few_touches ? std::to_string(m) + " sphere touch" + (m == 1 ? "" : "es")
-                     : std::to_string(k) + " sphere" + (k == 1 ? "" : "s") + " found in the sweep") +
+        (few_touches
+             ? std::to_string(m) + " sphere touch" + (m == 1 ? "" : "es")
+             : std::to_string(k) + " sphere" + (k == 1 ? "" : "s") + " found in the sweep") +
         ": at least 3 non-collinear spheres must be both swept and touched (fewer leave the "
         "rotation unobservable)");
   }
@@ -137,17 +138,20 @@ Correspondence MatchTouches(const Matching& mt) {
     throw InputError("half-sphere calibration: the spheres are collinear");
   }
   if (best > options.max_match_rms_mm) {
-    throw InputError("half-sphere calibration: the touched spheres do not match the swept ones "
-                     "(best assignment leaves " + Mm(best) + " rms > " +
-                     Mm(options.max_match_rms_mm) +
-                     "): check the sphere radius, the touches' units and that the same spheres "
-                     "were swept and touched");
+    throw InputError(
+        "half-sphere calibration: the touched spheres do not match the swept ones "
+        "(best assignment leaves " +
+        Mm(best) + " rms > " + Mm(options.max_match_rms_mm) +
+        "): check the sphere radius, the touches' units and that the same spheres "
+        "were swept and touched");
   }
   if (second <= options.max_match_rms_mm) {
-    throw InputError("half-sphere calibration: ambiguous correspondence between touches and swept "
-                     "spheres (two assignments fit: " + Mm(best) + " and " + Mm(second) +
-                     " rms): the layout is symmetric; place the spheres at different heights or "
-                     "distances");
+    throw InputError(
+        "half-sphere calibration: ambiguous correspondence between touches and swept "
+        "spheres (two assignments fit: " +
+        Mm(best) + " and " + Mm(second) +
+        " rms): the layout is symmetric; place the spheres at different heights or "
+        "distances");
   }
   Correspondence c;
   c.best_rms_mm = best;
@@ -308,8 +312,8 @@ HalfSphereCalibrationResult CalibrateHalfSpheres(const std::vector<SweptSphere>&
   return result;
 }
 
-StaticEdge HalfSphereEdge(const HalfSphereCalibrationResult& result,
-                          const std::string& sweep_frame, const EdgeProvenance& provenance) {
+StaticEdge HalfSphereEdge(const HalfSphereCalibrationResult& result, const std::string& sweep_frame,
+                          const EdgeProvenance& provenance) {
   StaticEdge edge;
   edge.parent = "handling_base";
   edge.child = sweep_frame;

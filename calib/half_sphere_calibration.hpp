@@ -54,9 +54,9 @@ struct SphereTouch {
 
 /// Contents of a touches file (format lasercell.touches, version 1; see ParseTouchesYaml).
 struct SphereTouches {
-  std::string robot = "handling_robot";  ///< Robot that touched.
-  std::string frame = "handling_base";   ///< Frame of the points.
-  double stated_sigma_mm = 0.05;         ///< Per-axis 1-sigma of a touch point, mm.
+  std::string robot = "handling_robot";    ///< Robot that touched.
+  std::string frame = "handling_base";     ///< Frame of the points.
+  double stated_sigma_mm = 0.05;           ///< Per-axis 1-sigma of a touch point, mm.
   std::optional<double> sphere_radius_mm;  ///< Nominal sphere radius, if stated.
   std::optional<Eigen::Isometry3d> handling_flange_from_tool_tip;  ///< Pointing tool, if stated.
   std::vector<SphereTouch> touches;
@@ -73,8 +73,8 @@ SphereTouches ParseTouchesYaml(const std::string& text, const std::string& name)
 struct SweptSphere {
   Eigen::Vector3d center_in_sweep = Eigen::Vector3d::Zero();  ///< mm.
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();   ///< Of the centre, mm^2.
-  double radius_mm = 0;        ///< Fitted or given radius.
-  double radius_sigma_mm = 0;  ///< 0 when the radius was given.
+  double radius_mm = 0;                                       ///< Fitted or given radius.
+  double radius_sigma_mm = 0;                                 ///< 0 when the radius was given.
   /// Cross-covariance of centre and radius (mm^2; zero when the radius was given).
   Eigen::Vector3d center_radius_covariance = Eigen::Vector3d::Zero();
 };
@@ -83,8 +83,8 @@ struct SweptSphere {
 struct HalfSphereCalibrationOptions {
   /// Direction against gravity in handling_base (normalized on use; non-zero).
   Eigen::Vector3d up_in_handling_base = Eigen::Vector3d::UnitZ();
-  double touch_sigma_mm = 0.05;      ///< Per-axis 1-sigma of a touch point (> 0), mm.
-  double tool_tip_radius_mm = 0.0;   ///< Radius of a ball tip (>= 0; 0 = a point tip), mm.
+  double touch_sigma_mm = 0.05;     ///< Per-axis 1-sigma of a touch point (> 0), mm.
+  double tool_tip_radius_mm = 0.0;  ///< Radius of a ball tip (>= 0; 0 = a point tip), mm.
   /// Largest RMS (mm) of the closed-form fit for an assignment of touches to swept spheres to
   /// count as consistent (> 0).
   double max_match_rms_mm = 2.0;
@@ -96,14 +96,14 @@ struct HalfSphereCalibrationOptions {
 
 /// One matched sphere.
 struct HalfSphereResidual {
-  int sphere = 0;           ///< Touch label.
-  std::size_t swept = 0;    ///< Index into the swept spheres.
+  int sphere = 0;         ///< Touch label.
+  std::size_t swept = 0;  ///< Index into the swept spheres.
   Eigen::Vector3d center_in_sweep = Eigen::Vector3d::Zero();
   Eigen::Vector3d center_in_handling_base = Eigen::Vector3d::Zero();  ///< From the touch.
   Eigen::Vector3d residual_mm = Eigen::Vector3d::Zero();  ///< touched - T * swept (handling_base).
   double residual_norm_mm = 0;
-  double mahalanobis = 0;   ///< sqrt(e^T S^-1 e).
-  double radius_mm = 0;     ///< Radius used for the top offset.
+  double mahalanobis = 0;  ///< sqrt(e^T S^-1 e).
+  double radius_mm = 0;    ///< Radius used for the top offset.
 };
 
 /// Outcome of CalibrateHalfSpheres.
@@ -133,8 +133,8 @@ HalfSphereCalibrationResult CalibrateHalfSpheres(const std::vector<SweptSphere>&
 std::vector<SweptSphere> SweptSpheresFrom(const SphereSegmentationResult& segmentation);
 
 /// The static edge handling_base <- sweep_frame with the result's pose and covariance.
-StaticEdge HalfSphereEdge(const HalfSphereCalibrationResult& result,
-                          const std::string& sweep_frame, const EdgeProvenance& provenance);
+StaticEdge HalfSphereEdge(const HalfSphereCalibrationResult& result, const std::string& sweep_frame,
+                          const EdgeProvenance& provenance);
 
 /// Options of CalibrateHalfSpheresInSweep: what the touches file may leave open. Units mm.
 struct HalfSphereSweepOptions {

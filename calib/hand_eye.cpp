@@ -206,9 +206,12 @@ bool ReversalIsRigid(const std::vector<Eigen::Vector3d>& p) {
 
 std::string HandEyeMethodName(HandEyeMethod method) {
   switch (method) {
-    case HandEyeMethod::kTsaiLenz: return "tsai-lenz";
-    case HandEyeMethod::kParkMartin: return "park-martin";
-    case HandEyeMethod::kDaniilidis: return "daniilidis";
+    case HandEyeMethod::kTsaiLenz:
+      return "tsai-lenz";
+    case HandEyeMethod::kParkMartin:
+      return "park-martin";
+    case HandEyeMethod::kDaniilidis:
+      return "daniilidis";
   }
   return "unknown";
 }
@@ -283,14 +286,14 @@ Eigen::Isometry3d SolveHandEyeClosedForm(const std::vector<Eigen::Isometry3d>& b
                                          const std::vector<Eigen::Isometry3d>& camera_from_board,
                                          HandEyeMethod method) {
   if (base_from_flange.size() != camera_from_board.size()) {
-    throw InputError("hand-eye: " + std::to_string(base_from_flange.size()) +
-                     " robot poses but " + std::to_string(camera_from_board.size()) +
-                     " board poses");
+    throw InputError("hand-eye: " + std::to_string(base_from_flange.size()) + " robot poses but " +
+                     std::to_string(camera_from_board.size()) + " board poses");
   }
   const std::vector<Motion> motions = Motions(base_from_flange, camera_from_board, 1.0 * kDeg);
   if (motions.size() < 2) {
-    throw InputError("hand-eye: fewer than 2 robot motions rotate by >= 1 deg; rotation "
-                     "unobservable");
+    throw InputError(
+        "hand-eye: fewer than 2 robot motions rotate by >= 1 deg; rotation "
+        "unobservable");
   }
   if (method == HandEyeMethod::kDaniilidis) return DaniilidisSolve(motions);
   Eigen::Isometry3d x = Eigen::Isometry3d::Identity();
@@ -318,8 +321,8 @@ Eigen::Isometry3d EstimateCameraFromBoard(const HandEyeView& view, const CameraM
   const std::vector<Eigen::Vector3d> rays = camera.UnprojectMany(view.corners_px);
   std::vector<Eigen::Vector2d> normalised;
   for (const auto& r : rays) normalised.push_back(r.head<2>() / r.z());
-  Eigen::Isometry3d camera_from_board = internal::SolvePnPNormalised(view.corners_in_board,
-                                                                     normalised);
+  Eigen::Isometry3d camera_from_board =
+      internal::SolvePnPNormalised(view.corners_in_board, normalised);
   // Refine over pixels through the lens model (the normalised-plane PnP weights pixels unevenly).
   for (int round = 0; round < 2; ++round) {
     double d[6] = {0, 0, 0, 0, 0, 0};
@@ -350,8 +353,8 @@ void AddResiduals(const std::vector<HandEyeView>& views, const CameraModel& came
     for (std::size_t k = 0; k < v.corners_px.size(); ++k) {
       problem->AddResidualBlock(
           new ceres::AutoDiffCostFunction<HandEyeReprojectionCost, 2, 6, 6>(
-              new HandEyeReprojectionCost(camera, v.base_from_flange, x, y,
-                                          v.corners_in_board[k], v.corners_px[k])),
+              new HandEyeReprojectionCost(camera, v.base_from_flange, x, y, v.corners_in_board[k],
+                                          v.corners_px[k])),
           nullptr, dx, dy);
     }
   }
@@ -375,14 +378,15 @@ Eigen::Vector3d HandEyeResult::SigmaTranslationMm() const {
 std::string HandEyeResult::Summary() const {
   char b[512];
   const Eigen::Vector3d sr = SigmaRotationDeg(), st = SigmaTranslationMm();
-  std::snprintf(b, sizeof b,
-                "hand-eye %s after %d iterations: reprojection RMS %.3f px over %d corners, "
-                "AX-XB RMS %.4f deg / %.3f mm; 1 sigma rot [%.4f %.4f %.4f] deg, "
-                "trans [%.3f %.3f %.3f] mm%s",
-                converged ? "converged" : "NOT converged", iterations, reprojection_rms_px,
-                observations, axxb_rms_rotation_deg, axxb_rms_translation_mm, sr.x(), sr.y(),
-                sr.z(), st.x(), st.y(), st.z(),
-                warnings.empty() ? "" : (" (" + std::to_string(warnings.size()) + " warnings)").c_str());
+  std::snprintf(
+      b, sizeof b,
+      "hand-eye %s after %d iterations: reprojection RMS %.3f px over %d corners, "
+      "AX-XB RMS %.4f deg / %.3f mm; 1 sigma rot [%.4f %.4f %.4f] deg, "
+      "trans [%.3f %.3f %.3f] mm%s",
+      converged ? "converged" : "NOT converged", iterations, reprojection_rms_px, observations,
+      axxb_rms_rotation_deg, axxb_rms_translation_mm, sr.x(), sr.y(), sr.z(), st.x(), st.y(),
+      st.z(),
+      warnings.empty() ? "" : (" (" + std::to_string(warnings.size()) + " warnings)").c_str());
   return b;
 }
 
@@ -426,7 +430,8 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
         std::reverse(flipped.corners_px.begin(), flipped.corners_px.end());
         const Eigen::Isometry3d c_flipped = EstimateCameraFromBoard(flipped, camera);
         const double keep = std::abs(
-            AngleOf((result.camera_from_board[0] * result.camera_from_board[i].inverse()).linear()) -
+            AngleOf(
+                (result.camera_from_board[0] * result.camera_from_board[i].inverse()).linear()) -
             angle_a);
         const double flip = std::abs(
             AngleOf((result.camera_from_board[0] * c_flipped.inverse()).linear()) - angle_a);
@@ -499,9 +504,9 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
   }
   double sr = 0, st = 0;
   for (std::size_t i = 0; i + 1 < vs.size(); ++i) {
-    const AxXbError e = AxXbResidual(
-        poses[i].inverse() * poses[i + 1],
-        result.camera_from_board[i] * result.camera_from_board[i + 1].inverse(), x);
+    const AxXbError e =
+        AxXbResidual(poses[i].inverse() * poses[i + 1],
+                     result.camera_from_board[i] * result.camera_from_board[i + 1].inverse(), x);
     result.axxb.push_back(e);
     sr += e.rotation_deg * e.rotation_deg;
     st += e.translation_mm * e.translation_mm;

@@ -39,7 +39,7 @@ std::string HandEyeMethodName(HandEyeMethod method);
 /// One robot pose and the chessboard seen from it.
 struct HandEyeView {
   Eigen::Isometry3d base_from_flange = Eigen::Isometry3d::Identity();  ///< Robot pose, mm.
-  std::vector<Eigen::Vector2d> corners_px;        ///< Detected corners, px.
+  std::vector<Eigen::Vector2d> corners_px;                             ///< Detected corners, px.
   std::vector<Eigen::Vector3d> corners_in_board;  ///< The same corners on the board, mm.
 };
 
@@ -91,9 +91,9 @@ AxXbError AxXbResidual(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
 /// Options of CalibrateHandEye.
 struct HandEyeOptions {
   HandEyeMethod initialisation = HandEyeMethod::kParkMartin;  ///< Closed form that starts Ceres.
-  HandEyeMotionOptions motion;     ///< Degeneracy thresholds.
-  bool refine = true;              ///< Ceres refinement over reprojection error (else closed form).
-  int max_iterations = 100;        ///< Ceres iterations (>= 1).
+  HandEyeMotionOptions motion;                                ///< Degeneracy thresholds.
+  bool refine = true;        ///< Ceres refinement over reprojection error (else closed form).
+  int max_iterations = 100;  ///< Ceres iterations (>= 1).
   double function_tolerance = 1e-12;  ///< Ceres relative cost change to stop (> 0).
   bool estimate_covariance = true;    ///< Compute the 6x6 covariances.
   int threads = 1;                    ///< Ceres threads (>= 1).
@@ -109,8 +109,8 @@ struct HandEyeOptions {
 struct HandEyeResult {
   Eigen::Isometry3d flange_from_camera = Eigen::Isometry3d::Identity();  ///< X.
   Eigen::Isometry3d base_from_board = Eigen::Isometry3d::Identity();     ///< Y.
-  Matrix6d flange_from_camera_covariance = Matrix6d::Zero();  ///< See the file comment.
-  Matrix6d base_from_board_covariance = Matrix6d::Zero();     ///< See the file comment.
+  Matrix6d flange_from_camera_covariance = Matrix6d::Zero();             ///< See the file comment.
+  Matrix6d base_from_board_covariance = Matrix6d::Zero();                ///< See the file comment.
   bool covariance_valid = false;  ///< False when not asked for or Ceres could not invert.
 
   Eigen::Isometry3d initial_flange_from_camera = Eigen::Isometry3d::Identity();  ///< Closed form.
@@ -120,19 +120,19 @@ struct HandEyeResult {
   int iterations = 0;       ///< Ceres iterations.
   std::string termination;  ///< Ceres termination message.
 
-  int observations = 0;               ///< Corners used.
-  double reprojection_rms_px = 0;     ///< RMS of corner residuals (per coordinate pair norm).
-  double residual_sigma_px = 0;       ///< sqrt(sum r^2 / (2N - 12)): scales the covariance.
-  std::vector<double> view_rms_px;    ///< Per view RMS reprojection error.
+  int observations = 0;             ///< Corners used.
+  double reprojection_rms_px = 0;   ///< RMS of corner residuals (per coordinate pair norm).
+  double residual_sigma_px = 0;     ///< sqrt(sum r^2 / (2N - 12)): scales the covariance.
+  std::vector<double> view_rms_px;  ///< Per view RMS reprojection error.
   std::vector<Eigen::Vector2d> residuals_px;  ///< Every corner residual (predicted - detected).
   /// Per view: A_i X C_i against Y (view closure), rotation deg / translation mm.
   std::vector<AxXbError> view_closure;
   /// Per consecutive motion (i, i+1): AX - XB with the final X and PnP camera poses.
   std::vector<AxXbError> axxb;
-  double axxb_rms_rotation_deg = 0;   ///< RMS over `axxb`.
-  double axxb_rms_translation_mm = 0; ///< RMS over `axxb`.
-  std::vector<int> reversed_views;    ///< 0-based views whose corner numbering was reversed.
-  std::vector<std::string> warnings;  ///< e.g. a view with a large residual.
+  double axxb_rms_rotation_deg = 0;    ///< RMS over `axxb`.
+  double axxb_rms_translation_mm = 0;  ///< RMS over `axxb`.
+  std::vector<int> reversed_views;     ///< 0-based views whose corner numbering was reversed.
+  std::vector<std::string> warnings;   ///< e.g. a view with a large residual.
 
   /// 1 sigma of X: rotation deg per axis (x, y, z) and translation mm per axis.
   Eigen::Vector3d SigmaRotationDeg() const;

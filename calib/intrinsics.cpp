@@ -8,10 +8,10 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <opencv2/calib3d.hpp>
-#include <limits>
 #include <sstream>
 
 #include "calib/cost_functions/reprojection.hpp"
@@ -50,11 +50,11 @@ struct State {
   int width = 0, height = 0;
   std::unique_ptr<CameraModel> lens;  // lens model (intrinsics values unused by the costs)
   IntrinsicsLayout layout;
-  std::vector<double> free;           // optimised intrinsics
-  std::vector<Pose6> poses;           // per used view
-  std::vector<int> view_of_pose;      // index into the input views
+  std::vector<double> free;       // optimised intrinsics
+  std::vector<Pose6> poses;       // per used view
+  std::vector<int> view_of_pose;  // index into the input views
   double warp[2] = {0, 0};
-  Eigen::MatrixXd regularization;     // rows x NumFree (splined), empty otherwise
+  Eigen::MatrixXd regularization;  // rows x NumFree (splined), empty otherwise
   // Observations of the used views: (pose index, corner id, pixel), inlier flag.
   struct Obs {
     int pose;
@@ -91,8 +91,8 @@ struct SolveReport {
 // them (marginal over the warp), unscaled. The
 // columns are scaled to unit norm first (fx ~ 1e3 px and k6 ~ 1e-3 differ by orders of
 // magnitude; unscaled, J'J looks rank deficient when it is not), then inverted through the SVD
-// of the scaled J; empty when its condition number (> 1e15, rounding level) shows a true rank deficiency;
-// OPENCV8's rational distortion alone reaches 1e13-1e14 on ordinary data.
+// of the scaled J; empty when its condition number (> 1e15, rounding level) shows a true rank
+// deficiency; OPENCV8's rational distortion alone reaches 1e13-1e14 on ordinary data.
 Eigen::MatrixXd MarginalCovariance(State& s, ceres::Problem& problem) {
   std::vector<double*> blocks = {s.free.data()};
   for (Pose6& p : s.poses) {
@@ -123,8 +123,7 @@ Eigen::MatrixXd MarginalCovariance(State& s, ceres::Problem& problem) {
   // singular values (Eigen's BDCSVD deflates them to exact zeros).
   if (js.rows() < js.cols()) return {};
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(js);
-  const Eigen::MatrixXd rfac =
-      qr.matrixQR().topRows(js.cols()).triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd rfac = qr.matrixQR().topRows(js.cols()).triangularView<Eigen::Upper>();
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(rfac, Eigen::ComputeFullV);
   const Eigen::VectorXd sv = svd.singularValues();
   if (sv.size() == 0 || !(sv(sv.size() - 1) > 1e-15 * sv(0))) return {};
@@ -317,7 +316,8 @@ void IntrinsicsOptions::Check() const {
   if (!(outlier_threshold_sigma >= 2)) {
     throw OptionError("IntrinsicsOptions.outlier_threshold_sigma must be >= 2");
   }
-  if (max_outlier_rounds < 0) throw OptionError("IntrinsicsOptions.max_outlier_rounds must be >= 0");
+  if (max_outlier_rounds < 0)
+    throw OptionError("IntrinsicsOptions.max_outlier_rounds must be >= 0");
   if (min_views < 2) throw OptionError("IntrinsicsOptions.min_views must be >= 2");
   if (min_corners_per_view < 4) {
     throw OptionError("IntrinsicsOptions.min_corners_per_view must be >= 4");
@@ -332,14 +332,17 @@ void IntrinsicsOptions::Check() const {
   if (!(max_focal_relative_sigma > 0)) {
     throw OptionError("IntrinsicsOptions.max_focal_relative_sigma must be > 0");
   }
-  if (min_tilt_spread_deg < 0) throw OptionError("IntrinsicsOptions.min_tilt_spread_deg must be >= 0");
+  if (min_tilt_spread_deg < 0)
+    throw OptionError("IntrinsicsOptions.min_tilt_spread_deg must be >= 0");
   if (threads < 1) throw OptionError("IntrinsicsOptions.threads must be >= 1");
 }
 
 std::string MrcalLensModelName(const IntrinsicsOptions& options, double fov_x_deg) {
   switch (options.model) {
-    case LensModelKind::kOpenCV5: return "LENSMODEL_OPENCV5";
-    case LensModelKind::kOpenCV8: return "LENSMODEL_OPENCV8";
+    case LensModelKind::kOpenCV5:
+      return "LENSMODEL_OPENCV5";
+    case LensModelKind::kOpenCV8:
+      return "LENSMODEL_OPENCV8";
     case LensModelKind::kSplined:
       return "LENSMODEL_SPLINED_STEREOGRAPHIC_order=" + std::to_string(options.spline_order) +
              "_Nx=" + std::to_string(options.spline_nx) +
@@ -397,8 +400,8 @@ void SelectViews(const std::vector<BoardView>& views, const BoardSpec& board, in
       }
     }
     if (static_cast<int>(view.corners_px.size()) < options.min_corners_per_view) {
-      vr.rejection_reason = "only " + std::to_string(view.corners_px.size()) +
-                            " corners (need " + std::to_string(options.min_corners_per_view) + ")";
+      vr.rejection_reason = "only " + std::to_string(view.corners_px.size()) + " corners (need " +
+                            std::to_string(options.min_corners_per_view) + ")";
       problems.push_back(vr.name + ": " + vr.rejection_reason);
     } else {
       vr.used = true;
@@ -421,7 +424,6 @@ void SelectViews(const std::vector<BoardView>& views, const BoardSpec& board, in
     }
     throw InputError(msg + ": add views of the board at varied tilts covering the image");
   }
-
 }
 
 // Initial focal length and poses (pinhole, principal point at the centre): fills the poses
@@ -504,8 +506,8 @@ double InitialPoses(const std::vector<BoardView>& views, const BoardSpec& board,
 void FitLens(State& s, const IntrinsicsOptions& options, double f0, double cx0, double cy0,
              IntrinsicsResult& result) {
   const int width_px = s.width, height_px = s.height;
-  const LensModelKind first = options.model == LensModelKind::kSplined ? LensModelKind::kOpenCV8
-                                                                       : options.model;
+  const LensModelKind first =
+      options.model == LensModelKind::kSplined ? LensModelKind::kOpenCV8 : options.model;
   IntrinsicsOptions first_options = options;
   first_options.model = first;
   {
@@ -540,7 +542,6 @@ void FitLens(State& s, const IntrinsicsOptions& options, double f0, double cx0, 
     result.iterations += held.iterations;
     SolveWithOutliers(s, result);
   }
-
 }
 
 // Final statistics and covariance: the last solve (covariance of [free intrinsics, poses],
@@ -585,8 +586,9 @@ void FinalStatistics(State& s, std::size_t num_views, const IntrinsicsOptions& o
   result.rms_px = result.num_corners > 0 ? std::sqrt(ssr / result.num_corners) : 0.0;
   result.residual_sigma_px = dof > 0 ? std::sqrt(ssr / dof) : 0.0;
   if (dof <= 0) {
-    result.warnings.push_back("as many parameters as measurements: no residual to estimate "
-                              "the noise from");
+    result.warnings.push_back(
+        "as many parameters as measurements: no residual to estimate "
+        "the noise from");
   }
   for (std::size_t p = 0; p < s.poses.size(); ++p) {
     ViewResult& vr = result.views[s.view_of_pose[p]];
@@ -617,8 +619,7 @@ std::vector<double> ViewGeometry(const State& s, const IntrinsicsOptions& option
   mean_normal.normalize();
   for (const auto& n : normals) {
     result.tilt_spread_deg = std::max(
-        result.tilt_spread_deg,
-        std::acos(std::clamp(n.dot(mean_normal), -1.0, 1.0)) * 180.0 / kPi);
+        result.tilt_spread_deg, std::acos(std::clamp(n.dot(mean_normal), -1.0, 1.0)) * 180.0 / kPi);
   }
   if (result.tilt_spread_deg < options.min_tilt_spread_deg) {
     result.focal_observable = false;
@@ -655,13 +656,14 @@ void IntrinsicsCovariance(const State& s, const Eigen::MatrixXd& cov_all,
     result.intrinsics_covariance =
         jf * cov_free * jf.transpose() * (result.residual_sigma_px * result.residual_sigma_px);
     for (int i = 0; i < n_full; ++i) {
-      result.intrinsics_sigma.push_back(std::sqrt(std::max(0.0, result.intrinsics_covariance(i, i))));
+      result.intrinsics_sigma.push_back(
+          std::sqrt(std::max(0.0, result.intrinsics_covariance(i, i))));
     }
     const double rel = result.intrinsics_sigma[0] / std::abs(full[0]);
     if (!(rel <= options.max_focal_relative_sigma)) {
       result.focal_observable = false;
-      result.warnings.push_back("focal length poorly observed: 1-sigma " +
-                                Fmt(100 * rel, 2) + " % of fx (limit " +
+      result.warnings.push_back("focal length poorly observed: 1-sigma " + Fmt(100 * rel, 2) +
+                                " % of fx (limit " +
                                 Fmt(100 * options.max_focal_relative_sigma, 2) +
                                 " %); add views with the board tilted in different directions");
     }
@@ -681,7 +683,6 @@ void IntrinsicsCovariance(const State& s, const Eigen::MatrixXd& cov_all,
                                 " inlier corners left after outlier rejection");
     }
   }
-
 }
 
 // Projection uncertainty over the image (header: mrcal's mean-frames idea).
@@ -693,11 +694,11 @@ void ProjectionUncertainty(const State& s, const Eigen::MatrixXd& cov_all,
   const std::vector<double> full = FullIntrinsics(s);
   std::vector<double>& sorted = distances;
   std::sort(sorted.begin(), sorted.end());
-  result.uncertainty_range_mm = options.uncertainty_range_mm > 0 ? options.uncertainty_range_mm
-                                                                 : sorted[sorted.size() / 2];
-  result.uncertainty_px = Eigen::MatrixXd::Constant(options.uncertainty_grid_y,
-                                                    options.uncertainty_grid_x,
-                                                    std::numeric_limits<double>::quiet_NaN());
+  result.uncertainty_range_mm =
+      options.uncertainty_range_mm > 0 ? options.uncertainty_range_mm : sorted[sorted.size() / 2];
+  result.uncertainty_px =
+      Eigen::MatrixXd::Constant(options.uncertainty_grid_y, options.uncertainty_grid_x,
+                                std::numeric_limits<double>::quiet_NaN());
   const int num_poses = static_cast<int>(s.poses.size());
   if (result.intrinsics_covariance.size() > 0 && cov_all.rows() == n_free + 6 * num_poses) {
     const CameraModel& cam = *result.camera;

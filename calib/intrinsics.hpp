@@ -67,15 +67,15 @@ struct IntrinsicsOptions {
   /// zero where nothing is observed) and second-difference (smoothness) term.
   double spline_value_weight = 0.02;
   double spline_smoothness_weight = 0.2;
-  bool fix_aspect_ratio = false;  ///< Hold fy / fx at 1 (OpenCV's CALIB_FIX_ASPECT_RATIO).
+  bool fix_aspect_ratio = false;     ///< Hold fy / fx at 1 (OpenCV's CALIB_FIX_ASPECT_RATIO).
   bool estimate_board_warp = false;  ///< Estimate the board's bow (2 coefficients, mm).
   /// A corner is an outlier when its residual norm exceeds this times the per-coordinate
   /// residual sigma (4 => chi^2 with 2 dof at p ~ 3e-4).
   double outlier_threshold_sigma = 4.0;
-  int max_outlier_rounds = 5;      ///< Re-solves after dropping outliers (0: no rejection).
-  int min_views = 3;               ///< Fewer usable views: InputError.
-  int min_corners_per_view = 6;    ///< Views with fewer corners are not used.
-  int max_iterations = 200;        ///< Ceres iterations per solve.
+  int max_outlier_rounds = 5;    ///< Re-solves after dropping outliers (0: no rejection).
+  int min_views = 3;             ///< Fewer usable views: InputError.
+  int min_corners_per_view = 6;  ///< Views with fewer corners are not used.
+  int max_iterations = 200;      ///< Ceres iterations per solve.
   /// Projection-uncertainty grid (cells along x and y) and the range of the fixed point, mm
   /// (0: the median board distance).
   int uncertainty_grid_x = 16;
@@ -85,7 +85,7 @@ struct IntrinsicsOptions {
   double max_focal_relative_sigma = 0.01;
   /// Views are "nearly parallel" when every board normal lies within this angle of their mean.
   double min_tilt_spread_deg = 5.0;
-  int threads = 1;                 ///< Ceres threads (results identical for any count).
+  int threads = 1;  ///< Ceres threads (results identical for any count).
 
   /// Throws OptionError naming the field.
   void Check() const;
@@ -93,7 +93,7 @@ struct IntrinsicsOptions {
 
 /// One corner's fit.
 struct CornerResidual {
-  int view = 0;               ///< Index into IntrinsicsResult::views.
+  int view = 0;  ///< Index into IntrinsicsResult::views.
   int corner_id = 0;
   Eigen::Vector2d observed_px = Eigen::Vector2d::Zero();
   Eigen::Vector2d residual_px = Eigen::Vector2d::Zero();  ///< projected - observed.
@@ -107,32 +107,32 @@ struct ViewResult {
   std::string rejection_reason;  ///< Why it was not used (empty when used).
   int num_corners = 0;           ///< Corners used (after outlier rejection).
   int num_outliers = 0;
-  double rms_px = 0;             ///< RMS of its inlier corners (OpenCV definition).
+  double rms_px = 0;  ///< RMS of its inlier corners (OpenCV definition).
   Eigen::Isometry3d camera_from_board = Eigen::Isometry3d::Identity();
-  double tilt_deg = 0;           ///< Angle between the board normal and the optical axis.
+  double tilt_deg = 0;  ///< Angle between the board normal and the optical axis.
 };
 
 struct IntrinsicsResult {
   std::optional<CameraModel> camera;  ///< Set whenever a solve ran.
   bool converged = false;
-  std::string termination;            ///< Ceres's message of the last solve.
-  int iterations = 0;                 ///< Over all solves.
+  std::string termination;  ///< Ceres's message of the last solve.
+  int iterations = 0;       ///< Over all solves.
   int outlier_rounds = 0;
-  double rms_px = 0;                  ///< Inliers, OpenCV definition (see header).
-  double residual_sigma_px = 0;       ///< Per-coordinate sigma, sqrt(SSR / (2N - P)).
-  int num_corners = 0;                ///< Inlier corners.
+  double rms_px = 0;             ///< Inliers, OpenCV definition (see header).
+  double residual_sigma_px = 0;  ///< Per-coordinate sigma, sqrt(SSR / (2N - P)).
+  int num_corners = 0;           ///< Inlier corners.
   int num_outliers = 0;
-  int num_parameters = 0;             ///< Optimised (intrinsics + poses + warp).
+  int num_parameters = 0;  ///< Optimised (intrinsics + poses + warp).
   std::vector<ViewResult> views;
-  std::vector<CornerResidual> corners;  ///< Every corner of the used views.
+  std::vector<CornerResidual> corners;       ///< Every corner of the used views.
   std::vector<std::string> intrinsic_names;  ///< fx fy cx cy k1 ... (mrcal order).
   /// Covariance of mrcal's full intrinsics vector (fy follows fx when the aspect is fixed),
   /// marginal over poses and warp, scaled by residual_sigma_px^2. Empty when not computable.
   Eigen::MatrixXd intrinsics_covariance;
   std::vector<double> intrinsics_sigma;  ///< sqrt of its diagonal (empty when not computable).
   Eigen::Vector2d board_warp_mm = Eigen::Vector2d::Zero();  ///< When estimated.
-  double tilt_spread_deg = 0;           ///< Largest angle of a board normal from their mean.
-  bool focal_observable = true;         ///< False: views do not constrain the focal length.
+  double tilt_spread_deg = 0;    ///< Largest angle of a board normal from their mean.
+  bool focal_observable = true;  ///< False: views do not constrain the focal length.
   /// 1-sigma projection uncertainty (worst direction, px) over the image, rows = grid y.
   Eigen::MatrixXd uncertainty_px;
   double uncertainty_range_mm = 0;

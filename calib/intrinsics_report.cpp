@@ -38,14 +38,18 @@ report::HtmlReport IntrinsicsReport(const IntrinsicsResult& r, const std::string
   page.AddKeyValues({
       {"lens model", r.camera ? r.camera->lensmodel() : "none"},
       {"image size", Fmt(w, 0) + " x " + Fmt(h, 0) + " px"},
-      {"RMS reprojection error", Fmt(r.rms_px, 4) + " px (per corner, OpenCV's definition; mrcal's per-coordinate RMS is " + Fmt(r.rms_px / std::sqrt(2.0), 4) + " px)"},
+      {"RMS reprojection error",
+       Fmt(r.rms_px, 4) + " px (per corner, OpenCV's definition; mrcal's per-coordinate RMS is " +
+           Fmt(r.rms_px / std::sqrt(2.0), 4) + " px)"},
       {"residual sigma", Fmt(r.residual_sigma_px, 4) + " px per coordinate"},
       {"views used", std::to_string(used) + " of " + std::to_string(r.views.size())},
-      {"corners used / outliers", std::to_string(r.num_corners) + " / " + std::to_string(r.num_outliers)},
+      {"corners used / outliers",
+       std::to_string(r.num_corners) + " / " + std::to_string(r.num_outliers)},
       {"converged", r.converged ? "yes" : "NO: " + r.termination},
       {"focal length observable", r.focal_observable ? "yes" : "NO"},
       {"spread of board normals", Fmt(r.tilt_spread_deg, 1) + " deg"},
-      {"board warp (x, y)", Fmt(r.board_warp_mm.x(), 3) + ", " + Fmt(r.board_warp_mm.y(), 3) + " mm"},
+      {"board warp (x, y)",
+       Fmt(r.board_warp_mm.x(), 3) + ", " + Fmt(r.board_warp_mm.y(), 3) + " mm"},
   });
   for (const std::string& warning : r.warnings) page.AddWarning(warning);
 
@@ -53,13 +57,15 @@ report::HtmlReport IntrinsicsReport(const IntrinsicsResult& r, const std::string
   std::vector<std::vector<std::string>> rows;
   if (r.camera) {
     const std::vector<double>& v = r.camera->intrinsics();
-    const std::size_t shown = r.camera->lensmodel().find("SPLINED") != std::string::npos ? 4 : v.size();
+    const std::size_t shown =
+        r.camera->lensmodel().find("SPLINED") != std::string::npos ? 4 : v.size();
     for (std::size_t i = 0; i < shown; ++i) {
       rows.push_back({r.intrinsic_names[i], Sci(v[i]),
                       r.intrinsics_sigma.empty() ? "n/a" : Sci(r.intrinsics_sigma[i])});
     }
     if (shown < v.size()) {
-      rows.push_back({"spline knots", std::to_string(v.size() - shown) + " values", "see .cameramodel"});
+      rows.push_back(
+          {"spline knots", std::to_string(v.size() - shown) + " values", "see .cameramodel"});
     }
   }
   page.AddTable({"parameter", "value", "1 sigma"}, rows);
@@ -99,16 +105,18 @@ report::HtmlReport IntrinsicsReport(const IntrinsicsResult& r, const std::string
   std::vector<double> rms;
   for (const ViewResult& v : r.views) {
     if (!v.used) continue;
-    labels.push_back(v.name.substr(v.name.find_last_of('/') == std::string::npos ? 0 : v.name.find_last_of('/') + 1));
+    labels.push_back(v.name.substr(
+        v.name.find_last_of('/') == std::string::npos ? 0 : v.name.find_last_of('/') + 1));
     rms.push_back(v.rms_px);
   }
   page.AddBars("RMS reprojection error per image", labels, rms, "RMS (px)");
   std::vector<std::vector<std::string>> view_rows;
   for (const ViewResult& v : r.views) {
-    view_rows.push_back({v.name, v.used ? "yes" : "no: " + v.rejection_reason,
-                         v.used ? Fmt(v.rms_px, 3) : "", v.used ? std::to_string(v.num_corners) : "",
-                         v.used ? std::to_string(v.num_outliers) : "", v.used ? Fmt(v.tilt_deg, 1) : "",
-                         v.used ? Fmt(v.camera_from_board.translation().norm(), 0) : ""});
+    view_rows.push_back(
+        {v.name, v.used ? "yes" : "no: " + v.rejection_reason, v.used ? Fmt(v.rms_px, 3) : "",
+         v.used ? std::to_string(v.num_corners) : "", v.used ? std::to_string(v.num_outliers) : "",
+         v.used ? Fmt(v.tilt_deg, 1) : "",
+         v.used ? Fmt(v.camera_from_board.translation().norm(), 0) : ""});
   }
   page.AddTable({"image", "used", "RMS (px)", "corners", "outliers", "tilt (deg)", "distance (mm)"},
                 view_rows);

@@ -60,9 +60,9 @@ struct State {
 struct Columns {
   std::vector<std::string> names;
   std::vector<bool> fixable;
-  std::vector<int> robot;   // robot parameter index -> column (-1 when not estimated)
-  int hand_eye = -1;        // first of 6 columns
-  int centres = -1;         // first of 3 S columns
+  std::vector<int> robot;  // robot parameter index -> column (-1 when not estimated)
+  int hand_eye = -1;       // first of 6 columns
+  int centres = -1;        // first of 3 S columns
   int radius = -1;
   int count = 0;
 };
@@ -79,8 +79,8 @@ Columns MakeColumns(const JointIdentificationOptions& o, const std::vector<bool>
   }
   if (o.estimate_hand_eye) {
     c.hand_eye = c.count;
-    for (const char* n : {"hand_eye_rx", "hand_eye_ry", "hand_eye_rz", "hand_eye_tx",
-                          "hand_eye_ty", "hand_eye_tz"}) {
+    for (const char* n : {"hand_eye_rx", "hand_eye_ry", "hand_eye_rz", "hand_eye_tx", "hand_eye_ty",
+                          "hand_eye_tz"}) {
       c.names.emplace_back(n);
       c.fixable.push_back(false);
       ++c.count;
@@ -138,8 +138,8 @@ BuiltProblem Build(State& st, const std::vector<SphereSweep>& sweeps,
       std::array<double, kJoints> q{};
       for (int j = 0; j < kJoints; ++j) q[j] = sweeps[w].profiles[profile].joints_rad[j];
       const int n = static_cast<int>(points.size());
-      ceres::CostFunction* cost = KinematicSphereCost::Create(
-          &st.chain, &st.flange_from_sensor, q, std::move(points), o.point_sigma_mm);
+      ceres::CostFunction* cost = KinematicSphereCost::Create(&st.chain, &st.flange_from_sensor, q,
+                                                              std::move(points), o.point_sigma_mm);
       if (robust) loss = new ceres::HuberLoss(3.0);
       b.problem->AddResidualBlock(cost, loss, st.robot_delta.data(), st.hand_eye.data(),
                                   st.centre_blocks[s].data(), &st.radius);
@@ -185,7 +185,8 @@ void Evaluate(State& st, const BuiltProblem& b, const Columns& cols, Eigen::Matr
       double* jac[] = {jc.data()};
       blk.cost->Evaluate(params, residuals->data() + row, jac);
       for (int i = 0; i < n; ++i) {
-        for (int k = 0; k < 3; ++k) (*jacobian)(row + i, cols.centres + 3 * blk.sphere + k) = jc[i * 3 + k];
+        for (int k = 0; k < 3; ++k)
+          (*jacobian)(row + i, cols.centres + 3 * blk.sphere + k) = jc[i * 3 + k];
       }
       row += n;
       continue;
@@ -205,7 +206,8 @@ void Evaluate(State& st, const BuiltProblem& b, const Columns& cols, Eigen::Matr
       if (cols.hand_eye >= 0) {
         for (int k = 0; k < 6; ++k) (*jacobian)(row + i, cols.hand_eye + k) = jh[i * 6 + k];
       }
-      for (int k = 0; k < 3; ++k) (*jacobian)(row + i, cols.centres + 3 * blk.sphere + k) = jc[i * 3 + k];
+      for (int k = 0; k < 3; ++k)
+        (*jacobian)(row + i, cols.centres + 3 * blk.sphere + k) = jc[i * 3 + k];
       if (cols.radius >= 0) (*jacobian)(row + i, cols.radius) = jrad[i];
     }
     row += n;
@@ -223,8 +225,8 @@ void Fold(State& st) {
   st.flange_from_sensor.linear() = Eigen::Quaterniond(r).normalized().toRotationMatrix();
   st.flange_from_sensor.translation() = t;
   for (std::size_t s = 0; s < st.centres.size(); ++s) {
-    st.centres[s] = Eigen::Vector3d(st.centre_blocks[s][0], st.centre_blocks[s][1],
-                                    st.centre_blocks[s][2]);
+    st.centres[s] =
+        Eigen::Vector3d(st.centre_blocks[s][0], st.centre_blocks[s][1], st.centre_blocks[s][2]);
   }
   st.robot_delta.fill(0);
   st.hand_eye.fill(0);
@@ -264,19 +266,19 @@ void CheckMotion(const DhChain& robot, const std::vector<SphereSweep>& sweeps) {
     }
   }
   if (largest_deg < 2) {
-    throw InputError("robot poses: the flange rotates by at most " +
-                     std::to_string(largest_deg) +
+    throw InputError("robot poses: the flange rotates by at most " + std::to_string(largest_deg) +
                      " deg between the sweeps (pure translations): the hand-eye rotation "
                      "and translation are not observable; record poses rotated about "
                      "several axes by >= 10 deg");
   }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scatter / pairs);
   if (eig.eigenvalues()[1] < 1e-3) {
-    throw InputError("robot poses: every relative flange rotation is about one axis (axis "
-                     "scatter eigenvalues " + std::to_string(eig.eigenvalues()[0]) + ", " +
-                     std::to_string(eig.eigenvalues()[1]) +
-                     "): the hand-eye translation along it is not observable; record poses "
-                     "rotated about at least two different axes");
+    throw InputError(
+        "robot poses: every relative flange rotation is about one axis (axis "
+        "scatter eigenvalues " +
+        std::to_string(eig.eigenvalues()[0]) + ", " + std::to_string(eig.eigenvalues()[1]) +
+        "): the hand-eye translation along it is not observable; record poses "
+        "rotated about at least two different axes");
   }
 }
 
@@ -303,13 +305,15 @@ void JointIdentificationOptions::Check() const {
     throw OptionError("JointIdentificationOptions.radius_mm must be >= 0 (0: from the data)");
   }
   if (!estimate_radius && radius_mm <= 0) {
-    throw OptionError("JointIdentificationOptions.radius_mm must be given (> 0) when "
-                      "estimate_radius is false");
+    throw OptionError(
+        "JointIdentificationOptions.radius_mm must be given (> 0) when "
+        "estimate_radius is false");
   }
   if (max_points_per_sweep < 10) {
     throw OptionError("JointIdentificationOptions.max_points_per_sweep must be >= 10");
   }
-  if (max_iterations < 1) throw OptionError("JointIdentificationOptions.max_iterations must be >= 1");
+  if (max_iterations < 1)
+    throw OptionError("JointIdentificationOptions.max_iterations must be >= 1");
   if (estimate_dh_deltas && !estimate_joint_offsets) {
     throw OptionError("JointIdentificationOptions.estimate_dh_deltas needs estimate_joint_offsets");
   }
@@ -319,8 +323,9 @@ void JointIdentificationOptions::Check() const {
 std::string JointIdentificationResult::Summary() const {
   std::string s = converged ? "converged" : "NOT converged";
   char buf[160];
-  std::snprintf(buf, sizeof(buf), ", rms %.4f mm over %zu points, %zu sweeps; offsets (deg):",
-                rms_mm, points_used, sweeps.size());
+  std::snprintf(buf, sizeof(buf),
+                ", rms %.4f mm over %zu points, %zu sweeps; offsets (deg):", rms_mm, points_used,
+                sweeps.size());
   s += buf;
   const int n = static_cast<int>(robot.joints().size());
   for (int j = 0; j < n; ++j) {
@@ -404,7 +409,8 @@ std::vector<std::vector<internal::SeedSphere>> SeedCandidates(
   for (std::size_t w = 0; w < sweeps.size(); ++w) {
     std::vector<Eigen::Vector3d> in_base;
     for (std::size_t p = 0; p < sweeps[w].profiles.size(); ++p) {
-      const Eigen::Isometry3d base_from_sensor = st.BaseFromSensor(sweeps[w].profiles[p].joints_rad);
+      const Eigen::Isometry3d base_from_sensor =
+          st.BaseFromSensor(sweeps[w].profiles[p].joints_rad);
       for (const Eigen::Vector3d& pt : sweeps[w].profiles[p].points_in_sensor) {
         flat[w].p_in_sensor.push_back(pt);
         flat[w].profile.push_back(static_cast<int>(p));
@@ -424,9 +430,9 @@ std::vector<std::vector<internal::SeedSphere>> SeedCandidates(
     candidates[w] = internal::FindSpheres(in_base, fo, o.known_centres_in_base.empty() ? 4 : 1);
     if (candidates[w].empty()) {
       throw InputError("sweep '" + sweeps[w].name + "': no sphere found among its " +
-                       std::to_string(in_base.size()) +
-                       " points (radius " + std::to_string(o.min_radius_mm) + " .. " +
-                       std::to_string(o.max_radius_mm) + " mm); check the sweep and the "
+                       std::to_string(in_base.size()) + " points (radius " +
+                       std::to_string(o.min_radius_mm) + " .. " + std::to_string(o.max_radius_mm) +
+                       " mm); check the sweep and the "
                        "initial robot model / hand-eye transform");
     }
   }
@@ -519,7 +525,8 @@ ObservabilityReport FixUnobservable(State& st, const std::vector<SphereSweep>& s
     }
     throw InputError("sphere sweeps: the poses cannot separate " + names +
                      " (a direction of the identification Jacobian with relative singular "
-                     "value " + std::to_string(seed_obs.directions.back().relative_singular_value) +
+                     "value " +
+                     std::to_string(seed_obs.directions.back().relative_singular_value) +
                      "); record poses that rotate about several axes and see several spheres");
   }
   for (int k = 0; k < kRobotParams; ++k) {
@@ -531,17 +538,19 @@ ObservabilityReport FixUnobservable(State& st, const std::vector<SphereSweep>& s
 // Re-gate: residuals of every point of every sweep against the model; keeps the points within
 // gate_sigmas robust sigmas. Counts the seed inliers dropped when `count_rejected`.
 void Regate(const State& st, const std::vector<SphereSweep>& sweeps,
-            const JointIdentificationOptions& o, bool count_rejected,
-            std::vector<FlatSweep>& flat, JointIdentificationResult& result) {
+            const JointIdentificationOptions& o, bool count_rejected, std::vector<FlatSweep>& flat,
+            JointIdentificationResult& result) {
   std::vector<double> abs_res;
   std::vector<std::vector<double>> res(sweeps.size());
   for (std::size_t w = 0; w < sweeps.size(); ++w) {
     const Eigen::Vector3d& c = st.centres[static_cast<std::size_t>(sweeps[w].sphere)];
     std::vector<Eigen::Isometry3d> poses;
-    for (const SweptProfile& p : sweeps[w].profiles) poses.push_back(st.BaseFromSensor(p.joints_rad));
+    for (const SweptProfile& p : sweeps[w].profiles)
+      poses.push_back(st.BaseFromSensor(p.joints_rad));
     res[w].resize(flat[w].p_in_sensor.size());
     for (std::size_t i = 0; i < flat[w].p_in_sensor.size(); ++i) {
-      res[w][i] = (poses[static_cast<std::size_t>(flat[w].profile[i])] * flat[w].p_in_sensor[i] - c).norm() -
+      res[w][i] = (poses[static_cast<std::size_t>(flat[w].profile[i])] * flat[w].p_in_sensor[i] - c)
+                      .norm() -
                   st.radius;
     }
     for (int i : flat[w].selected) abs_res.push_back(std::abs(res[w][static_cast<std::size_t>(i)]));
@@ -639,7 +648,8 @@ FinalJacobian Uncertainty(State& st, const std::vector<SphereSweep>& sweeps,
   const double dof = static_cast<double>(m - static_cast<Eigen::Index>(f.active.size()));
   result.variance_factor = dof > 0 ? rss / dof : 0;
   result.covariance = CovarianceFromJacobian(f.j, f.active, result.variance_factor);
-  for (int c : f.active) result.covariance_names.push_back(all_cols.names[static_cast<std::size_t>(c)]);
+  for (int c : f.active)
+    result.covariance_names.push_back(all_cols.names[static_cast<std::size_t>(c)]);
   return f;
 }
 
@@ -667,15 +677,15 @@ void FillParameters(const DhChain& robot, const State& st, const JointIdentifica
     result.parameter_corrections.push_back(identified[static_cast<std::size_t>(k)] -
                                            input[static_cast<std::size_t>(k)]);
     result.parameter_estimated.push_back(robot_free[k]);
-    result.parameter_sigmas.push_back(all_cols.robot[k] >= 0 && robot_free[k]
-                                          ? sigma_of(all_cols.robot[k])
-                                          : 0.0);
+    result.parameter_sigmas.push_back(
+        all_cols.robot[k] >= 0 && robot_free[k] ? sigma_of(all_cols.robot[k]) : 0.0);
   }
   if (o.estimate_hand_eye) {
     Matrix6d cov;
     for (int a = 0; a < 6; ++a) {
       for (int c = 0; c < 6; ++c) {
-        cov(a, c) = result.covariance(index_of(all_cols.hand_eye + a), index_of(all_cols.hand_eye + c));
+        cov(a, c) =
+            result.covariance(index_of(all_cols.hand_eye + a), index_of(all_cols.hand_eye + c));
       }
     }
     result.flange_from_sensor_covariance = cov;
@@ -719,7 +729,8 @@ void FillResiduals(const std::vector<SphereSweep>& sweeps, const FinalJacobian& 
     sr.mean_mm = sweep_sum[w] / static_cast<double>(sr.points);
   }
   result.points_used = result.residuals_mm.size();
-  result.rms_mm = std::sqrt(sum2 / static_cast<double>(std::max<std::size_t>(1, result.points_used)));
+  result.rms_mm =
+      std::sqrt(sum2 / static_cast<double>(std::max<std::size_t>(1, result.points_used)));
 }
 
 }  // namespace
@@ -737,12 +748,12 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
   // Counting: a sweep of a sphere fixes about 3 pose quantities (its centre seen from the pose)
   // plus the radius; the unknowns are the model parameters and 3 per free sphere centre.
   const Columns all_cols = MakeColumns(o, robot_estimated, spheres);
-  const int constraints = 3 * static_cast<int>(sweeps.size()) +
-                          (o.known_centres_in_base.empty() ? 0 : 3 * spheres) + 1;
+  const int constraints =
+      3 * static_cast<int>(sweeps.size()) + (o.known_centres_in_base.empty() ? 0 : 3 * spheres) + 1;
   if (constraints <= all_cols.count) {
-    throw InputError("sphere sweeps: " + std::to_string(sweeps.size()) +
-                     " poses give about " + std::to_string(constraints) +
-                     " constraints, not more than the " + std::to_string(all_cols.count) +
+    throw InputError("sphere sweeps: " + std::to_string(sweeps.size()) + " poses give about " +
+                     std::to_string(constraints) + " constraints, not more than the " +
+                     std::to_string(all_cols.count) +
                      " parameters to estimate (robot, hand-eye, sphere centres, radius); "
                      "record more poses");
   }
@@ -758,8 +769,7 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
   std::vector<bool> robot_free = robot_estimated;
   const ObservabilityReport seed_obs = FixUnobservable(st, sweeps, flat, o, all_cols, robot_free);
   Solve(st, sweeps, o, robot_free, flat, result);
-  const FinalJacobian f =
-      Uncertainty(st, sweeps, flat, o, all_cols, robot_free, seed_obs, result);
+  const FinalJacobian f = Uncertainty(st, sweeps, flat, o, all_cols, robot_free, seed_obs, result);
   FillParameters(robot, st, o, all_cols, robot_free, f.active, spheres, result);
   FillResiduals(sweeps, f, o, result);
   if (!result.converged) result.warnings.push_back("Ceres did not converge: " + result.termination);

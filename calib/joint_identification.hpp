@@ -56,12 +56,12 @@ struct SphereSweep {
 
 /// Options of IdentifyRobot. Units mm, rad.
 struct JointIdentificationOptions {
-  bool estimate_joint_offsets = true;   ///< Joint offsets (rad).
-  bool estimate_dh_deltas = false;      ///< Also a, d (mm) and alpha (rad) of every joint.
-  bool estimate_hand_eye = false;       ///< Also flange_from_sensor.
-  bool estimate_radius = true;          ///< Sphere radius free (else radius_mm held).
-  double radius_mm = 0;                 ///< Initial (or held) radius; 0: from the seed fits.
-  double point_sigma_mm = 0.1;          ///< A-priori point noise (weights; > 0).
+  bool estimate_joint_offsets = true;  ///< Joint offsets (rad).
+  bool estimate_dh_deltas = false;     ///< Also a, d (mm) and alpha (rad) of every joint.
+  bool estimate_hand_eye = false;      ///< Also flange_from_sensor.
+  bool estimate_radius = true;         ///< Sphere radius free (else radius_mm held).
+  double radius_mm = 0;                ///< Initial (or held) radius; 0: from the seed fits.
+  double point_sigma_mm = 0.1;         ///< A-priori point noise (weights; > 0).
   /// Known sphere centres in the base (index = sphere); empty: centres free.
   std::vector<Eigen::Vector3d> known_centres_in_base;
   double known_centre_sigma_mm = 0.05;  ///< 1-sigma of each known centre coordinate (> 0).
@@ -70,14 +70,14 @@ struct JointIdentificationOptions {
   /// Seed sphere centres of one sphere seen from different sweeps agree within this (the
   /// initial model's error, mm); candidates farther from the consensus are other objects.
   double seed_consistency_mm = 60;
-  double gate_sigmas = 4;               ///< Final inlier gate, in robust sigmas of the residuals.
-  double min_gate_mm = 0.05;            ///< The final gate is at least this.
+  double gate_sigmas = 4;     ///< Final inlier gate, in robust sigmas of the residuals.
+  double min_gate_mm = 0.05;  ///< The final gate is at least this.
   /// Plausible sphere radii for the seed fit (mm); when radius_mm is given, the seed accepts
   /// only radius_mm +- 20 %. Raise max_radius_mm for targets larger than 80 mm.
   double min_radius_mm = 5;
   double max_radius_mm = 80;
-  int max_iterations = 100;             ///< Ceres iterations per solve.
-  ObservabilityOptions observability;   ///< Unidentifiable-direction detection.
+  int max_iterations = 100;            ///< Ceres iterations per solve.
+  ObservabilityOptions observability;  ///< Unidentifiable-direction detection.
   /// Throws OptionError naming the field.
   void Check() const;
 };
@@ -86,25 +86,25 @@ struct JointIdentificationOptions {
 struct SweepResidual {
   std::string name;
   int sphere = 0;
-  std::size_t points = 0;   ///< Points used.
-  double rms_mm = 0;        ///< RMS point-to-sphere distance.
-  double max_abs_mm = 0;    ///< Largest |distance|.
-  double mean_mm = 0;       ///< Mean signed distance (a pose error shows as a bias).
+  std::size_t points = 0;  ///< Points used.
+  double rms_mm = 0;       ///< RMS point-to-sphere distance.
+  double max_abs_mm = 0;   ///< Largest |distance|.
+  double mean_mm = 0;      ///< Mean signed distance (a pose error shows as a bias).
 };
 
 /// Outcome of IdentifyRobot.
 struct JointIdentificationResult {
   bool converged = false;
-  std::string termination;          ///< Ceres' termination message.
-  int iterations = 0;               ///< Ceres iterations (all passes).
-  DhChain robot;                    ///< The identified chain (input with corrections applied).
+  std::string termination;  ///< Ceres' termination message.
+  int iterations = 0;       ///< Ceres iterations (all passes).
+  DhChain robot;            ///< The identified chain (input with corrections applied).
   Eigen::Isometry3d flange_from_sensor = Eigen::Isometry3d::Identity();
   /// 6x6 over [rotation vector rad; translation mm], left perturbation (when estimated).
   std::optional<Matrix6d> flange_from_sensor_covariance;
-  std::vector<std::string> parameter_names;   ///< 4 n robot parameters (DhParameterName).
-  std::vector<double> parameter_corrections;  ///< Identified minus input (rad or mm).
-  std::vector<double> parameter_sigmas;       ///< 1-sigma; 0 when not estimated or fixed.
-  std::vector<bool> parameter_estimated;      ///< True when solved for (not fixed).
+  std::vector<std::string> parameter_names;             ///< 4 n robot parameters (DhParameterName).
+  std::vector<double> parameter_corrections;            ///< Identified minus input (rad or mm).
+  std::vector<double> parameter_sigmas;                 ///< 1-sigma; 0 when not estimated or fixed.
+  std::vector<bool> parameter_estimated;                ///< True when solved for (not fixed).
   std::vector<Eigen::Vector3d> sphere_centres_in_base;  ///< Per sphere index (mm).
   std::vector<Eigen::Vector3d> sphere_centre_sigmas;    ///< 1-sigma per coordinate.
   double radius_mm = 0;
@@ -114,7 +114,7 @@ struct JointIdentificationResult {
   std::size_t points_used = 0;
   std::size_t points_rejected = 0;  ///< Seed inliers beyond the final gate.
   std::vector<SweepResidual> sweeps;
-  std::vector<double> residuals_mm;  ///< Signed point-to-sphere distances of the points used.
+  std::vector<double> residuals_mm;   ///< Signed point-to-sphere distances of the points used.
   ObservabilityReport observability;  ///< At the solution (after fixing).
   /// Covariance of every estimated parameter, names in covariance_names (robot parameters,
   /// hand_eye_rx.. tz, centre_<s>_x.., radius).

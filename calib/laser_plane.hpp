@@ -48,8 +48,8 @@ namespace lasercell::calib {
 
 /// Peaks of one white-plane sweep: (column, subpixel row) pixels of all its profiles.
 struct HeightCapture {
-  std::string name;                  ///< e.g. the profile file, for messages and reports.
-  double height_mm = 0;              ///< Height of the plate along the plate normal m.
+  std::string name;                       ///< e.g. the profile file, for messages and reports.
+  double height_mm = 0;                   ///< Height of the plate along the plate normal m.
   std::vector<Eigen::Vector2d> peaks_px;  ///< (column, row) of every valid peak.
 };
 
@@ -135,12 +135,12 @@ struct StripeOptions {
 /// Per-height / per-image diagnostics.
 struct LaserPlaneItem {
   std::string name;
-  bool used = false;         ///< False when rejected (reason in `note`).
-  std::string note;          ///< Why it was rejected, or how it was detected.
-  int points = 0;            ///< Observations used.
-  double rms_mm = 0;         ///< RMS distance of its points from the fitted plane.
-  double rms_px = 0;         ///< RMS residual in px of peak row (method a), or 0.
-  double height_mm = 0;      ///< Method (a): plate height.
+  bool used = false;               ///< False when rejected (reason in `note`).
+  std::string note;                ///< Why it was rejected, or how it was detected.
+  int points = 0;                  ///< Observations used.
+  double rms_mm = 0;               ///< RMS distance of its points from the fitted plane.
+  double rms_px = 0;               ///< RMS residual in px of peak row (method a), or 0.
+  double height_mm = 0;            ///< Method (a): plate height.
   double reprojection_rms_px = 0;  ///< Method (b): board corners' PnP reprojection RMS.
   bool scan_along_rows = false;    ///< Method (b): one peak per image row (vertical stripe).
   /// Leave-this-one-out refit: angle of the normal from the full fit (deg), change of d (mm),
@@ -167,9 +167,9 @@ struct LaserPlaneResult {
   bool converged = false;
   std::string termination;  ///< Ceres termination message.
   int iterations = 0;
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  ///< Unit, oriented so offset <= 0.
-  double offset_mm = 0;                                ///< d of n . p + d = 0.
-  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();  ///< p0 = -d n.
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();     ///< Unit, oriented so offset <= 0.
+  double offset_mm = 0;                                  ///< d of n . p + d = 0.
+  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();    ///< p0 = -d n.
   Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();  ///< Over [n; d].
   double normal_sigma_deg = 0;  ///< 1 sigma of the normal's direction: sqrt(trace cov(n)).
   double offset_sigma_mm = 0;   ///< 1 sigma of d.
@@ -177,11 +177,11 @@ struct LaserPlaneResult {
   double rms_px = 0;            ///< Method (a): RMS residual in px of peak row.
   int points = 0;               ///< Observations used.
   double median_triangulation_angle_deg = 0;  ///< Median angle of the rays to the plane.
-  bool ill_conditioned = false;  ///< True when the geometry cannot determine the plane.
+  bool ill_conditioned = false;            ///< True when the geometry cannot determine the plane.
   std::optional<double> zero_distance_mm;  ///< Method (a): D0 (estimated or given).
   double zero_distance_sigma_mm = 0;       ///< Method (a): 1 sigma of D0 (0 when given).
-  double plate_tilt_deg = 0;        ///< Method (a): estimated tilt of m towards the line.
-  double plate_tilt_sigma_deg = 0;  ///< Method (a): its 1 sigma (0 when not estimated).
+  double plate_tilt_deg = 0;               ///< Method (a): estimated tilt of m towards the line.
+  double plate_tilt_sigma_deg = 0;         ///< Method (a): its 1 sigma (0 when not estimated).
   std::vector<LaserPlaneItem> items;
   std::vector<LaserPlaneResidual> residuals;  ///< Used observations (for reports).
   /// Leave-one-out over the items: largest normal change (deg) and offset change (mm); NaN
@@ -208,16 +208,16 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
 
 /// What method (b) measures in one image: the board's inner corners and the stripe peaks.
 struct StripeObservation {
-  std::string name;                          ///< Image file, for messages and reports.
-  std::vector<Eigen::Vector2d> corners_px;   ///< Inner corners, OpenCV order; empty: not found.
-  std::vector<Eigen::Vector2d> stripe_px;    ///< (column, row) stripe peaks on the board.
+  std::string name;                         ///< Image file, for messages and reports.
+  std::vector<Eigen::Vector2d> corners_px;  ///< Inner corners, OpenCV order; empty: not found.
+  std::vector<Eigen::Vector2d> stripe_px;   ///< (column, row) stripe peaks on the board.
   bool scan_along_rows = false;  ///< One peak per image row (a vertical stripe), else per column.
   std::string note;              ///< Why the board or stripe was not found, or how it was scanned.
 };
 
-/// Detects the board (calib::DetectTarget with options.board_detection) and the stripe (one peak per scan
-/// line of the laser channel inside the board region; rows or columns, whichever gives more
-/// peaks). Throws InputError when the image size differs from the camera's.
+/// Detects the board (calib::DetectTarget with options.board_detection) and the stripe (one peak
+/// per scan line of the laser channel inside the board region; rows or columns, whichever gives
+/// more peaks). Throws InputError when the image size differs from the camera's.
 StripeObservation DetectStripe(const CameraModel& camera, const StripeImage& image,
                                const BoardSpec& board, const StripeOptions& options = {});
 
@@ -227,10 +227,11 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
     const CameraModel& camera, const std::vector<StripeObservation>& observations,
     const BoardSpec& board, const StripeOptions& options = {});
 
-/// Method (b): DetectStripe on every image, then CalibrateLaserPlaneFromStripeObservations. Images where the board or the stripe is not found are kept as unused items with
-/// the reason; throws InputError when fewer than 2 images are usable (listing why each failed),
-/// when the images' size differs from the camera's, or when the stripe points of all images lie
-/// in one plane through the camera centre (laser plane parallel to the camera rays).
+/// Method (b): DetectStripe on every image, then CalibrateLaserPlaneFromStripeObservations. Images
+/// where the board or the stripe is not found are kept as unused items with the reason; throws
+/// InputError when fewer than 2 images are usable (listing why each failed), when the images' size
+/// differs from the camera's, or when the stripe points of all images lie in one plane through the
+/// camera centre (laser plane parallel to the camera rays).
 LaserPlaneResult CalibrateLaserPlaneFromStripes(const CameraModel& camera,
                                                 const std::vector<StripeImage>& images,
                                                 const BoardSpec& board,

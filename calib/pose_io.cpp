@@ -57,8 +57,9 @@ void CheckPoseUnits(const std::vector<Eigen::Isometry3d>& base_from_flange,
   }
   const int count = static_cast<int>(base_from_flange.size());
   if (small == count) {
-    throw FileError(name, "every translation is below 5 mm: the poses look like metres; give "
-                          "mm (or use the kuka format, which is in metres)");
+    throw FileError(name,
+                    "every translation is below 5 mm: the poses look like metres; give "
+                    "mm (or use the kuka format, which is in metres)");
   }
   if (small > 0 && large > 0) {
     throw FileError(name, std::to_string(small) + " of " + std::to_string(count) +
@@ -83,7 +84,8 @@ RobotPoses ParseKukaPoses(const std::string& text, const std::string& name) {
     while (ls >> x) v.push_back(x);
     const std::string where = "line " + std::to_string(line_no);
     if (!ls.eof() || v.size() != 16) {
-      throw FileError(name, where + ": expected 16 numbers (row-major 4x4 base->TCP, metres), got " +
+      throw FileError(name, where +
+                                ": expected 16 numbers (row-major 4x4 base->TCP, metres), got " +
                                 std::to_string(v.size()) + (ls.eof() ? "" : " and text"));
     }
     Eigen::Matrix4d m;
@@ -190,8 +192,7 @@ BoardSpec ChessboardDetections::Board() const {
   return BoardSpec::Chessboard(cols, rows, square_mm);
 }
 
-ChessboardDetections ParseChessboardDetections(const std::string& text,
-                                               const std::string& name) {
+ChessboardDetections ParseChessboardDetections(const std::string& text, const std::string& name) {
   std::istringstream in(text);
   std::string line;
   int line_no = 0;
@@ -236,8 +237,8 @@ ChessboardDetections ParseChessboardDetections(const std::string& text,
       d.corners_px.emplace_back();
     }
     if (index != static_cast<int>(d.corners_px.back().size())) {
-      throw FileError(name, where + ": corner index " + std::to_string(index) + " of " + key +
-                                " out of order");
+      throw FileError(
+          name, where + ": corner index " + std::to_string(index) + " of " + key + " out of order");
     }
     d.corners_px.back().emplace_back(u, v);
   }

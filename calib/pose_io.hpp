@@ -69,10 +69,10 @@ void CheckPoseUnits(const std::vector<Eigen::Isometry3d>& base_from_flange,
 /// corner `IMAGE_NAME CORNER_INDEX U_PX V_PX` (corner index in OpenCV order, row by row along x;
 /// pixel (0, 0) = centre of the top-left pixel). '#' lines are comments. Images keep file order.
 struct ChessboardDetections {
-  int cols = 0, rows = 0;         ///< Inner corners.
-  double square_mm = 0;           ///< Square size.
-  int width_px = 0, height_px = 0;  ///< Image size.
-  std::vector<std::string> images;  ///< Image names, in order.
+  int cols = 0, rows = 0;                                ///< Inner corners.
+  double square_mm = 0;                                  ///< Square size.
+  int width_px = 0, height_px = 0;                       ///< Image size.
+  std::vector<std::string> images;                       ///< Image names, in order.
   std::vector<std::vector<Eigen::Vector2d>> corners_px;  ///< Per image, cols * rows corners.
 
   /// The chessboard these corners belong to (corner ids and board-frame positions, board.hpp).

@@ -16,8 +16,8 @@ void CheckCovariances(const std::vector<Eigen::Matrix3d>& c, std::size_t n, cons
                       const std::string& item) {
   if (c.empty()) return;
   if (c.size() != n) {
-    throw InputError(std::string("FitRigidTransform: ") + std::to_string(c.size()) + " " +
-                     which + " covariances for " + std::to_string(n) + " points");
+    throw InputError(std::string("FitRigidTransform: ") + std::to_string(c.size()) + " " + which +
+                     " covariances for " + std::to_string(n) + " points");
   }
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::LLT<Eigen::Matrix3d> llt(c[i]);
@@ -110,8 +110,7 @@ RigidFitResult FitRigidTransform(const std::vector<Eigen::Vector3d>& src,
   }
   const std::size_t n = src.size();
   if (n < 3) {
-    throw InputError("rigid fit: " + std::to_string(n) + " " + item +
-                     (n == 1 ? "" : "s") +
+    throw InputError("rigid fit: " + std::to_string(n) + " " + item + (n == 1 ? "" : "s") +
                      ": a rigid transform needs at least 3 non-collinear " + item +
                      "s (with 2 the rotation about their line is unobservable)");
   }

@@ -23,9 +23,9 @@ ScaledSvd SvdOfColumns(const Eigen::MatrixXd& jacobian, const std::vector<int>& 
   Eigen::MatrixXd j(jacobian.rows(), static_cast<Eigen::Index>(columns.size()));
   for (std::size_t c = 0; c < columns.size(); ++c) {
     const double norm = jacobian.col(columns[c]).norm();
-    j.col(static_cast<Eigen::Index>(c)) =
-        norm > 0 ? Eigen::VectorXd(jacobian.col(columns[c]) / norm)
-                 : Eigen::VectorXd::Zero(jacobian.rows());
+    j.col(static_cast<Eigen::Index>(c)) = norm > 0
+                                              ? Eigen::VectorXd(jacobian.col(columns[c]) / norm)
+                                              : Eigen::VectorXd::Zero(jacobian.rows());
   }
   // QR first: the SVD of the small triangular factor has the same singular values.
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(j);
@@ -76,8 +76,8 @@ ObservabilityReport AnalyzeObservability(const Eigen::MatrixXd& jacobian,
   if (static_cast<Eigen::Index>(names.size()) != n ||
       static_cast<Eigen::Index>(fixable.size()) != n) {
     throw InputError("AnalyzeObservability: " + std::to_string(n) + " Jacobian columns but " +
-                     std::to_string(names.size()) + " names and " +
-                     std::to_string(fixable.size()) + " fixable flags");
+                     std::to_string(names.size()) + " names and " + std::to_string(fixable.size()) +
+                     " fixable flags");
   }
   if (jacobian.rows() < n) {
     throw InputError("AnalyzeObservability: " + std::to_string(jacobian.rows()) +

@@ -30,7 +30,7 @@ struct ObservabilityOptions {
 
 /// One unidentifiable direction found (and how it was resolved).
 struct UnidentifiableDirection {
-  double relative_singular_value = 0;  ///< sigma / sigma_max when found.
+  double relative_singular_value = 0;   ///< sigma / sigma_max when found.
   std::vector<std::string> parameters;  ///< Parameters with |v_k| >= component_threshold.
   std::vector<double> components;       ///< Their components of the unit null vector.
   std::string fixed_parameter;          ///< The parameter held fixed ("" when none was fixable).
@@ -38,10 +38,10 @@ struct UnidentifiableDirection {
 
 /// What the Jacobian says about the parameters.
 struct ObservabilityReport {
-  std::vector<std::string> parameters;        ///< All columns, in order.
-  std::vector<bool> identifiable;             ///< Per column: false when fixed by the analysis.
-  Eigen::VectorXd singular_values;            ///< Scaled, descending, over identifiable columns.
-  double condition_number = 0;                ///< sigma_max / sigma_min over identifiable columns.
+  std::vector<std::string> parameters;  ///< All columns, in order.
+  std::vector<bool> identifiable;       ///< Per column: false when fixed by the analysis.
+  Eigen::VectorXd singular_values;      ///< Scaled, descending, over identifiable columns.
+  double condition_number = 0;          ///< sigma_max / sigma_min over identifiable columns.
   std::vector<UnidentifiableDirection> directions;  ///< In the order found.
   /// True when a direction involved no fixable parameter (the data are degenerate for the
   /// quantities that must be estimated); `directions.back()` names it.

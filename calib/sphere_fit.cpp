@@ -28,8 +28,7 @@ ceres::Solver::Summary SolvePass(std::span<const Eigen::Vector3d> points,
   for (std::size_t i = 0; i < points.size(); ++i) {
     if (!use[i]) continue;
     problem.AddResidualBlock(SphereDistanceCost::Create(points[i]),
-                             robust ? new ceres::CauchyLoss(options.robust_loss_scale_mm)
-                                    : nullptr,
+                             robust ? new ceres::CauchyLoss(options.robust_loss_scale_mm) : nullptr,
                              c, &r);
   }
   if (options.radius_mm) problem.SetParameterBlockConstant(&r);
@@ -111,8 +110,9 @@ double CapHalfAngleDeg(const std::vector<Eigen::Vector3d>& dirs, const Eigen::Ve
 
 void SphereFitOptions::Check() const {
   if (radius_mm && !(std::isfinite(*radius_mm) && *radius_mm > 0)) {
-    throw OptionError("SphereFitOptions.radius_mm must be positive and finite (or unset for a "
-                      "free radius)");
+    throw OptionError(
+        "SphereFitOptions.radius_mm must be positive and finite (or unset for a "
+        "free radius)");
   }
   if (!(robust_loss_scale_mm > 0) || !std::isfinite(robust_loss_scale_mm)) {
     throw OptionError("SphereFitOptions.robust_loss_scale_mm must be positive");
@@ -208,8 +208,7 @@ SphereFitResult FitSphere(std::span<const Eigen::Vector3d> points,
   }
 
   // Final least-squares pass over the inliers: the estimate and its covariance.
-  const ceres::Solver::Summary final_pass =
-      SolvePass(points, use, false, options, center, radius);
+  const ceres::Solver::Summary final_pass = SolvePass(points, use, false, options, center, radius);
   result.iterations += static_cast<int>(final_pass.iterations.size());
   converged = converged && final_pass.termination_type == ceres::CONVERGENCE;
   result.converged = converged;
@@ -263,8 +262,8 @@ SphereFitResult FitSphere(std::span<const Eigen::Vector3d> points,
   result.covariance = 0.5 * (result.covariance + result.covariance.transpose()).eval();
 
   // Cap: mean direction and the 95 % cone about it.
-  result.cap_axis = dir_sum.norm() > 1e-12 ? Eigen::Vector3d(dir_sum.normalized())
-                                           : Eigen::Vector3d::Zero();
+  result.cap_axis =
+      dir_sum.norm() > 1e-12 ? Eigen::Vector3d(dir_sum.normalized()) : Eigen::Vector3d::Zero();
   result.cap_half_angle_deg = CapHalfAngleDeg(dirs, result.cap_axis);
   if (!result.radius_fixed && result.cap_half_angle_deg < options.min_cap_half_angle_deg) {
     result.radius_determined = false;

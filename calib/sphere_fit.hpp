@@ -55,7 +55,7 @@ struct SphereFitOptions {
 struct SphereFitResult {
   /// False: too few of the points agree with one sphere, or they do not fix it (see failure).
   bool success = false;
-  std::string failure;   ///< Why not, when !success.
+  std::string failure;                               ///< Why not, when !success.
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  ///< Centre, mm (caller's frame).
   double radius_mm = 0;                              ///< Fitted or given radius.
   bool radius_fixed = false;                         ///< True when options.radius_mm was given.
@@ -72,9 +72,9 @@ struct SphereFitResult {
   std::vector<std::uint8_t> outlier;
   std::size_t num_inliers = 0;
   std::size_t num_outliers = 0;
-  int iterations = 0;           ///< Ceres iterations over both passes.
-  bool converged = false;       ///< Both Ceres passes converged.
-  std::string termination;      ///< Ceres termination of the final pass.
+  int iterations = 0;       ///< Ceres iterations over both passes.
+  bool converged = false;   ///< Both Ceres passes converged.
+  std::string termination;  ///< Ceres termination of the final pass.
   /// Unit direction from the centre to the middle of the measured cap (mean of the inliers'
   /// directions), and the half-angle (deg) of the cone about it holding 95 % of them.
   Eigen::Vector3d cap_axis = Eigen::Vector3d::Zero();

@@ -20,9 +20,10 @@
 //  5. Accepted when it keeps >= min_points points, its residuals peak (RMS <= max_rms_fraction of
 //     the inlier distance, itself min(ransac_threshold, 4 sigma of the fit)), nearly all
 //     points near its shell inside its cap are inliers (min_shell_fraction: rejects surfaces that
-//     only cross the shell), its cap's half-angle is >= min_cap_half_angle and it faces the sensor (cap axis within max_cap_tilt_deg of towards_sensor): a
-//     stand's axis votes form a ring-shaped consensus whose mean normal is sideways, so it fails.
-//     Points of accepted spheres are excluded from later candidates.
+//     only cross the shell), its cap's half-angle is >= min_cap_half_angle and it faces the sensor
+//     (cap axis within max_cap_tilt_deg of towards_sensor): a stand's axis votes form a ring-shaped
+//     consensus whose mean normal is sideways, so it fails. Points of accepted spheres are excluded
+//     from later candidates.
 //  6. For organized sweeps, the fit covariance is multiplied by LineCorrelationFactor: speckle
 //     makes the noise of neighbouring columns correlated, and FitSphere's covariance assumes
 //     independent points (it would be ~3x too small in sigma with 0.08 px speckle of 3-column
@@ -48,22 +49,22 @@ struct SphereSegmentationOptions {
   bool fix_radius = true;
   /// Accepted |fitted - nominal| radius for RANSAC hypotheses and free-radius fits (> 0).
   double radius_tolerance_mm = 2.0;
-  double sample_spacing_mm = 2.5;   ///< Voxel size of the voting samples (> 0).
-  double normal_radius_mm = 5.0;    ///< Neighbourhood of the PCA normals (> 0).
-  double vote_cell_mm = 2.0;        ///< Accumulator cell (> 0).
-  int min_votes = 40;               ///< Fewest votes (27-cell sum) of a candidate (> 0).
-  int max_candidates = 60;          ///< Candidates examined, strongest first (> 0).
-  double search_margin_mm = 3.0;    ///< Points within R + this of a candidate are examined.
-  double ransac_threshold_mm = 0.5; ///< RANSAC inlier distance (> 0).
-  int ransac_iterations = 300;      ///< RANSAC draws per candidate (> 0).
-  double connectivity_mm = 6.0;     ///< Region-growing neighbour distance (> 0); > the sweep's
-                                    ///< profile spacing.
-  std::size_t min_points = 100;     ///< Fewest points on an accepted sphere.
+  double sample_spacing_mm = 2.5;        ///< Voxel size of the voting samples (> 0).
+  double normal_radius_mm = 5.0;         ///< Neighbourhood of the PCA normals (> 0).
+  double vote_cell_mm = 2.0;             ///< Accumulator cell (> 0).
+  int min_votes = 40;                    ///< Fewest votes (27-cell sum) of a candidate (> 0).
+  int max_candidates = 60;               ///< Candidates examined, strongest first (> 0).
+  double search_margin_mm = 3.0;         ///< Points within R + this of a candidate are examined.
+  double ransac_threshold_mm = 0.5;      ///< RANSAC inlier distance (> 0).
+  int ransac_iterations = 300;           ///< RANSAC draws per candidate (> 0).
+  double connectivity_mm = 6.0;          ///< Region-growing neighbour distance (> 0); > the sweep's
+                                         ///< profile spacing.
+  std::size_t min_points = 100;          ///< Fewest points on an accepted sphere.
   double min_cap_half_angle_deg = 30.0;  ///< Smallest accepted cap (95 % cone), (0, 90].
   /// Unit direction from the spheres towards the sensor in the cloud's frame: (0, 0, -1) for
   /// the sensor frame (the camera looks along +z). Zero vector: no facing check.
   Eigen::Vector3d towards_sensor = Eigen::Vector3d(0, 0, -1);
-  double max_cap_tilt_deg = 60.0;   ///< Largest angle between cap axis and towards_sensor.
+  double max_cap_tilt_deg = 60.0;  ///< Largest angle between cap axis and towards_sensor.
   /// Shell test: of the points inside the cap's cone within 3x the inlier distance of the
   /// surface, at least this fraction must be inliers, (0, 1]. A real sphere holds nearly all of
   /// them; a surface that merely crosses the sphere's shell leaves a uniform residual band
@@ -73,9 +74,9 @@ struct SphereSegmentationOptions {
   /// noise truncated at d = 4 sigma gives ~0.25; a surface crossing the shell fills the band
   /// +-d uniformly, ~0.58.
   double max_rms_fraction = 0.4;
-  std::size_t max_spheres = 16;     ///< Stop after this many spheres.
-  unsigned seed = 1;                ///< RANSAC random stream (results are deterministic).
-  SphereFitOptions fit;             ///< Per-sphere fit (radius_mm set from fix_radius).
+  std::size_t max_spheres = 16;  ///< Stop after this many spheres.
+  unsigned seed = 1;             ///< RANSAC random stream (results are deterministic).
+  SphereFitOptions fit;          ///< Per-sphere fit (radius_mm set from fix_radius).
 
   /// Throws OptionError naming the field.
   void Check() const;

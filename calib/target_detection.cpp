@@ -64,10 +64,9 @@ void Refine(const cv::Mat& gray, std::vector<cv::Point2f>& corners, const std::v
             int nx, const DetectionOptions& options, TargetDetection& out) {
   out.square_px = SquareSizePx(corners, ids, nx);
   if (!options.refine || corners.empty()) return;
-  const int half = std::clamp(static_cast<int>(std::floor(options.refine_window_fraction *
-                                                          out.square_px)),
-                              options.min_refine_half_window_px,
-                              options.max_refine_half_window_px);
+  const int half =
+      std::clamp(static_cast<int>(std::floor(options.refine_window_fraction * out.square_px)),
+                 options.min_refine_half_window_px, options.max_refine_half_window_px);
   const std::vector<cv::Point2f> before = corners;
   cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1),
                    cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
@@ -131,8 +130,8 @@ void DetectChessboard(const cv::Mat& gray, const BoardSpec& board, const Detecti
                         (visible.width >= board.cols && visible.height >= board.rows) ||
                         (visible.width >= board.rows && visible.height >= board.cols);
   if (!found && can_hold) {
-    found = cv::findChessboardCorners(
-        search, pattern, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+    found = cv::findChessboardCorners(search, pattern, corners,
+                                      cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
   }
   if (!found && can_hold) {
     found = cv::findChessboardCornersSB(search, pattern, corners,
@@ -168,8 +167,9 @@ void DetectChessboard(const cv::Mat& gray, const BoardSpec& board, const Detecti
   const int c = visible.width;
   const int r = visible.height;
   if ((c == board.cols && r == board.rows) || (c == board.rows && r == board.cols)) {
-    out.message += " although a board of that size is visible (blurred, cut off or low "
-                   "contrast?)";
+    out.message +=
+        " although a board of that size is visible (blurred, cut off or low "
+        "contrast?)";
     return;
   }
   out.status = DetectionStatus::kWrongBoardSize;
@@ -183,9 +183,9 @@ void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionO
                    TargetDetection& out) {
   const cv::Ptr<cv::aruco::Dictionary> dictionary =
       cv::aruco::getPredefinedDictionary(DictionaryByName(board.dictionary));
-  const cv::Ptr<cv::aruco::CharucoBoard> charuco = cv::aruco::CharucoBoard::create(
-      board.cols, board.rows, static_cast<float>(board.square_mm),
-      static_cast<float>(board.marker_mm), dictionary);
+  const cv::Ptr<cv::aruco::CharucoBoard> charuco =
+      cv::aruco::CharucoBoard::create(board.cols, board.rows, static_cast<float>(board.square_mm),
+                                      static_cast<float>(board.marker_mm), dictionary);
   std::vector<std::vector<cv::Point2f>> marker_corners, rejected;
   std::vector<int> marker_ids;
   const cv::Ptr<cv::aruco::DetectorParameters> params = cv::aruco::DetectorParameters::create();
@@ -224,11 +224,16 @@ void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionO
 
 const char* DetectionStatusName(DetectionStatus status) {
   switch (status) {
-    case DetectionStatus::kFound: return "found";
-    case DetectionStatus::kUnreadable: return "unreadable";
-    case DetectionStatus::kNotFound: return "not_found";
-    case DetectionStatus::kWrongBoardSize: return "wrong_board_size";
-    case DetectionStatus::kTooFewCorners: return "too_few_corners";
+    case DetectionStatus::kFound:
+      return "found";
+    case DetectionStatus::kUnreadable:
+      return "unreadable";
+    case DetectionStatus::kNotFound:
+      return "not_found";
+    case DetectionStatus::kWrongBoardSize:
+      return "wrong_board_size";
+    case DetectionStatus::kTooFewCorners:
+      return "too_few_corners";
   }
   return "unknown";
 }
@@ -248,8 +253,9 @@ void DetectionOptions::Check() const {
     throw OptionError("DetectionOptions.search_downscale must be in 1..8");
   }
   if (search_downscale > 1 && !refine) {
-    throw OptionError("DetectionOptions.search_downscale > 1 needs refine = true (corners found "
-                      "on the shrunk image are only good to about half the factor in px)");
+    throw OptionError(
+        "DetectionOptions.search_downscale > 1 needs refine = true (corners found "
+        "on the shrunk image are only good to about half the factor in px)");
   }
 }
 

@@ -67,14 +67,14 @@ struct DetectionOptions {
 /// The board in one image.
 struct TargetDetection {
   DetectionStatus status = DetectionStatus::kNotFound;
-  std::string message;                   ///< Human-readable diagnosis ("found 54 corners", ...).
-  int width = 0;                         ///< Image size, px.
+  std::string message;  ///< Human-readable diagnosis ("found 54 corners", ...).
+  int width = 0;        ///< Image size, px.
   int height = 0;
   std::vector<Eigen::Vector2d> corners_px;  ///< Detected corners.
-  std::vector<int> corner_ids;           ///< BoardSpec corner id of each corner.
-  double square_px = 0;                  ///< Smallest square edge seen in the image, px.
-  int refine_half_window_px = 0;         ///< cornerSubPix half window used (0: no refinement).
-  double max_refine_shift_px = 0;        ///< Largest move of a corner by the refinement.
+  std::vector<int> corner_ids;              ///< BoardSpec corner id of each corner.
+  double square_px = 0;                     ///< Smallest square edge seen in the image, px.
+  int refine_half_window_px = 0;            ///< cornerSubPix half window used (0: no refinement).
+  double max_refine_shift_px = 0;           ///< Largest move of a corner by the refinement.
 
   bool found() const { return status == DetectionStatus::kFound; }
 };

@@ -54,7 +54,7 @@ namespace internal {
 }  // namespace lasercell
 
 /// Tier-3 invariant check: throws lasercell::InternalError with location when cond is false.
-#define LASERCELL_CHECK(cond, message)                                                  \
-  do {                                                                                  \
+#define LASERCELL_CHECK(cond, message)                                                           \
+  do {                                                                                           \
     if (!(cond)) ::lasercell::internal::ThrowCheckFailure(#cond, __FILE__, __LINE__, (message)); \
   } while (false)

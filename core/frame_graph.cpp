@@ -158,9 +158,7 @@ void FrameGraph::SetLaserPlane(const std::string& name, const LaserPlaneEntry& p
   laser_planes_[name] = plane;
 }
 
-bool FrameGraph::RemoveLaserPlane(const std::string& name) {
-  return laser_planes_.erase(name) > 0;
-}
+bool FrameGraph::RemoveLaserPlane(const std::string& name) { return laser_planes_.erase(name) > 0; }
 
 void FrameGraph::SetDynamicEdge(const DynamicEdge& edge) {
   CheckFrameName(edge.parent);

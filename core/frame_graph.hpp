@@ -93,8 +93,8 @@ struct DynamicEdge {
 /// the `sensor` frame, i.e. the camera frame). Stored as the cell file holds it: the unit normal
 /// and a point on the plane (p0), both kept exactly as given or read.
 struct LaserPlaneEntry {
-  std::string frame = "sensor";  ///< Frame the plane is expressed in.
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();  ///< Unit normal (|n| within 1e-9 of 1).
+  std::string frame = "sensor";                        ///< Frame the plane is expressed in.
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();   ///< Unit normal (|n| within 1e-9 of 1).
   Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();  ///< A point of the plane (p0), mm.
   /// Optional 4x4 covariance over [n (3, unitless); d (mm)] with d = -n . p0 (rank 3: the
   /// normal is unit), as the calibration estimated it.

@@ -159,8 +159,8 @@ std::string FrameGraphToYaml(const FrameGraph& graph) {
            "\n    type: dynamic\n    robot: " + NameToken(edge.robot) + "\n";
   }
   if (!graph.laser_planes().empty()) {
-    out += "laser_planes:\n  version: " + std::to_string(kLaserPlanesSectionVersion) +
-           "\n  planes:\n";
+    out +=
+        "laser_planes:\n  version: " + std::to_string(kLaserPlanesSectionVersion) + "\n  planes:\n";
     for (const auto& [name, plane] : graph.laser_planes()) {
       const std::string what = "laser plane '" + name + "'";
       const auto vec = [&](const Eigen::Vector3d& v) {

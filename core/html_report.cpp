@@ -11,9 +11,9 @@
 namespace lasercell::report {
 namespace {
 
-constexpr double kWidth = 640.0;   // SVG plot size, CSS px
+constexpr double kWidth = 640.0;  // SVG plot size, CSS px
 constexpr double kHeight = 400.0;
-constexpr double kLeft = 70.0;     // margins for tick labels
+constexpr double kLeft = 70.0;  // margins for tick labels
 constexpr double kRight = 20.0;
 constexpr double kTop = 30.0;
 constexpr double kBottom = 50.0;
@@ -25,12 +25,23 @@ std::string Escape(const std::string& text) {
   out.reserve(text.size());
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -40,8 +51,8 @@ std::string Escape(const std::string& text) {
 std::string Num(double v, int precision = 4) {
   if (!std::isfinite(v)) return "0";
   char buffer[64];
-  const auto r = std::to_chars(buffer, buffer + sizeof(buffer), v, std::chars_format::general,
-                               precision);
+  const auto r =
+      std::to_chars(buffer, buffer + sizeof(buffer), v, std::chars_format::general, precision);
   return std::string(buffer, r.ptr);
 }
 
@@ -147,8 +158,8 @@ std::string CloseSvg(const std::string& caption = "") {
 
 // Viridis-like colour ramp, t in [0, 1].
 std::string Colour(double t) {
-  static const double stops[5][3] = {{68, 1, 84}, {59, 82, 139}, {33, 145, 140},
-                                     {94, 201, 98}, {253, 231, 37}};
+  static const double stops[5][3] = {
+      {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
   t = std::clamp(t, 0.0, 1.0) * 4.0;
   const int i = std::min(3, static_cast<int>(t));
   const double f = t - i;
@@ -166,9 +177,7 @@ HtmlReport::HtmlReport(std::string title) : title_(std::move(title)) {}
 
 void HtmlReport::AddHeading(const std::string& text) { body_ += "<h2>" + Escape(text) + "</h2>\n"; }
 
-void HtmlReport::AddParagraph(const std::string& text) {
-  body_ += "<p>" + Escape(text) + "</p>\n";
-}
+void HtmlReport::AddParagraph(const std::string& text) { body_ += "<p>" + Escape(text) + "</p>\n"; }
 
 void HtmlReport::AddWarning(const std::string& text) {
   body_ += "<p class='warning'>&#9888; " + Escape(text) + "</p>\n";
@@ -329,8 +338,8 @@ void HtmlReport::AddVectorField(const std::string& title,
   ++num_plots_;
 }
 
-void HtmlReport::AddHeatmap(const std::string& title, const Eigen::MatrixXd& values,
-                            double width, double height, const std::string& value_label) {
+void HtmlReport::AddHeatmap(const std::string& title, const Eigen::MatrixXd& values, double width,
+                            double height, const std::string& value_label) {
   Range xr, yr, vr;
   xr.Add(0);
   xr.Add(width);

@@ -19,18 +19,18 @@ namespace lasercell::report {
 
 /// One named set of (x, y) points in a scatter/line plot.
 struct Series {
-  std::string name;        ///< Legend entry.
-  std::vector<double> x;   ///< Same length as y.
+  std::string name;       ///< Legend entry.
+  std::vector<double> x;  ///< Same length as y.
   std::vector<double> y;
-  bool lines = false;      ///< Connect the points in order (a line plot) instead of markers.
+  bool lines = false;  ///< Connect the points in order (a line plot) instead of markers.
 };
 
 /// Axis and frame options of a 2-D plot.
 struct PlotOptions {
-  std::string x_label;           ///< With unit, e.g. "column (px)".
-  std::string y_label;           ///< With unit.
-  bool equal_aspect = false;     ///< Same scale on both axes (image plots).
-  bool y_down = false;           ///< Image convention: y grows downwards.
+  std::string x_label;        ///< With unit, e.g. "column (px)".
+  std::string y_label;        ///< With unit.
+  bool equal_aspect = false;  ///< Same scale on both axes (image plots).
+  bool y_down = false;        ///< Image convention: y grows downwards.
   /// Fixed axis ranges [x0, x1, y0, y1]; all zero = from the data.
   std::array<double, 4> range = {0, 0, 0, 0};
 };

@@ -160,7 +160,8 @@ DhChain WithDhParameters(const DhChain& chain, std::span<const double> parameter
   const std::size_t n = chain.joints().size();
   if (parameters.size() != 4 * n) {
     throw InputError("DH parameters: got " + std::to_string(parameters.size()) +
-                     " values, expected " + std::to_string(4 * n) + " (joint offsets, a, d, alpha)");
+                     " values, expected " + std::to_string(4 * n) +
+                     " (joint offsets, a, d, alpha)");
   }
   std::vector<DhJoint> joints = chain.joints();
   for (std::size_t i = 0; i < n; ++i) {

@@ -47,11 +47,11 @@ enum class DhConvention { kStandard, kModified };
 
 /// One row of a DH table.
 struct DhJoint {
-  double a_mm = 0;                ///< Link length (kModified: a_{i-1}), mm.
-  double alpha_rad = 0;           ///< Link twist (kModified: alpha_{i-1}), rad.
-  double d_mm = 0;                ///< Link offset, mm.
-  double theta_offset_rad = 0;    ///< Nominal joint zero offset, rad.
-  double joint_offset_rad = 0;    ///< Calibrated joint offset error, rad (0 when nominal).
+  double a_mm = 0;              ///< Link length (kModified: a_{i-1}), mm.
+  double alpha_rad = 0;         ///< Link twist (kModified: alpha_{i-1}), rad.
+  double d_mm = 0;              ///< Link offset, mm.
+  double theta_offset_rad = 0;  ///< Nominal joint zero offset, rad.
+  double joint_offset_rad = 0;  ///< Calibrated joint offset error, rad (0 when nominal).
 };
 
 /// A serial chain described by a DH table, with base and flange transforms (mounts).

@@ -33,7 +33,9 @@ struct BoundingBox {
     max = max.cwiseMax(p);
   }
   /// Edge lengths, mm (zero vector when empty).
-  Eigen::Vector3d Size() const { return Empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(max - min); }
+  Eigen::Vector3d Size() const {
+    return Empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(max - min);
+  }
   /// Length of the diagonal, mm.
   double Diagonal() const { return Size().norm(); }
   /// Centre of the box, mm.
@@ -92,8 +94,9 @@ struct PointCloud {
 
 /// A triangle mesh: vertices (with optional attributes) and index triples.
 struct TriangleMesh {
-  PointCloud vertices;                 ///< Vertex positions (and normals when known), mm.
-  std::vector<Eigen::Vector3i> faces;  ///< Vertex index triples, counter-clockwise seen from outside.
+  PointCloud vertices;  ///< Vertex positions (and normals when known), mm.
+  std::vector<Eigen::Vector3i>
+      faces;  ///< Vertex index triples, counter-clockwise seen from outside.
 };
 
 }  // namespace lasercell

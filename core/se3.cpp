@@ -77,8 +77,8 @@ std::vector<double> CheckedWeights(std::size_t n, std::span<const double> weight
                                    const char* what) {
   if (n == 0) throw InputError(std::string(what) + ": nothing to average (empty input)");
   if (!weights.empty() && weights.size() != n) {
-    throw InputError(std::string(what) + ": " + std::to_string(weights.size()) +
-                     " weights for " + std::to_string(n) + " values");
+    throw InputError(std::string(what) + ": " + std::to_string(weights.size()) + " weights for " +
+                     std::to_string(n) + " values");
   }
   std::vector<double> w(n, 1.0);
   double sum = 0;
@@ -129,8 +129,7 @@ Eigen::Isometry3d AveragePoses(std::span<const Eigen::Isometry3d> poses,
 Eigen::Isometry3d InterpolatePoses(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
                                    double t) {
   const Eigen::Quaterniond qa(a.linear()), qb(b.linear());
-  return PoseFromQuaternion(qa.slerp(t, qb),
-                            (1.0 - t) * a.translation() + t * b.translation());
+  return PoseFromQuaternion(qa.slerp(t, qb), (1.0 - t) * a.translation() + t * b.translation());
 }
 
 Eigen::Isometry3d Orthonormalized(const Eigen::Isometry3d& pose) {

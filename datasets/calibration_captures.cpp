@@ -371,7 +371,9 @@ HandEyeImageSet PlanHandEyeImages(const SimConfig& config, const CellTruth& trut
       throw OptionError(what + ": image " + std::to_string(i) + " of " +
                         std::to_string(options.images) +
                         ": no drawn pose is reachable by the vision robot and shows the whole "
-                        "board; change " + what + ".distance_mm/max_tilt_deg/board_height_mm or "
+                        "board; change " +
+                        what +
+                        ".distance_mm/max_tilt_deg/board_height_mm or "
                         "SimConfig.sweep.center_xy_mm");
     }
   }
@@ -390,8 +392,8 @@ std::string HandEyeImagesRecordYaml(const ChessboardTarget& board, const HandEye
     << "# Chessboard images taken by the sensor camera on the vision robot, with the joints (rad)\n"
     << "# the controller reports for each. The board lies still in the cell. Board frame and\n"
     << "# corner order as truth/chessboard.yaml.\nrobot: vision_robot\n"
-    << "board: {squares: [" << board.squares_x << ", " << board.squares_y
-    << "], inner_corners: [" << board.squares_x - 1 << ", " << board.squares_y - 1
+    << "board: {squares: [" << board.squares_x << ", " << board.squares_y << "], inner_corners: ["
+    << board.squares_x - 1 << ", " << board.squares_y - 1
     << "], square_mm: " << Num(board.square_mm) << "}\nimages:\n";
   for (std::size_t i = 0; i < set.images.size(); ++i) {
     o << "  - file: " << HandEyeImageFile(i)
@@ -420,8 +422,8 @@ std::string HandEyeImagesTruthYaml(const CellTruth& truth, const HandEyeImageSet
       << "\n    tilt_deg: " << Num(im.tilt_deg) << "\n    azimuth_deg: " << Num(im.azimuth_deg)
       << "\n    roll_deg: " << Num(im.roll_deg) << "\n    corners_px: [";
     for (std::size_t k = 0; k < im.corners_px.size(); ++k) {
-      o << (k ? ", " : "") << "[" << Num(im.corners_px[k].x()) << ", "
-        << Num(im.corners_px[k].y()) << "]";
+      o << (k ? ", " : "") << "[" << Num(im.corners_px[k].x()) << ", " << Num(im.corners_px[k].y())
+        << "]";
     }
     o << "]\n";
   }

@@ -86,7 +86,7 @@ struct HandEyeImage {
   /// True camera pose: the TRUE robot at joints_rad (cell frame; camera = sensor frame).
   Eigen::Isometry3d true_cell_from_camera = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d camera_from_board = Eigen::Isometry3d::Identity();  ///< True.
-  std::vector<Eigen::Vector2d> corners_px;  ///< True projections of the inner corners.
+  std::vector<Eigen::Vector2d> corners_px;             ///< True projections of the inner corners.
   double tilt_deg = 0, azimuth_deg = 0, roll_deg = 0;  ///< Drawn angles.
 };
 

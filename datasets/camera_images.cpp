@@ -4,11 +4,10 @@ extern "C" {
 #include <mrcal/mrcal.h>
 }
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include <cmath>
 #include <numbers>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "core/error.hpp"
 #include "datasets/rng.hpp"
@@ -41,7 +40,8 @@ void GaussianBlur(std::vector<float>& img, int w, int h, double sigma) {
   const int r = std::max(1, static_cast<int>(std::ceil(3.5 * sigma)));
   std::vector<float> k(2 * r + 1);
   double sum = 0;
-  for (int i = -r; i <= r; ++i) sum += k[i + r] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
+  for (int i = -r; i <= r; ++i)
+    sum += k[i + r] = static_cast<float>(std::exp(-0.5 * i * i / (sigma * sigma)));
   for (float& v : k) v = static_cast<float>(v / sum);
   std::vector<float> tmp(img.size());
   for (int y = 0; y < h; ++y) {
@@ -108,8 +108,8 @@ void ImageRenderOptions::Check(const std::string& what) const {
                       std::to_string(blur_sigma_px) + ")");
   }
   if (!(noise_sigma >= 0 && noise_sigma <= 100)) {
-    throw OptionError(what + ".noise_sigma must be in [0, 100] (got " + std::to_string(noise_sigma) +
-                      ")");
+    throw OptionError(what + ".noise_sigma must be in [0, 100] (got " +
+                      std::to_string(noise_sigma) + ")");
   }
   if (edge_samples < 1 || edge_samples > 64) {
     throw OptionError(what + ".edge_samples must be in [1, 64]");
@@ -259,15 +259,15 @@ std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board
   const Eigen::Vector3d center(sx / 2, sy / 2, 0);
   const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
   const double bx = board.border_mm;
-  const std::array<Eigen::Vector3d, 4> plate = {Eigen::Vector3d(-bx, -bx, 0),
-                                                Eigen::Vector3d(sx + bx, -bx, 0),
-                                                Eigen::Vector3d(sx + bx, sy + bx, 0),
-                                                Eigen::Vector3d(-bx, sy + bx, 0)};
+  const std::array<Eigen::Vector3d, 4> plate = {
+      Eigen::Vector3d(-bx, -bx, 0), Eigen::Vector3d(sx + bx, -bx, 0),
+      Eigen::Vector3d(sx + bx, sy + bx, 0), Eigen::Vector3d(-bx, sy + bx, 0)};
   std::vector<Eigen::Isometry3d> poses;
   for (int attempt = 0; static_cast<int>(poses.size()) < count; ++attempt) {
     if (attempt > 1000 * count) {
-      throw OptionError("chessboard: no board pose of this size fits the camera's view; use a "
-                        "smaller board (squares, square_mm)");
+      throw OptionError(
+          "chessboard: no board pose of this size fits the camera's view; use a "
+          "smaller board (squares, square_mm)");
     }
     const double distance = rng.Uniform(550, 850);
     const double tilt = rng.Uniform(5, 40) * kDegToRad;

@@ -7,8 +7,9 @@
 // bilinearly inside a pixel) meets it through a homography. A pixel wholly inside one square
 // takes that square's albedo; a pixel an edge crosses is averaged over edge_samples^2
 // sub-samples (box filter = the pixel's area) on an n-rooks pattern (edge_samples^2 distinct x
-// and y offsets: an axis-aligned edge is resolved to 1 / edge_samples^2 px). Then: cos^4 vignetting, Gaussian optical blur,
-// Gaussian read noise, 8-bit quantization. Gray = ambient + exposure * albedo * vignetting.
+// and y offsets: an axis-aligned edge is resolved to 1 / edge_samples^2 px). Then: cos^4
+// vignetting, Gaussian optical blur, Gaussian read noise, 8-bit quantization. Gray = ambient +
+// exposure * albedo * vignetting.
 //
 // Frames: camera as in sensor.hpp; board frame: pattern in its xy plane (z = 0, +z out of the
 // printed face), square (i, j) at [i s, (i+1) s] x [j s, (j+1) s], dark when i + j is even (as
@@ -45,13 +46,13 @@ struct ChessboardTarget {
 
 /// Photometry and image noise.
 struct ImageRenderOptions {
-  double exposure = 250.0;           ///< Gray level of albedo 1 on the optical axis.
-  double ambient = 6.0;              ///< Gray level offset (dark current, stray light).
-  double background_albedo = 0.25;   ///< Albedo seen where the ray misses the plate.
-  double blur_sigma_px = 0.6;        ///< Gaussian optical blur (0: none).
-  double noise_sigma = 1.5;          ///< Gaussian read noise, gray levels (0: none).
-  bool vignetting = true;            ///< cos^4 falloff.
-  int edge_samples = 16;             ///< Sub-samples per axis in pixels an edge crosses.
+  double exposure = 250.0;          ///< Gray level of albedo 1 on the optical axis.
+  double ambient = 6.0;             ///< Gray level offset (dark current, stray light).
+  double background_albedo = 0.25;  ///< Albedo seen where the ray misses the plate.
+  double blur_sigma_px = 0.6;       ///< Gaussian optical blur (0: none).
+  double noise_sigma = 1.5;         ///< Gaussian read noise, gray levels (0: none).
+  bool vignetting = true;           ///< cos^4 falloff.
+  int edge_samples = 16;            ///< Sub-samples per axis in pixels an edge crosses.
 
   /// Throws OptionError naming `what` and the field.
   void Check(const std::string& what = "images") const;

@@ -19,9 +19,10 @@ constexpr std::uint64_t kPlacementStream = 0x5EA7'0000'0000ull;
 void AddFloor(Scene& scene, const CellLayout& layout) {
   Material m;
   m.albedo = layout.albedo.floor;
-  scene.Add({"floor", MakeRectangle(Eigen::Isometry3d::Identity(), layout.floor_size_mm,
-                                    layout.floor_size_mm),
-             m});
+  scene.Add(
+      {"floor",
+       MakeRectangle(Eigen::Isometry3d::Identity(), layout.floor_size_mm, layout.floor_size_mm),
+       m});
 }
 
 void AddPallet(Scene& scene, const CellLayout& layout) {
@@ -97,11 +98,10 @@ SeatPlacement DrawSeatPlacement(const SeatPlacementOptions& options, const Chair
   p.tilt_x_rad = rng.Uniform(-options.max_tilt_deg, options.max_tilt_deg) * kDegToRad;
   p.tilt_y_rad = rng.Uniform(-options.max_tilt_deg, options.max_tilt_deg) * kDegToRad;
   p.yaw_rad = rng.Uniform(-options.max_yaw_deg, options.max_yaw_deg) * kDegToRad;
-  const Eigen::Matrix3d rotation =
-      (Eigen::AngleAxisd(p.tilt_y_rad, Eigen::Vector3d::UnitY()) *
-       Eigen::AngleAxisd(p.tilt_x_rad, Eigen::Vector3d::UnitX()) *
-       Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()))
-          .toRotationMatrix();
+  const Eigen::Matrix3d rotation = (Eigen::AngleAxisd(p.tilt_y_rad, Eigen::Vector3d::UnitY()) *
+                                    Eigen::AngleAxisd(p.tilt_x_rad, Eigen::Vector3d::UnitX()) *
+                                    Eigen::AngleAxisd(p.yaw_rad, Eigen::Vector3d::UnitZ()))
+                                       .toRotationMatrix();
   double min_z = std::numeric_limits<double>::infinity();
   for (const Eigen::Vector3d& v : seat.part.mesh.vertices.positions) {
     min_z = std::min(min_z, (rotation * v).z());
@@ -182,8 +182,7 @@ Scene MakeChessboardScene(const CellLayout& layout, const Eigen::Isometry3d& cel
   m.squares_y = squares[1];
   m.square_mm = square_mm;
   m.pattern_from_scene = cell_from_board.inverse();
-  scene.Add({"chessboard",
-             MakeBox(cell_from_board * Eigen::Translation3d(center), size), m});
+  scene.Add({"chessboard", MakeBox(cell_from_board * Eigen::Translation3d(center), size), m});
   scene.Commit();
   return scene;
 }

@@ -20,14 +20,14 @@ namespace lasercell::datasets {
 
 /// Diffuse reflectances of the cell's surfaces at 660 nm.
 struct CellAlbedo {
-  double floor = 0.35;            ///< Grey concrete.
-  double pallet = 0.55;           ///< Raw pine.
-  double seat = 0.08;             ///< Black polypropylene (the seed's dark plastic).
-  double white_plane = 0.90;      ///< Matte white calibration plane.
-  double spheres = 0.75;          ///< Matte painted calibration spheres.
-  double stands = 0.45;           ///< Sphere stands (anodized aluminium).
-  double chessboard_light = 0.85; ///< Light squares and border of the chessboard plate.
-  double chessboard_dark = 0.04;  ///< Dark squares.
+  double floor = 0.35;             ///< Grey concrete.
+  double pallet = 0.55;            ///< Raw pine.
+  double seat = 0.08;              ///< Black polypropylene (the seed's dark plastic).
+  double white_plane = 0.90;       ///< Matte white calibration plane.
+  double spheres = 0.75;           ///< Matte painted calibration spheres.
+  double stands = 0.45;            ///< Sphere stands (anodized aluminium).
+  double chessboard_light = 0.85;  ///< Light squares and border of the chessboard plate.
+  double chessboard_dark = 0.04;   ///< Dark squares.
 };
 
 /// Placement of the cell's fixed items.
@@ -41,11 +41,11 @@ struct CellLayout {
 /// The four calibration half spheres on cylindrical stands of different heights
 /// (Skotheim et al., calibration step 3), standing on the pallet's top deck.
 struct SphereTargets {
-  double radius_mm = 25.0;                                   ///< Sphere (and stand) radius.
+  double radius_mm = 25.0;                                    ///< Sphere (and stand) radius.
   std::vector<double> stand_heights_mm = {40, 80, 120, 160};  ///< Stand height above the deck.
   std::vector<Eigen::Vector2d> positions_xy_mm = {
-      {-250, -140}, {230, -160}, {260, 150}, {-220, 170}};   ///< Stand axes in cell xy.
-  int segments = 128;                                        ///< Tessellation around.
+      {-250, -140}, {230, -160}, {260, 150}, {-220, 170}};  ///< Stand axes in cell xy.
+  int segments = 128;                                       ///< Tessellation around.
 
   /// Sphere centres in the cell frame (the stand top's centre).
   std::vector<Eigen::Vector3d> CentersInCell() const;

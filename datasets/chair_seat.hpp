@@ -37,7 +37,7 @@ struct ChairSeatOptions {
 
 /// The seat mesh in the part frame and its grasp reference.
 struct ChairSeat {
-  MeshPart part;                ///< Closed mesh with patches (cylinders for boss and hole).
+  MeshPart part;                        ///< Closed mesh with patches (cylinders for boss and hole).
   Eigen::Vector3d hole_center_in_part;  ///< Centre of the hole's opening at the boss top, mm.
   Eigen::Vector3d hole_axis_in_part;    ///< Unit axis of the hole, pointing out of the boss.
 };

@@ -166,7 +166,8 @@ MeshPart MakeCylinder(const Eigen::Isometry3d& frame_from_cylinder, double radiu
     AddQuad(m, bottom[i], bottom[j], top[j], top[i], wall_patch);
   }
   if (bottom_cap) {
-    const std::int32_t patch = m.AddPatch(Plane(Eigen::Vector3d::Zero(), -Eigen::Vector3d::UnitZ()));
+    const std::int32_t patch =
+        m.AddPatch(Plane(Eigen::Vector3d::Zero(), -Eigen::Vector3d::UnitZ()));
     const std::int32_t c = m.AddVertex(Eigen::Vector3d::Zero());
     for (int i = 0; i < segments; ++i) m.AddFace(c, bottom[(i + 1) % segments], bottom[i], patch);
   }
@@ -202,7 +203,8 @@ MeshPart SphereZone(double radius_mm, int segments, int rings, double theta1) {
                                                            std::cos(theta)));
     }
   }
-  for (int i = 0; i < segments; ++i) m.AddFace(pole, ring[0][i], ring[0][(i + 1) % segments], patch);
+  for (int i = 0; i < segments; ++i)
+    m.AddFace(pole, ring[0][i], ring[0][(i + 1) % segments], patch);
   for (int r = 0; r + 1 < rings; ++r) {
     for (int i = 0; i < segments; ++i) {
       const int j = (i + 1) % segments;
@@ -214,8 +216,8 @@ MeshPart SphereZone(double radius_mm, int segments, int rings, double theta1) {
 
 }  // namespace
 
-MeshPart MakeHemisphere(const Eigen::Isometry3d& frame_from_sphere, double radius_mm,
-                        int segments, int rings) {
+MeshPart MakeHemisphere(const Eigen::Isometry3d& frame_from_sphere, double radius_mm, int segments,
+                        int rings) {
   MeshPart m = SphereZone(radius_mm, segments, rings, kPi / 2);
   m.Transform(frame_from_sphere);
   return m;

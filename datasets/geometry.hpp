@@ -36,9 +36,9 @@ struct AnalyticSurface {
 
 /// A triangle mesh whose faces each point to an analytic surface ("patch").
 struct MeshPart {
-  TriangleMesh mesh;                       ///< Vertices (positions only) and faces.
-  std::vector<std::int32_t> face_patch;    ///< Patch index of every face.
-  std::vector<AnalyticSurface> patches;    ///< Patches referenced by face_patch.
+  TriangleMesh mesh;                     ///< Vertices (positions only) and faces.
+  std::vector<std::int32_t> face_patch;  ///< Patch index of every face.
+  std::vector<AnalyticSurface> patches;  ///< Patches referenced by face_patch.
 
   /// Appends another part (indices shifted).
   void Append(const MeshPart& other);
@@ -66,8 +66,8 @@ MeshPart MakeCylinder(const Eigen::Isometry3d& frame_from_cylinder, double radiu
                       double height_mm, int segments, bool bottom_cap, bool top_cap);
 
 /// Half sphere (z >= 0) of `radius_mm` about the primitive origin, open at the equator.
-MeshPart MakeHemisphere(const Eigen::Isometry3d& frame_from_sphere, double radius_mm,
-                        int segments, int rings);
+MeshPart MakeHemisphere(const Eigen::Isometry3d& frame_from_sphere, double radius_mm, int segments,
+                        int rings);
 
 /// Full sphere about the primitive origin (used in tests).
 MeshPart MakeSphere(const Eigen::Isometry3d& frame_from_sphere, double radius_mm, int segments,

@@ -31,13 +31,15 @@ void LaserRenderOptions::Check(const std::string& what) const {
   if (!(max_range_mm > 0)) fail("max_range_mm", "must be positive", max_range_mm);
   if (!(intensity_gain > 0)) fail("intensity_gain", "must be positive", intensity_gain);
   if (!(reference_range_mm > 0)) fail("reference_range_mm", "must be positive", reference_range_mm);
-  if (!(min_intensity >= 0 && min_intensity < 1)) fail("min_intensity", "must be in [0, 1)", min_intensity);
+  if (!(min_intensity >= 0 && min_intensity < 1))
+    fail("min_intensity", "must be in [0, 1)", min_intensity);
   if (!(max_view_angle_deg > 0 && max_view_angle_deg <= 90)) {
     fail("max_view_angle_deg", "must be in (0, 90]", max_view_angle_deg);
   }
   if (!(sheet_thickness_mm >= 0)) fail("sheet_thickness_mm", "must be >= 0", sheet_thickness_mm);
   if (!(min_width_px > 0)) fail("min_width_px", "must be positive", min_width_px);
-  if (!(row_sigma_px >= 0) || !std::isfinite(row_sigma_px)) fail("row_sigma_px", "must be >= 0", row_sigma_px);
+  if (!(row_sigma_px >= 0) || !std::isfinite(row_sigma_px))
+    fail("row_sigma_px", "must be >= 0", row_sigma_px);
   if (!(intensity_sigma >= 0) || !std::isfinite(intensity_sigma)) {
     fail("intensity_sigma", "must be >= 0", intensity_sigma);
   }
@@ -53,7 +55,8 @@ void LaserRenderOptions::Check(const std::string& what) const {
   if (!(speckle_intensity_sigma >= 0) || !std::isfinite(speckle_intensity_sigma)) {
     fail("speckle_intensity_sigma", "must be >= 0", speckle_intensity_sigma);
   }
-  if (!(occlusion_epsilon_mm > 0)) fail("occlusion_epsilon_mm", "must be positive", occlusion_epsilon_mm);
+  if (!(occlusion_epsilon_mm > 0))
+    fail("occlusion_epsilon_mm", "must be positive", occlusion_epsilon_mm);
   if (!(reflection_probability >= 0 && reflection_probability <= 1)) {
     fail("reflection_probability", "must be in [0, 1]", reflection_probability);
   }
@@ -64,14 +67,17 @@ void LaserRenderOptions::Check(const std::string& what) const {
 
 void SweepTiming::Check(const std::string& what) const {
   if (profiles <= 0 || profiles > 10'000'000) {
-    throw OptionError(what + ".profiles must be in [1, 1e7] (got " + std::to_string(profiles) + ")");
+    throw OptionError(what + ".profiles must be in [1, 1e7] (got " + std::to_string(profiles) +
+                      ")");
   }
   if (!(rate_hz > 0) || !std::isfinite(rate_hz)) {
     throw OptionError(what + ".rate_hz must be positive (got " + std::to_string(rate_hz) + ")");
   }
   if (!(jitter_s >= 0) || !(timestamp_noise_s >= 0) || jitter_s * rate_hz > 0.2) {
-    throw OptionError(what + ".jitter_s and timestamp_noise_s must be >= 0, jitter below 0.2 "
-                             "profile periods (got " + std::to_string(jitter_s) + ")");
+    throw OptionError(what +
+                      ".jitter_s and timestamp_noise_s must be >= 0, jitter below 0.2 "
+                      "profile periods (got " +
+                      std::to_string(jitter_s) + ")");
   }
   if (!(joint_noise_rad >= 0) || joint_noise_rad > 0.01) {
     throw OptionError(what + ".joint_noise_rad must be in [0, 0.01] rad (got " +
@@ -157,16 +163,18 @@ ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sen
     if (c0 > c1) continue;
     const MeshPart& geom = scene_.objects()[a.hit.object].geometry;
     const bool same_patch = geom.face_patch[a.hit.face] == geom.face_patch[b.hit.face];
-    const bool analytic =
-        same_patch && geom.patches[geom.face_patch[a.hit.face]].kind != AnalyticSurface::Kind::kNone;
+    const bool analytic = same_patch && geom.patches[geom.face_patch[a.hit.face]].kind !=
+                                            AnalyticSurface::Kind::kNone;
 
     // Intersection of the fan ray at alpha with the bracket's surface.
     const auto trace = [&](double alpha, double t_hint) -> std::optional<RayHit> {
       const Eigen::Vector3d d = direction(alpha);
       if (analytic) return scene_.IntersectFace(a.hit.object, a.hit.face, emitter, d, t_hint, 1e30);
       if (same_patch) {
-        if (auto h = scene_.IntersectFace(a.hit.object, a.hit.face, emitter, d, t_hint, 1e-9)) return h;
-        if (auto h = scene_.IntersectFace(b.hit.object, b.hit.face, emitter, d, t_hint, 1e-9)) return h;
+        if (auto h = scene_.IntersectFace(a.hit.object, a.hit.face, emitter, d, t_hint, 1e-9))
+          return h;
+        if (auto h = scene_.IntersectFace(b.hit.object, b.hit.face, emitter, d, t_hint, 1e-9))
+          return h;
       }
       auto h = scene_.Intersect(emitter, d, 0.0, options_.max_range_mm);
       if (h && h->object != a.hit.object) return std::nullopt;
@@ -230,8 +238,8 @@ ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sen
       const double cos_view = normal.dot(view);
       if (cos_view <= cos_view_min) continue;  // back side or grazing view
       const double laser_range = (p - emitter).norm();
-      double intensity = options_.intensity_gain * scene_.AlbedoAt(hit->object, p) *
-                         cos_incidence * options_.reference_range_mm / laser_range;
+      double intensity = options_.intensity_gain * scene_.AlbedoAt(hit->object, p) * cos_incidence *
+                         options_.reference_range_mm / laser_range;
       intensity = std::min(intensity, 1.0);
       if (intensity < options_.min_intensity) continue;
       if (intensity <= out.intensity[c]) continue;  // a brighter peak already owns the column
@@ -249,8 +257,8 @@ ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sen
       out.object[c] = hit->object;
     }
   }
-  if (options_.reflection_probability > 0) AddReflections(fan, emitter, camera_center,
-                                                          sensor_from_scene, out);
+  if (options_.reflection_probability > 0)
+    AddReflections(fan, emitter, camera_center, sensor_from_scene, out);
   return out;
 }
 
@@ -272,8 +280,8 @@ void LaserRenderer::AddReflections(const std::vector<FanSampleRef>& fan,
     Eigen::Vector3d n = s.hit.normal;
     if (n.dot(d) > 0) n = -n;
     const Eigen::Vector3d r = d - 2.0 * d.dot(n) * n;  // mirror direction
-    const auto q = scene_.Intersect(s.hit.point, r, options_.occlusion_epsilon_mm,
-                                    options_.max_range_mm);
+    const auto q =
+        scene_.Intersect(s.hit.point, r, options_.occlusion_epsilon_mm, options_.max_range_mm);
     if (!q || q->object == s.hit.object) continue;
     Eigen::Vector3d qn = q->normal;
     if (qn.dot(r) > 0) qn = -qn;
@@ -286,10 +294,9 @@ void LaserRenderer::AddReflections(const std::vector<FanSampleRef>& fan,
     const int c = static_cast<int>(std::lround(pixel->x()));
     if (c < 0 || c >= width) continue;
     const double range = (s.hit.point - emitter).norm() + q->t_mm;
-    const double intensity =
-        std::min(1.0, options_.reflection_intensity * options_.intensity_gain *
-                          scene_.AlbedoAt(q->object, q->point) * (-qn.dot(r)) *
-                          options_.reference_range_mm / range);
+    const double intensity = std::min(1.0, options_.reflection_intensity * options_.intensity_gain *
+                                               scene_.AlbedoAt(q->object, q->point) * (-qn.dot(r)) *
+                                               options_.reference_range_mm / range);
     if (intensity < options_.min_intensity || intensity <= out.reflection_intensity[c]) continue;
     if (scene_.Occluded(q->point, view, options_.occlusion_epsilon_mm,
                         camera_distance - options_.occlusion_epsilon_mm)) {

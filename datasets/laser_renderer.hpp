@@ -79,7 +79,7 @@ struct LaserRenderOptions {
   double speckle_correlation_px = 3.0;
   /// Relative std of the multiplicative intensity speckle, same grain (>= 0; 0 = off).
   double speckle_intensity_sigma = 0.0;
-  double occlusion_epsilon_mm = 0.05; ///< Occlusion rays start/stop this far from the ends.
+  double occlusion_epsilon_mm = 0.05;  ///< Occlusion rays start/stop this far from the ends.
   /// Probability that a specular ghost peak is present (per ghost column), [0, 1]; 0 = off.
   double reflection_probability = 0.0;
   /// Ghost intensity relative to the lit surface's diffuse intensity, (0, 1].
@@ -128,9 +128,9 @@ class LaserRenderer {
 
   /// One fan sample of an exposure: the ray's hit and its projection (internal).
   struct FanSampleRef {
-    bool valid = false;  ///< Hit and projected.
-    double alpha = 0;    ///< Fan angle, rad.
-    RayHit hit;          ///< First hit.
+    bool valid = false;                               ///< Hit and projected.
+    double alpha = 0;                                 ///< Fan angle, rad.
+    RayHit hit;                                       ///< First hit.
     Eigen::Vector2d pixel = Eigen::Vector2d::Zero();  ///< Projection, px.
   };
 
@@ -175,10 +175,10 @@ struct SensorState {
 
 /// A rendered sweep with its ground truth.
 struct SweepResult {
-  triangulation::ProfileSet profiles;               ///< What the sensor reports.
-  std::vector<double> exposure_time_s;              ///< True exposure times since start, s.
-  std::vector<Eigen::Isometry3d> scene_from_sensor; ///< True sensor pose per profile.
-  std::size_t valid_peaks = 0;                      ///< Peaks over all profiles.
+  triangulation::ProfileSet profiles;                ///< What the sensor reports.
+  std::vector<double> exposure_time_s;               ///< True exposure times since start, s.
+  std::vector<Eigen::Isometry3d> scene_from_sensor;  ///< True sensor pose per profile.
+  std::size_t valid_peaks = 0;                       ///< Peaks over all profiles.
 };
 
 /// Renders a sweep: profile i is exposed at t_i = i / rate + N(0, jitter) (true), stamped

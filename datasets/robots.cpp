@@ -92,7 +92,8 @@ std::optional<std::vector<double>> SolveIk(const KinematicModel& model,
     for (int j = 0; j < n; ++j) q[j] += dq[j];
   }
   const Vector6d e = error(q);
-  if (e.tail<3>().norm() < 1e3 * options.tolerance_mm && e.head<3>().norm() < 1e3 * options.tolerance_rad) {
+  if (e.tail<3>().norm() < 1e3 * options.tolerance_mm &&
+      e.head<3>().norm() < 1e3 * options.tolerance_rad) {
     return q;
   }
   return std::nullopt;

@@ -28,11 +28,11 @@ DhChain ApproximateNachiSc15f();
 
 /// Options of the numerical inverse kinematics.
 struct IkOptions {
-  int max_iterations = 200;             ///< Damped Gauss-Newton steps.
-  double tolerance_mm = 1e-7;           ///< Stop when the translation error is below this...
-  double tolerance_rad = 1e-10;         ///< ...and the rotation error below this.
-  double damping = 1e-6;                ///< Levenberg damping (mm^2).
-  double max_step_rad = 0.2;            ///< Largest joint change per step.
+  int max_iterations = 200;      ///< Damped Gauss-Newton steps.
+  double tolerance_mm = 1e-7;    ///< Stop when the translation error is below this...
+  double tolerance_rad = 1e-10;  ///< ...and the rotation error below this.
+  double damping = 1e-6;         ///< Levenberg damping (mm^2).
+  double max_step_rad = 0.2;     ///< Largest joint change per step.
 };
 
 /// Joint values (rad) with model.BaseFromFlange(q) == base_from_flange, found by damped

@@ -101,12 +101,11 @@ void Scene::Commit() {
   for (std::size_t i = 0; i < objects_.size(); ++i) {
     const TriangleMesh& mesh = objects_[i].geometry.mesh;
     RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-        mesh.vertices.positions.size()));
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                          RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                          mesh.vertices.positions.size()));
     auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-        mesh.faces.size()));
+        geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.faces.size()));
     CheckEmbree(device, "rtcSetNewGeometryBuffer");
     for (std::size_t k = 0; k < mesh.vertices.positions.size(); ++k) {
       for (int c = 0; c < 3; ++c) v[3 * k + c] = static_cast<float>(mesh.vertices.positions[k][c]);
@@ -168,8 +167,8 @@ std::optional<RayHit> Scene::IntersectFace(std::int32_t object, std::int32_t fac
       const Eigen::Vector3d oc = o - s.point;
       const Eigen::Vector3d op = sphere ? oc : Eigen::Vector3d(oc - oc.dot(s.axis) * s.axis);
       const Eigen::Vector3d dp = sphere ? d : Eigen::Vector3d(d - d.dot(s.axis) * s.axis);
-      const auto roots = QuadraticRoots(dp.squaredNorm(), dp.dot(op),
-                                        op.squaredNorm() - s.radius * s.radius);
+      const auto roots =
+          QuadraticRoots(dp.squaredNorm(), dp.dot(op), op.squaredNorm() - s.radius * s.radius);
       if (!roots) return std::nullopt;
       // Prefer the root where the surface faces the ray the way the hit triangle does (entry into
       // a ball, exit from a hole), then the one nearest the hint.
@@ -178,7 +177,8 @@ std::optional<RayHit> Scene::IntersectFace(std::int32_t object, std::int32_t fac
       int best_rank = 3;
       for (double t : *roots) {
         const Eigen::Vector3d radial = (op + t * dp) / s.radius;
-        const Eigen::Vector3d oriented = radial.dot(n_face) >= 0 ? radial : Eigen::Vector3d(-radial);
+        const Eigen::Vector3d oriented =
+            radial.dot(n_face) >= 0 ? radial : Eigen::Vector3d(-radial);
         const int rank = ((oriented.dot(d) < 0) == front) ? 0 : 1;
         if (rank < best_rank ||
             (rank == best_rank && std::abs(t - t_hint) < std::abs(best_t - t_hint))) {
@@ -213,8 +213,8 @@ std::optional<RayHit> Scene::Intersect(const Eigen::Vector3d& origin,
   rh.ray.dir_y = static_cast<float>(d.y());
   rh.ray.dir_z = static_cast<float>(d.z());
   rh.ray.tnear = static_cast<float>(t_min);
-  rh.ray.tfar = std::isfinite(t_max) ? static_cast<float>(t_max)
-                                     : std::numeric_limits<float>::infinity();
+  rh.ray.tfar =
+      std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
   rh.ray.time = 0.0f;
   rh.ray.mask = 0xFFFFFFFFu;
   rh.ray.id = 0;
@@ -248,8 +248,8 @@ std::optional<RayHit> Scene::Intersect(const Eigen::Vector3d& origin,
   return hit;
 }
 
-bool Scene::Occluded(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction,
-                     double t_min, double t_max) const {
+bool Scene::Occluded(const Eigen::Vector3d& origin, const Eigen::Vector3d& direction, double t_min,
+                     double t_max) const {
   LASERCELL_CHECK(impl_->committed, "Scene::Occluded before Commit");
   const Eigen::Vector3d d = direction.normalized();
   RTCIntersectContext context;
@@ -262,7 +262,8 @@ bool Scene::Occluded(const Eigen::Vector3d& origin, const Eigen::Vector3d& direc
   ray.dir_y = static_cast<float>(d.y());
   ray.dir_z = static_cast<float>(d.z());
   ray.tnear = static_cast<float>(t_min);
-  ray.tfar = std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
+  ray.tfar =
+      std::isfinite(t_max) ? static_cast<float>(t_max) : std::numeric_limits<float>::infinity();
   ray.time = 0.0f;
   ray.mask = 0xFFFFFFFFu;
   ray.id = 0;

@@ -25,8 +25,8 @@ namespace lasercell::datasets {
 
 /// Camera intrinsics in mrcal's LENSMODEL_OPENCV8 parametrisation.
 struct CameraIntrinsics {
-  int width_px = 1024;   ///< Image columns.
-  int height_px = 1024;  ///< Image rows.
+  int width_px = 1024;    ///< Image columns.
+  int height_px = 1024;   ///< Image rows.
   double fx_px = 1132.0;  ///< Focal length in columns, px (12 mm lens / 10.6 um pixels).
   double fy_px = 1132.0;  ///< Focal length in rows, px.
   double cx_px = 515.3;   ///< Principal point column, px.
@@ -68,10 +68,10 @@ struct LaserPlane {
 
 /// Geometry of the sensor, as a user would specify it.
 struct SensorOptions {
-  CameraIntrinsics camera;          ///< Lens and imager.
-  double baseline_mm = 250.0;       ///< Emitter distance from the camera centre (along -y).
-  double standoff_mm = 700.0;       ///< Distance along the optical axis where the laser crosses it.
-  double fan_angle_deg = 45.0;      ///< Full laser fan angle.
+  CameraIntrinsics camera;      ///< Lens and imager.
+  double baseline_mm = 250.0;   ///< Emitter distance from the camera centre (along -y).
+  double standoff_mm = 700.0;   ///< Distance along the optical axis where the laser crosses it.
+  double fan_angle_deg = 45.0;  ///< Full laser fan angle.
 
   /// Throws OptionError naming `what` and the field.
   void Check(const std::string& what = "sensor") const;
@@ -97,9 +97,9 @@ Eigen::Matrix3d SensorLookingDown(const LaserPlane& laser, const Eigen::Vector3d
 /// default), with every number printed to round-trip exactly. mrcal's own writer
 /// (mrcal_write_cameramodel_file) prints 6 decimals and writes non-atomically, so the simulator
 /// writes this text with WriteFileAtomically; mrcal_read_cameramodel_string reads it back.
-std::string MrcalCameraModelText(const CameraIntrinsics& intrinsics,
-                                 const Eigen::Isometry3d& camera_from_ref =
-                                     Eigen::Isometry3d::Identity());
+std::string MrcalCameraModelText(
+    const CameraIntrinsics& intrinsics,
+    const Eigen::Isometry3d& camera_from_ref = Eigen::Isometry3d::Identity());
 
 /// Parses a .cameramodel text with mrcal's reader; throws FileError(name, ...) unless it is an
 /// OPENCV8 model.

@@ -61,16 +61,17 @@ void PoseSweepOptions::Check(const std::string& what) const {
   CheckRange(max_tilt_deg, min_tilt_deg, 60.0, what + ".max_tilt_deg");
   CheckRange(max_roll_deg, 0.0, 180.0, what + ".max_roll_deg");
   if (!(sweep_length_mm > 0 && sweep_length_mm <= 1000)) {
-    throw OptionError(what + ".sweep_length_mm must be in (0, 1000] (got " +
-                      Num(sweep_length_mm) + ")");
+    throw OptionError(what + ".sweep_length_mm must be in (0, 1000] (got " + Num(sweep_length_mm) +
+                      ")");
   }
   if (profiles < 2 || profiles > 100000) {
     throw OptionError(what + ".profiles must be in [2, 100000] (got " + std::to_string(profiles) +
                       ")");
   }
   if (range_offsets_mm.empty()) {
-    throw OptionError(what + ".range_offsets_mm must list at least one offset (0: all sweeps at "
-                             "the stand-off)");
+    throw OptionError(what +
+                      ".range_offsets_mm must list at least one offset (0: all sweeps at "
+                      "the stand-off)");
   }
   for (double r : range_offsets_mm) CheckRange(r, -500.0, 500.0, what + ".range_offsets_mm");
 }
@@ -94,8 +95,9 @@ void SimConfig::Check() const {
   render.Check("SimConfig.render");
   timing.Check("SimConfig.timing");
   if (!mount_translation_mm.allFinite() || mount_translation_mm.norm() > 1000) {
-    throw OptionError("SimConfig.sensor.mount_translation_mm must be finite and within 1000 mm "
-                      "of the flange");
+    throw OptionError(
+        "SimConfig.sensor.mount_translation_mm must be finite and within 1000 mm "
+        "of the flange");
   }
   if (!mount_rotation_deg.allFinite() || mount_rotation_deg.norm() > 30) {
     throw OptionError("SimConfig.sensor.mount_rotation_deg must be finite, at most 30 deg");
@@ -125,7 +127,8 @@ void SimConfig::Check() const {
     }
     for (double v : *joint_offsets_deg) {
       if (!std::isfinite(v) || std::abs(v) > 10) {
-        throw OptionError("SimConfig.vision_robot.joint_offsets_deg values must be within +-10 deg");
+        throw OptionError(
+            "SimConfig.vision_robot.joint_offsets_deg values must be within +-10 deg");
       }
     }
   }
@@ -160,14 +163,18 @@ void SimConfig::Check() const {
   CheckFinite(sweep_center_xy_mm.y(), "sweep.center_xy_mm");
   CheckFinite(sweep_direction_deg, "sweep.direction_deg");
   if (seat_count < 0 || seat_count > 100000 || (capture_seats && seat_count == 0)) {
-    throw OptionError("SimConfig.seats.count must be in [1, 100000] when captures.seats is true "
-                      "(got " + std::to_string(seat_count) + ")");
+    throw OptionError(
+        "SimConfig.seats.count must be in [1, 100000] when captures.seats is true "
+        "(got " +
+        std::to_string(seat_count) + ")");
   }
   seat_placement.Check("SimConfig.seats");
   seat_shape.Check("SimConfig.seats.shape");
   if (capture_planes && plane_heights_mm.size() < 2) {
-    throw OptionError("SimConfig.planes.heights_mm must list at least 2 heights for the laser "
-                      "plane calibration (got " + std::to_string(plane_heights_mm.size()) + ")");
+    throw OptionError(
+        "SimConfig.planes.heights_mm must list at least 2 heights for the laser "
+        "plane calibration (got " +
+        std::to_string(plane_heights_mm.size()) + ")");
   }
   for (std::size_t i = 0; i < plane_heights_mm.size(); ++i) {
     if (!(plane_heights_mm[i] >= 20) || !std::isfinite(plane_heights_mm[i])) {
@@ -184,9 +191,10 @@ void SimConfig::Check() const {
   chessboard.Check("SimConfig.chessboard");
   images.Check("SimConfig.images");
   if (capture_chessboard_images && (chessboard_images < 1 || chessboard_images > 1000)) {
-    throw OptionError("SimConfig.chessboard.images must be in [1, 1000] when "
-                      "captures.chessboard_images is true (got " +
-                      std::to_string(chessboard_images) + ")");
+    throw OptionError(
+        "SimConfig.chessboard.images must be in [1, 1000] when "
+        "captures.chessboard_images is true (got " +
+        std::to_string(chessboard_images) + ")");
   }
   if (!(arc_radius_mm >= 0 && arc_radius_mm <= 1000)) {
     throw OptionError("SimConfig.trajectory.arc_radius_mm must be in [0, 1000] (got " +
@@ -202,8 +210,9 @@ void SimConfig::Check() const {
   hand_eye_images.Check("SimConfig.hand_eye_images");
   if ((capture_touches || capture_eye_in_hand || capture_joint_poses) &&
       spheres.stand_heights_mm.empty()) {
-    throw OptionError("SimConfig.spheres.stand_heights_mm must list at least one sphere for "
-                      "captures.touches/eye_in_hand/joint_poses");
+    throw OptionError(
+        "SimConfig.spheres.stand_heights_mm must list at least one sphere for "
+        "captures.touches/eye_in_hand/joint_poses");
   }
   if (arc_waypoints < 2 || arc_waypoints > 1000) {
     throw OptionError("SimConfig.trajectory.waypoints must be in [2, 1000] (got " +
@@ -220,11 +229,10 @@ void SimConfig::Check() const {
     const double far = std::min(model.central_range_mm[1], render.max_range_mm);
     if (!(range > model.central_range_mm[0] && range < far)) {
       std::ostringstream msg;
-      msg << "SimConfig." << field << ": the sensor sees nothing of the " << target
-          << " at height " << height << " mm: the laser meets it " << range
+      msg << "SimConfig." << field << ": the sensor sees nothing of the " << target << " at height "
+          << height << " mm: the laser meets it " << range
           << " mm from the emitter, outside the sensor's measuring range ["
-          << model.central_range_mm[0] << ", " << far
-          << "] mm along the laser; change " << field
+          << model.central_range_mm[0] << ", " << far << "] mm along the laser; change " << field
           << " or sweep.measuring_height_mm (or sensor.baseline_mm/standoff_mm/camera, "
              "render.max_range_mm)";
       throw OptionError(msg.str());
@@ -426,8 +434,8 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     t.Read("tool_length_mm", &c.touches.tool_length_mm);
     t.Done();
   }
-  for (auto [key, options] : {std::pair{"eye_in_hand", &c.eye_in_hand},
-                              std::pair{"joint_poses", &c.joint_poses}}) {
+  for (auto [key, options] :
+       {std::pair{"eye_in_hand", &c.eye_in_hand}, std::pair{"joint_poses", &c.joint_poses}}) {
     Fields p = top.Sub(key);
     p.Read("poses", &options->poses);
     p.Read("min_tilt_deg", &options->min_tilt_deg);
@@ -480,37 +488,43 @@ std::string SimConfigToYaml(const SimConfig& c) {
   o << "format: lasercell.sim_config\nversion: " << kSimConfigVersion << "\n";
   o << "seed: " << c.seed << "\n";
   o << "sensor:\n  camera: {width_px: " << cam.width_px << ", height_px: " << cam.height_px
-    << ", fx_px: " << Num(cam.fx_px) << ", fy_px: " << Num(cam.fy_px) << ", cx_px: "
-    << Num(cam.cx_px) << ", cy_px: " << Num(cam.cy_px) << ", distortion: " << List(cam.distortion)
-    << "}\n";
-  o << "  baseline_mm: " << Num(c.sensor.baseline_mm) << "\n  standoff_mm: "
-    << Num(c.sensor.standoff_mm) << "\n  fan_angle_deg: " << Num(c.sensor.fan_angle_deg)
+    << ", fx_px: " << Num(cam.fx_px) << ", fy_px: " << Num(cam.fy_px)
+    << ", cx_px: " << Num(cam.cx_px) << ", cy_px: " << Num(cam.cy_px)
+    << ", distortion: " << List(cam.distortion) << "}\n";
+  o << "  baseline_mm: " << Num(c.sensor.baseline_mm)
+    << "\n  standoff_mm: " << Num(c.sensor.standoff_mm)
+    << "\n  fan_angle_deg: " << Num(c.sensor.fan_angle_deg)
     << "\n  mount_translation_mm: " << List(c.mount_translation_mm)
     << "\n  mount_rotation_deg: " << List(c.mount_rotation_deg) << "\n";
   o << "render: {fan_rays: " << r.fan_rays << ", max_range_mm: " << Num(r.max_range_mm)
-    << ", intensity_gain: " << Num(r.intensity_gain) << ", reference_range_mm: "
-    << Num(r.reference_range_mm) << ", min_intensity: " << Num(r.min_intensity)
-    << ", max_view_angle_deg: " << Num(r.max_view_angle_deg) << ", sheet_thickness_mm: "
-    << Num(r.sheet_thickness_mm) << ", min_width_px: " << Num(r.min_width_px)
-    << ", row_sigma_px: " << Num(r.row_sigma_px) << ", intensity_sigma: "
-    << Num(r.intensity_sigma) << ", dropout_probability: " << Num(r.dropout_probability)
-    << ", speckle_sigma_px: " << Num(r.speckle_sigma_px) << ", speckle_correlation_px: "
-    << Num(r.speckle_correlation_px) << ", speckle_intensity_sigma: "
-    << Num(r.speckle_intensity_sigma)
+    << ", intensity_gain: " << Num(r.intensity_gain)
+    << ", reference_range_mm: " << Num(r.reference_range_mm)
+    << ", min_intensity: " << Num(r.min_intensity)
+    << ", max_view_angle_deg: " << Num(r.max_view_angle_deg)
+    << ", sheet_thickness_mm: " << Num(r.sheet_thickness_mm)
+    << ", min_width_px: " << Num(r.min_width_px) << ", row_sigma_px: " << Num(r.row_sigma_px)
+    << ", intensity_sigma: " << Num(r.intensity_sigma)
+    << ", dropout_probability: " << Num(r.dropout_probability)
+    << ", speckle_sigma_px: " << Num(r.speckle_sigma_px)
+    << ", speckle_correlation_px: " << Num(r.speckle_correlation_px)
+    << ", speckle_intensity_sigma: " << Num(r.speckle_intensity_sigma)
     << ", occlusion_epsilon_mm: " << Num(r.occlusion_epsilon_mm)
     << ", reflection_probability: " << Num(r.reflection_probability)
     << ", reflection_intensity: " << Num(r.reflection_intensity) << "}\n";
   o << "timing: {profiles: " << c.timing.profiles << ", rate_hz: " << Num(c.timing.rate_hz)
-    << ", jitter_s: " << Num(c.timing.jitter_s) << ", timestamp_noise_s: "
-    << Num(c.timing.timestamp_noise_s) << ", joint_noise_rad: " << Num(c.timing.joint_noise_rad)
-    << ", start_ns: " << c.timing.start_ns << "}\n";
-  o << "cell:\n  vision_base_mm: " << List(c.vision_base_mm) << "\n  vision_base_yaw_deg: "
-    << Num(c.vision_base_yaw_deg) << "\n  handling_base_mm: " << List(c.handling_base_mm)
-    << "\n  handling_base_yaw_deg: " << Num(c.handling_base_yaw_deg) << "\n  floor_size_mm: "
-    << Num(c.floor_size_mm) << "\n  albedo: {floor: " << Num(c.albedo.floor) << ", pallet: "
-    << Num(c.albedo.pallet) << ", seat: " << Num(c.albedo.seat) << ", white_plane: "
-    << Num(c.albedo.white_plane) << ", spheres: " << Num(c.albedo.spheres) << ", stands: "
-    << Num(c.albedo.stands) << ", chessboard_light: " << Num(c.albedo.chessboard_light)
+    << ", jitter_s: " << Num(c.timing.jitter_s)
+    << ", timestamp_noise_s: " << Num(c.timing.timestamp_noise_s)
+    << ", joint_noise_rad: " << Num(c.timing.joint_noise_rad) << ", start_ns: " << c.timing.start_ns
+    << "}\n";
+  o << "cell:\n  vision_base_mm: " << List(c.vision_base_mm)
+    << "\n  vision_base_yaw_deg: " << Num(c.vision_base_yaw_deg)
+    << "\n  handling_base_mm: " << List(c.handling_base_mm)
+    << "\n  handling_base_yaw_deg: " << Num(c.handling_base_yaw_deg)
+    << "\n  floor_size_mm: " << Num(c.floor_size_mm)
+    << "\n  albedo: {floor: " << Num(c.albedo.floor) << ", pallet: " << Num(c.albedo.pallet)
+    << ", seat: " << Num(c.albedo.seat) << ", white_plane: " << Num(c.albedo.white_plane)
+    << ", spheres: " << Num(c.albedo.spheres) << ", stands: " << Num(c.albedo.stands)
+    << ", chessboard_light: " << Num(c.albedo.chessboard_light)
     << ", chessboard_dark: " << Num(c.albedo.chessboard_dark) << "}\n";
   o << "vision_robot:\n";
   if (c.joint_offsets_deg) o << "  joint_offsets_deg: " << List(*c.joint_offsets_deg) << "\n";
@@ -518,44 +532,46 @@ std::string SimConfigToYaml(const SimConfig& c) {
   if (c.dh_a_errors_mm) o << "  dh_a_errors_mm: " << List(*c.dh_a_errors_mm) << "\n";
   if (c.dh_d_errors_mm) o << "  dh_d_errors_mm: " << List(*c.dh_d_errors_mm) << "\n";
   o << "  dh_length_sigma_mm: " << Num(c.dh_length_sigma_mm) << "\n";
-  o << "sweep: {measuring_height_mm: " << Num(c.measuring_height_mm) << ", length_mm: "
-    << Num(c.sweep_length_mm) << ", center_xy_mm: " << List(c.sweep_center_xy_mm)
+  o << "sweep: {measuring_height_mm: " << Num(c.measuring_height_mm)
+    << ", length_mm: " << Num(c.sweep_length_mm) << ", center_xy_mm: " << List(c.sweep_center_xy_mm)
     << ", direction_deg: " << Num(c.sweep_direction_deg) << "}\n";
-  o << "seats:\n  count: " << c.seat_count << "\n  max_shift_mm: "
-    << Num(c.seat_placement.max_shift_mm) << "\n  max_tilt_deg: "
-    << Num(c.seat_placement.max_tilt_deg) << "\n  max_yaw_deg: "
-    << Num(c.seat_placement.max_yaw_deg) << "\n  shape: {half_length_x_mm: "
-    << Num(s.half_length_x_mm) << ", half_width_y_mm: " << Num(s.half_width_y_mm)
+  o << "seats:\n  count: " << c.seat_count
+    << "\n  max_shift_mm: " << Num(c.seat_placement.max_shift_mm)
+    << "\n  max_tilt_deg: " << Num(c.seat_placement.max_tilt_deg)
+    << "\n  max_yaw_deg: " << Num(c.seat_placement.max_yaw_deg)
+    << "\n  shape: {half_length_x_mm: " << Num(s.half_length_x_mm)
+    << ", half_width_y_mm: " << Num(s.half_width_y_mm)
     << ", outline_exponent: " << Num(s.outline_exponent) << ", crown_mm: " << Num(s.crown_mm)
     << ", front_roll_mm: " << Num(s.front_roll_mm) << ", side_lift_mm: " << Num(s.side_lift_mm)
-    << ", thickness_mm: " << Num(s.thickness_mm) << ", boss_offset_x_mm: "
-    << Num(s.boss_offset_x_mm) << ", boss_radius_mm: " << Num(s.boss_radius_mm)
-    << ", boss_height_mm: " << Num(s.boss_height_mm) << ", hole_diameter_mm: "
-    << Num(s.hole_diameter_mm) << ", angular_steps: " << s.angular_steps
+    << ", thickness_mm: " << Num(s.thickness_mm)
+    << ", boss_offset_x_mm: " << Num(s.boss_offset_x_mm)
+    << ", boss_radius_mm: " << Num(s.boss_radius_mm)
+    << ", boss_height_mm: " << Num(s.boss_height_mm)
+    << ", hole_diameter_mm: " << Num(s.hole_diameter_mm) << ", angular_steps: " << s.angular_steps
     << ", radial_steps: " << s.radial_steps << "}\n";
-  o << "planes: {heights_mm: " << List(c.plane_heights_mm) << ", size_mm: "
-    << List(c.plane_size_mm) << "}\n";
-  o << "spheres:\n  radius_mm: " << Num(c.spheres.radius_mm) << "\n  stand_heights_mm: "
-    << List(c.spheres.stand_heights_mm) << "\n  positions_xy_mm: [";
+  o << "planes: {heights_mm: " << List(c.plane_heights_mm) << ", size_mm: " << List(c.plane_size_mm)
+    << "}\n";
+  o << "spheres:\n  radius_mm: " << Num(c.spheres.radius_mm)
+    << "\n  stand_heights_mm: " << List(c.spheres.stand_heights_mm) << "\n  positions_xy_mm: [";
   for (std::size_t i = 0; i < c.spheres.positions_xy_mm.size(); ++i) {
     o << (i ? ", " : "") << List(c.spheres.positions_xy_mm[i]);
   }
   o << "]\n  segments: " << c.spheres.segments << "\n";
-  o << "trajectory: {arc_radius_mm: " << Num(c.arc_radius_mm) << ", arc_angle_deg: "
-    << Num(c.arc_angle_deg) << ", waypoints: " << c.arc_waypoints << "}\n";
+  o << "trajectory: {arc_radius_mm: " << Num(c.arc_radius_mm)
+    << ", arc_angle_deg: " << Num(c.arc_angle_deg) << ", waypoints: " << c.arc_waypoints << "}\n";
   const auto b = [](bool v) { return v ? "true" : "false"; };
-  o << "chessboard: {images: " << c.chessboard_images << ", squares: ["
-    << c.chessboard.squares_x << ", " << c.chessboard.squares_y << "], square_mm: "
-    << Num(c.chessboard.square_mm) << ", border_mm: " << Num(c.chessboard.border_mm) << "}\n";
+  o << "chessboard: {images: " << c.chessboard_images << ", squares: [" << c.chessboard.squares_x
+    << ", " << c.chessboard.squares_y << "], square_mm: " << Num(c.chessboard.square_mm)
+    << ", border_mm: " << Num(c.chessboard.border_mm) << "}\n";
   o << "images: {exposure: " << Num(c.images.exposure) << ", ambient: " << Num(c.images.ambient)
-    << ", background_albedo: " << Num(c.images.background_albedo) << ", blur_sigma_px: "
-    << Num(c.images.blur_sigma_px) << ", noise_sigma: " << Num(c.images.noise_sigma)
-    << ", vignetting: " << b(c.images.vignetting) << ", edge_samples: " << c.images.edge_samples
-    << "}\n";
+    << ", background_albedo: " << Num(c.images.background_albedo)
+    << ", blur_sigma_px: " << Num(c.images.blur_sigma_px)
+    << ", noise_sigma: " << Num(c.images.noise_sigma) << ", vignetting: " << b(c.images.vignetting)
+    << ", edge_samples: " << c.images.edge_samples << "}\n";
   o << "touches: {sigma_mm: " << Num(c.touches.sigma_mm)
     << ", tool_length_mm: " << Num(c.touches.tool_length_mm) << "}\n";
-  for (auto [key, p] : {std::pair{"eye_in_hand", &c.eye_in_hand},
-                        std::pair{"joint_poses", &c.joint_poses}}) {
+  for (auto [key, p] :
+       {std::pair{"eye_in_hand", &c.eye_in_hand}, std::pair{"joint_poses", &c.joint_poses}}) {
     o << key << ": {poses: " << p->poses << ", min_tilt_deg: " << Num(p->min_tilt_deg)
       << ", max_tilt_deg: " << Num(p->max_tilt_deg) << ", max_roll_deg: " << Num(p->max_roll_deg)
       << ", sweep_length_mm: " << Num(p->sweep_length_mm) << ", profiles: " << p->profiles
@@ -564,8 +580,8 @@ std::string SimConfigToYaml(const SimConfig& c) {
   const HandEyeImageOptions& h = c.hand_eye_images;
   o << "hand_eye_images: {images: " << h.images << ", distance_mm: " << Num(h.distance_mm)
     << ", min_tilt_deg: " << Num(h.min_tilt_deg) << ", max_tilt_deg: " << Num(h.max_tilt_deg)
-    << ", max_roll_deg: " << Num(h.max_roll_deg) << ", board_height_mm: "
-    << Num(h.board_height_mm) << ", board_yaw_deg: " << Num(h.board_yaw_deg) << "}\n";
+    << ", max_roll_deg: " << Num(h.max_roll_deg) << ", board_height_mm: " << Num(h.board_height_mm)
+    << ", board_yaw_deg: " << Num(h.board_yaw_deg) << "}\n";
   o << "captures: {planes: " << b(c.capture_planes) << ", spheres: " << b(c.capture_spheres)
     << ", seats: " << b(c.capture_seats) << ", trajectory: " << b(c.capture_trajectory)
     << ", chessboard_images: " << b(c.capture_chessboard_images)

@@ -96,13 +96,13 @@ struct PoseSweepOptions {
 /// angle in [min_tilt_deg, max_tilt_deg] about a horizontal axis whose azimuth is stratified
 /// over the circle, rolled about it by +- max_roll_deg.
 struct HandEyeImageOptions {
-  int images = 15;               ///< Number of robot poses / images.
-  double distance_mm = 700.0;    ///< Camera centre to board centre along the optical axis, mm.
-  double min_tilt_deg = 10.0;    ///< Smallest tilt of the optical axis from the vertical, deg.
-  double max_tilt_deg = 35.0;    ///< Largest tilt, deg.
-  double max_roll_deg = 60.0;    ///< Roll about the optical axis, +- deg.
+  int images = 15;                 ///< Number of robot poses / images.
+  double distance_mm = 700.0;      ///< Camera centre to board centre along the optical axis, mm.
+  double min_tilt_deg = 10.0;      ///< Smallest tilt of the optical axis from the vertical, deg.
+  double max_tilt_deg = 35.0;      ///< Largest tilt, deg.
+  double max_roll_deg = 60.0;      ///< Roll about the optical axis, +- deg.
   double board_height_mm = 150.0;  ///< Height of the printed face above the floor, mm.
-  double board_yaw_deg = 15.0;   ///< Rotation of the board about the vertical, deg.
+  double board_yaw_deg = 15.0;     ///< Rotation of the board about the vertical, deg.
 
   /// Throws OptionError naming `what` and the field.
   void Check(const std::string& what) const;
@@ -141,18 +141,19 @@ struct SimConfig {
   double dh_length_sigma_mm = 0.0;
 
   // Linear sweeps (calibration planes, spheres, part scenes).
-  double measuring_height_mm = 244.0;  ///< Height (cell z) where the laser crosses the optical axis.
-  double sweep_length_mm = 900.0;      ///< Travel of a linear sweep.
+  double measuring_height_mm =
+      244.0;                       ///< Height (cell z) where the laser crosses the optical axis.
+  double sweep_length_mm = 900.0;  ///< Travel of a linear sweep.
   Eigen::Vector2d sweep_center_xy_mm = Eigen::Vector2d::Zero();  ///< Sweep midpoint (cell xy).
-  double sweep_direction_deg = 0.0;    ///< Sweep direction in the cell xy plane.
+  double sweep_direction_deg = 0.0;  ///< Sweep direction in the cell xy plane.
 
   // Part scenes.
-  int seat_count = 3;                  ///< Seat placements in a cell capture set.
+  int seat_count = 3;                   ///< Seat placements in a cell capture set.
   SeatPlacementOptions seat_placement;  ///< Table I ranges.
   ChairSeatOptions seat_shape;          ///< Seat geometry.
 
   // Calibration targets.
-  std::vector<double> plane_heights_mm = {150.0, 250.0, 350.0};  ///< White plane top heights.
+  std::vector<double> plane_heights_mm = {150.0, 250.0, 350.0};   ///< White plane top heights.
   Eigen::Vector2d plane_size_mm = Eigen::Vector2d(800.0, 600.0);  ///< White plane size.
   SphereTargets spheres;                                          ///< Half spheres on stands.
 
@@ -163,9 +164,9 @@ struct SimConfig {
 
   // Camera images (intrinsics calibration, peak-detector tests). The board's albedos come from
   // cell.albedo.chessboard_light/dark.
-  ChessboardTarget chessboard;    ///< Printed board: squares, square_mm, border_mm.
-  int chessboard_images = 20;     ///< Chessboard views in a cell capture set.
-  ImageRenderOptions images;      ///< Photometry, blur, noise of the images.
+  ChessboardTarget chessboard;  ///< Printed board: squares, square_mm, border_mm.
+  int chessboard_images = 20;   ///< Chessboard views in a cell capture set.
+  ImageRenderOptions images;    ///< Photometry, blur, noise of the images.
 
   // Robot-side calibration captures (hand-eye, joint offsets, half spheres).
   TouchOptions touches;  ///< Handling-robot pointing-tool touches of the sphere tops.
@@ -183,10 +184,10 @@ struct SimConfig {
   bool capture_trajectory = true;
   bool capture_chessboard_images = true;  ///< images/chessboard_NNN.png + truth/chessboard.yaml.
   bool capture_laser_line_images = true;  ///< images/laser_line_*.png + truth/laser_lines.yaml.
-  bool write_meshes = true;                ///< models/*.ply and models/*.stl.
-  bool capture_touches = true;      ///< records/touches.yaml + truth/touches.yaml.
-  bool capture_eye_in_hand = true;  ///< profiles/eye_in_hand_NN.lcp.
-  bool capture_joint_poses = true;  ///< profiles/joint_pose_NNN.lcp.
+  bool write_meshes = true;               ///< models/*.ply and models/*.stl.
+  bool capture_touches = true;            ///< records/touches.yaml + truth/touches.yaml.
+  bool capture_eye_in_hand = true;        ///< profiles/eye_in_hand_NN.lcp.
+  bool capture_joint_poses = true;        ///< profiles/joint_pose_NNN.lcp.
   /// images/hand_eye_NNN.png + records/hand_eye_images.yaml + truth/hand_eye_images.yaml. Off
   /// by default: 15 more 1024 x 1024 renders (~3 s, minutes under ASan).
   bool capture_hand_eye_images = false;

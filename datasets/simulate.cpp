@@ -46,8 +46,8 @@ constexpr std::uint64_t kEyeInHandPlanStream = 0x7000;
 constexpr std::uint64_t kJointPosePlanStream = 0x8000;
 constexpr std::uint64_t kHandEyeImageStream = 0x9000;  // plan; + 1 + i: image noise
 constexpr std::uint64_t kSeatStream = 0x10000;
-constexpr std::uint64_t kEyeInHandStream = 0x1000000;   // + pose index
-constexpr std::uint64_t kJointPoseStream = 0x2000000;   // + pose index
+constexpr std::uint64_t kEyeInHandStream = 0x1000000;  // + pose index
+constexpr std::uint64_t kJointPoseStream = 0x2000000;  // + pose index
 
 const char* const kTool = "lasercell simulator " LASERCELL_VERSION;
 
@@ -57,7 +57,6 @@ Eigen::Isometry3d YawPose(const Eigen::Vector3d& t, double yaw_deg) {
   p.translation() = t;
   return p;
 }
-
 
 StaticEdge Edge(const std::string& parent, const std::string& child,
                 const Eigen::Isometry3d& parent_from_child, const std::string& note) {
@@ -124,9 +123,8 @@ CaptureReport WriteSweep(const SweepJob& job, const SweepResult& result, const S
   if (result.valid_peaks == 0) {
     throw OptionError("capture '" + job.name + "' (" + job.kind +
                       "): the sensor sees nothing of the target in any of its " +
-                      std::to_string(result.profiles.profiles.size()) +
-                      " profiles; check " + job.target_fields +
-                      ", SimConfig.sweep.* and SimConfig.render.min_intensity");
+                      std::to_string(result.profiles.profiles.size()) + " profiles; check " +
+                      job.target_fields + ", SimConfig.sweep.* and SimConfig.render.min_intensity");
   }
   triangulation::ProfileSet set = result.profiles;
   set.header.metadata = "format: lasercell.capture\ncapture: " + job.name + "\nkind: " + job.kind +
@@ -171,14 +169,18 @@ void RunSeats(const SimConfig& config, const CellTruth& truth,
     const Scene scene = MakeSeatScene(truth.layout, truth.seat, seats[i].placement.cell_from_part);
     const LaserRenderer renderer(scene, truth.sensor, config.render);
     const SweepResult result = RenderSweep(
-        renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
-        StreamSeed(config.seed, kSeatStream + i), 0, "", threads);
+        renderer,
+        [&](double t) {
+          return SensorState{sweep.At(t), {}};
+        },
+        config.timing, StreamSeed(config.seed, kSeatStream + i), 0, "", threads);
     const CaptureReport r = WriteSweep(
-        {seats[i].name, "seat", "SimConfig.seats.* (placement " + std::to_string(i) + ")"},
-        result, config, out);
+        {seats[i].name, "seat", "SimConfig.seats.* (placement " + std::to_string(i) + ")"}, result,
+        config, out);
     report.captures.push_back(r);
     captures_yaml += CaptureHeaderYaml(r) + LinearSweepTruthYaml(sweep, hb_from_cell, config) +
-                     ExposureTimesTruthYaml(result, config) + SeatTruthYaml(seats[i], truth, hb_from_cell);
+                     ExposureTimesTruthYaml(result, config) +
+                     SeatTruthYaml(seats[i], truth, hb_from_cell);
     ReportProgress(progress, "seats", static_cast<double>(i + 1) / seats.size());
   }
 }
@@ -208,13 +210,14 @@ void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output
   std::ostringstream o;
   o << "format: lasercell.sim_chessboard\nversion: 1\n"
     << "# Board frame: pattern in its xy plane, square (i, j) at [i s, (i+1) s] x [j s, (j+1) s],\n"
-    << "# dark when i + j is even; inner corner (i, j) at ((i+1) s, (j+1) s, 0), listed row by row\n"
+    << "# dark when i + j is even; inner corner (i, j) at ((i+1) s, (j+1) s, 0), listed row by "
+       "row\n"
     << "# along x (OpenCV order). Pixel coordinates: centre of the top-left pixel is (0, 0).\n"
-    << "board: {squares: [" << board.squares_x << ", " << board.squares_y
-    << "], inner_corners: [" << board.squares_x - 1 << ", " << board.squares_y - 1
+    << "board: {squares: [" << board.squares_x << ", " << board.squares_y << "], inner_corners: ["
+    << board.squares_x - 1 << ", " << board.squares_y - 1
     << "], square_mm: " << Num(board.square_mm) << ", border_mm: " << Num(board.border_mm)
-    << ", dark_albedo: " << Num(board.dark_albedo) << ", light_albedo: "
-    << Num(board.light_albedo) << "}\nimages:\n";
+    << ", dark_albedo: " << Num(board.dark_albedo) << ", light_albedo: " << Num(board.light_albedo)
+    << "}\nimages:\n";
   for (std::size_t i = 0; i < poses.size(); ++i) {
     char name[48];
     std::snprintf(name, sizeof(name), "images/chessboard_%03zu.png", i);
@@ -275,9 +278,9 @@ void RunLaserLineImages(const SimConfig& config, const CellTruth& truth, const L
     Scene scene;
   };
   std::vector<Case> cases;
-  cases.push_back({"laser_line_plane",
-                   MakePlaneScene(truth.layout, cell_from_board.translation().z(),
-                                  config.plane_size_mm)});
+  cases.push_back(
+      {"laser_line_plane",
+       MakePlaneScene(truth.layout, cell_from_board.translation().z(), config.plane_size_mm)});
   cases.push_back({"laser_line_chessboard",
                    MakeChessboardScene(truth.layout, cell_from_board,
                                        {board.squares_x, board.squares_y}, board.square_mm)});
@@ -285,7 +288,8 @@ void RunLaserLineImages(const SimConfig& config, const CellTruth& truth, const L
   std::ostringstream o;
   o << "format: lasercell.sim_laser_lines\nversion: 1\n"
     << "# Exact (noise-free) peak row per image column of each raw laser-line image; .nan where\n"
-    << "# the column has no peak. Stripe profile: Gaussian of FWHM width_px, peak 255 * intensity.\n"
+    << "# the column has no peak. Stripe profile: Gaussian of FWHM width_px, peak 255 * "
+       "intensity.\n"
     << "images:\n";
   for (std::size_t k = 0; k < cases.size(); ++k) {
     const LaserRenderer renderer(cases[k].scene, truth.sensor, config.render);
@@ -311,10 +315,10 @@ void RunTouches(const SimConfig& config, const CellTruth& truth, Output& out) {
 
 // One set of pose sweeps (eye_in_hand or joint_poses): profiles, captures.yaml entries, and
 // the set's list in records/sphere_sweeps.yaml.
-void RunPoseSweeps(const SimConfig& config, const CellTruth& truth,
-                   const PoseSweepOptions& options, const std::vector<PoseSweep>& plans,
-                   const std::string& set, const char* name_format, std::uint64_t render_stream,
-                   Output& out, SimulationReport& report, std::string& captures_yaml,
+void RunPoseSweeps(const SimConfig& config, const CellTruth& truth, const PoseSweepOptions& options,
+                   const std::vector<PoseSweep>& plans, const std::string& set,
+                   const char* name_format, std::uint64_t render_stream, Output& out,
+                   SimulationReport& report, std::string& captures_yaml,
                    triangulation::SphereSweepList& records, const ProgressCallback& progress,
                    int threads) {
   const Scene scene = MakeSphereScene(truth.layout, config.spheres);
@@ -326,9 +330,9 @@ void RunPoseSweeps(const SimConfig& config, const CellTruth& truth,
     std::snprintf(name, sizeof(name), name_format, static_cast<int>(i));
     const SweepResult result = RenderPoseSweep(renderer, truth, plans[i], timing,
                                                StreamSeed(config.seed, render_stream + i), threads);
-    const CaptureReport r = WriteSweep(
-        {name, set + "_sphere", "SimConfig." + set + ".* and SimConfig.spheres.*"}, result,
-        config, out);
+    const CaptureReport r =
+        WriteSweep({name, set + "_sphere", "SimConfig." + set + ".* and SimConfig.spheres.*"},
+                   result, config, out);
     report.captures.push_back(r);
     records.sets.back().sweeps.push_back({r.profiles_file, plans[i].sphere});
     captures_yaml += CaptureHeaderYaml(r) + PoseSweepTruthYaml(config, truth, plans[i]) +
@@ -366,18 +370,22 @@ void RunPlanes(const SimConfig& config, const CellTruth& truth, const LinearSwee
     const Scene scene = MakePlaneScene(truth.layout, h, config.plane_size_mm);
     const LaserRenderer renderer(scene, truth.sensor, config.render);
     const SweepResult result = RenderSweep(
-        renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
-        StreamSeed(config.seed, kPlaneStream + i), 0, "", threads);
+        renderer,
+        [&](double t) {
+          return SensorState{sweep.At(t), {}};
+        },
+        config.timing, StreamSeed(config.seed, kPlaneStream + i), 0, "", threads);
     const std::string name = "plane_" + std::to_string(i);
-    const CaptureReport r = WriteSweep(
-        {name, "white_plane", "SimConfig.planes.heights_mm[" + std::to_string(i) + "]"}, result,
-        config, out);
+    const CaptureReport r =
+        WriteSweep({name, "white_plane", "SimConfig.planes.heights_mm[" + std::to_string(i) + "]"},
+                   result, config, out);
     report.captures.push_back(r);
     const Eigen::Vector3d n_hb = hb_from_cell.linear() * Eigen::Vector3d::UnitZ();
     const Eigen::Vector3d p_hb = hb_from_cell * Eigen::Vector3d(0, 0, h);
     captures_yaml += CaptureHeaderYaml(r) + LinearSweepTruthYaml(sweep, hb_from_cell, config) +
-                     ExposureTimesTruthYaml(result, config) + "    plane_height_in_cell_mm: " +
-                     Num(h) + "\n    plane_in_handling_base: {normal: " + Vec(n_hb) +
+                     ExposureTimesTruthYaml(result, config) +
+                     "    plane_height_in_cell_mm: " + Num(h) +
+                     "\n    plane_in_handling_base: {normal: " + Vec(n_hb) +
                      ", d_mm: " + Num(-n_hb.dot(p_hb)) + "}\n";
     ReportProgress(progress, "white planes",
                    static_cast<double>(i + 1) / config.plane_heights_mm.size());
@@ -391,8 +399,11 @@ void RunSpheres(const SimConfig& config, const CellTruth& truth, const LinearSwe
   const Scene scene = MakeSphereScene(truth.layout, config.spheres);
   const LaserRenderer renderer(scene, truth.sensor, config.render);
   const SweepResult result = RenderSweep(
-      renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing,
-      StreamSeed(config.seed, kSphereStream), 0, "", threads);
+      renderer,
+      [&](double t) {
+        return SensorState{sweep.At(t), {}};
+      },
+      config.timing, StreamSeed(config.seed, kSphereStream), 0, "", threads);
   const CaptureReport r =
       WriteSweep({"spheres", "spheres", "SimConfig.spheres.*"}, result, config, out);
   report.captures.push_back(r);
@@ -425,12 +436,12 @@ void RunTrajectory(const SimConfig& config, const CellTruth& truth,
     return s;
   };
   const SweepResult result =
-      RenderSweep(renderer, state_at, config.timing, StreamSeed(config.seed, kTrajectoryStream),
-                  6, "vision_robot", threads);
+      RenderSweep(renderer, state_at, config.timing, StreamSeed(config.seed, kTrajectoryStream), 6,
+                  "vision_robot", threads);
   const std::string name = "trajectory_" + seat.name;
-  const CaptureReport r = WriteSweep(
-      {name, "seat_trajectory", "SimConfig.trajectory.* and SimConfig.seats.*"}, result, config,
-      out);
+  const CaptureReport r =
+      WriteSweep({name, "seat_trajectory", "SimConfig.trajectory.* and SimConfig.seats.*"}, result,
+                 config, out);
   report.captures.push_back(r);
   std::ostringstream o;
   o << "    sweep:\n      type: joints\n      robot: vision_robot\n"
@@ -456,7 +467,8 @@ FrameGraph CellTruth::Graph() const {
   FrameGraph g;
   g.SetRobot("vision_robot", true_vision_robot);
   g.SetRobot("handling_robot", handling_robot);
-  g.SetStaticEdge(Edge("cell", "vision_base", layout.cell_from_vision_base, "simulated ground truth"));
+  g.SetStaticEdge(
+      Edge("cell", "vision_base", layout.cell_from_vision_base, "simulated ground truth"));
   g.SetStaticEdge(
       Edge("cell", "handling_base", layout.cell_from_handling_base, "simulated ground truth"));
   g.SetDynamicEdge({"vision_base", "vision_flange", "vision_robot"});
@@ -481,7 +493,8 @@ CellTruth MakeCellTruth(const SimConfig& config) {
   // rotation (in the flange frame) and the camera centre's position.
   const Eigen::Matrix3d cell_from_flange_down = Eigen::Vector3d(1, -1, -1).asDiagonal();
   const Eigen::Matrix3d flange_from_sensor_nominal =
-      cell_from_flange_down.transpose() * SensorLookingDown(t.sensor.laser, Eigen::Vector3d::UnitX());
+      cell_from_flange_down.transpose() *
+      SensorLookingDown(t.sensor.laser, Eigen::Vector3d::UnitX());
   t.vision_flange_from_sensor.linear() =
       QuaternionFromRotationVector(config.mount_rotation_deg * kDegToRad).toRotationMatrix() *
       flange_from_sensor_nominal;
@@ -562,7 +575,8 @@ JointTrajectory MakeArcTrajectory(const SimConfig& config, const CellTruth& trut
     const Eigen::Vector3d tangent(-std::sin(phi), std::cos(phi), 0.0);
     const Eigen::Isometry3d cell_from_sensor =
         LookingDownAt(truth.sensor, config.sensor.standoff_mm, crossing, tangent);
-    const Eigen::Isometry3d base_from_flange = base_from_cell * cell_from_sensor * sensor_from_flange;
+    const Eigen::Isometry3d base_from_flange =
+        base_from_cell * cell_from_sensor * sensor_from_flange;
     std::optional<std::vector<double>> q;
     if (k == 0) {
       // Deterministic multi-start: the first converged of a fixed list of UR5 postures.
@@ -570,8 +584,7 @@ JointTrajectory MakeArcTrajectory(const SimConfig& config, const CellTruth& trut
       for (double q1 : {0.0, h, -h, 2 * h}) {
         for (double q3 : {h, -h}) {
           for (double q5 : {-h, h}) {
-            q = SolveIk(truth.nominal_vision_robot, base_from_flange,
-                        {q1, -h, q3, -h, q5, 0.0});
+            q = SolveIk(truth.nominal_vision_robot, base_from_flange, {q1, -h, q3, -h, q5, 0.0});
             if (q) break;
           }
           if (q) break;
@@ -587,11 +600,12 @@ JointTrajectory MakeArcTrajectory(const SimConfig& config, const CellTruth& trut
       for (double& v : *q) v = std::remainder(v, 2 * std::numbers::pi);
     }
     if (!q) {
-      throw OptionError("SimConfig.trajectory: the vision robot (UR5 at cell.vision_base_mm) "
-                        "cannot reach arc waypoint " + std::to_string(k) + " of " +
-                        std::to_string(n) +
-                        "; change trajectory.arc_radius_mm, sweep.measuring_height_mm, "
-                        "sweep.center_xy_mm or cell.vision_base_mm");
+      throw OptionError(
+          "SimConfig.trajectory: the vision robot (UR5 at cell.vision_base_mm) "
+          "cannot reach arc waypoint " +
+          std::to_string(k) + " of " + std::to_string(n) +
+          "; change trajectory.arc_radius_mm, sweep.measuring_height_mm, "
+          "sweep.center_xy_mm or cell.vision_base_mm");
     }
     seed = *q;
     traj.times_s.push_back(duration * s);
@@ -626,14 +640,14 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
   // Likewise the pose sweeps' robot poses (IK and visibility).
   std::vector<PoseSweep> eye_in_hand, joint_poses;
   if (config.capture_eye_in_hand) {
-    eye_in_hand = PlanPoseSweeps(config, truth, config.eye_in_hand,
-                                 StreamSeed(config.seed, kEyeInHandPlanStream),
-                                 "SimConfig.eye_in_hand");
+    eye_in_hand =
+        PlanPoseSweeps(config, truth, config.eye_in_hand,
+                       StreamSeed(config.seed, kEyeInHandPlanStream), "SimConfig.eye_in_hand");
   }
   if (config.capture_joint_poses) {
-    joint_poses = PlanPoseSweeps(config, truth, config.joint_poses,
-                                 StreamSeed(config.seed, kJointPosePlanStream),
-                                 "SimConfig.joint_poses");
+    joint_poses =
+        PlanPoseSweeps(config, truth, config.joint_poses,
+                       StreamSeed(config.seed, kJointPosePlanStream), "SimConfig.joint_poses");
   }
 
   if (config.capture_planes) {
@@ -661,7 +675,8 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
     // calibration estimates it (>= 3 heights).
     const Eigen::Vector3d up_in_sensor =
         sweep.cell_from_sensor_start.linear().transpose() * Eigen::Vector3d::UnitZ();
-    out.Write("records/planes.yaml", calib::PlaneHeightsYaml({config.plane_heights_mm, up_in_sensor}));
+    out.Write("records/planes.yaml",
+              calib::PlaneHeightsYaml({config.plane_heights_mm, up_in_sensor}));
   }
   if (config.capture_trajectory) {
     RunTrajectory(config, truth, trajectory, seats.front(), hb_from_cell, out, report,
@@ -695,13 +710,11 @@ SimulationReport SimulateCell(const SimConfig& config, const std::string& out_di
     ReportProgress(progress, "laser-line images", 1.0);
   }
   out.Write("truth/captures.yaml", captures_yaml);
-  WriteCommonTruth(config, truth, config.capture_seats || config.capture_trajectory
-                                      ? seats
-                                      : std::vector<SeatCapture>{},
-                   out);
+  WriteCommonTruth(
+      config, truth,
+      config.capture_seats || config.capture_trajectory ? seats : std::vector<SeatCapture>{}, out);
   report.files = out.files();
-  report.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }
 

@@ -57,13 +57,13 @@ struct CellTruth {
   CellLayout layout;
   SensorModel sensor;
   Eigen::Isometry3d vision_flange_from_sensor = Eigen::Isometry3d::Identity();
-  DhChain nominal_vision_robot;          ///< core NominalUr5().
-  DhChain true_vision_robot;             ///< Nominal + joint offsets + DH length errors.
-  std::vector<double> joint_offsets_rad; ///< True joint offsets (rad).
-  std::vector<double> dh_a_errors_mm;    ///< True errors added to the nominal a_i (mm).
-  std::vector<double> dh_d_errors_mm;    ///< True errors added to the nominal d_i (mm).
-  DhChain handling_robot;                ///< ApproximateNachiSc15f().
-  ChairSeat seat;                        ///< The part.
+  DhChain nominal_vision_robot;           ///< core NominalUr5().
+  DhChain true_vision_robot;              ///< Nominal + joint offsets + DH length errors.
+  std::vector<double> joint_offsets_rad;  ///< True joint offsets (rad).
+  std::vector<double> dh_a_errors_mm;     ///< True errors added to the nominal a_i (mm).
+  std::vector<double> dh_d_errors_mm;     ///< True errors added to the nominal d_i (mm).
+  DhChain handling_robot;                 ///< ApproximateNachiSc15f().
+  ChairSeat seat;                         ///< The part.
 
   /// The true frame graph: cell -> vision_base -> (vision_robot) -> vision_flange -> sensor ->
   /// camera, cell -> handling_base -> (handling_robot) -> handling_flange.

@@ -18,18 +18,21 @@ namespace lasercell::datasets {
 void SyntheticScanOptions::Check() const {
   auto non_negative = [](const char* field, double v) {
     if (!(v >= 0.0) || !std::isfinite(v))
-      throw OptionError(std::string("SyntheticScanOptions.") + field + " = " + std::to_string(v) + ": must be >= 0 mm");
+      throw OptionError(std::string("SyntheticScanOptions.") + field + " = " + std::to_string(v) +
+                        ": must be >= 0 mm");
   };
   auto positive = [](const char* field, double v) {
     if (!(v > 0.0) || !std::isfinite(v))
-      throw OptionError(std::string("SyntheticScanOptions.") + field + " = " + std::to_string(v) + ": must be > 0 mm");
+      throw OptionError(std::string("SyntheticScanOptions.") + field + " = " + std::to_string(v) +
+                        ": must be > 0 mm");
   };
   non_negative("noise_sigma_mm", noise_sigma_mm);
   non_negative("clutter_noise_sigma_mm", clutter_noise_sigma_mm);
   positive("zbuffer_cell_mm", zbuffer_cell_mm);
   positive("zbuffer_reference_range_mm", zbuffer_reference_range_mm);
   positive("zbuffer_depth_tolerance_mm", zbuffer_depth_tolerance_mm);
-  if (part_normal_neighbors < 3) throw OptionError("SyntheticScanOptions.part_normal_neighbors must be >= 3");
+  if (part_normal_neighbors < 3)
+    throw OptionError("SyntheticScanOptions.part_normal_neighbors must be >= 3");
 }
 
 Eigen::Isometry3d ReadPoseFile(const std::string& path) {
@@ -50,10 +53,13 @@ Eigen::Isometry3d ReadPoseFile(const std::string& path) {
   return pose;
 }
 
-PointCloud SampleMeshSurface(const TriangleMesh& mesh, double area_per_point_mm2, std::uint64_t seed) {
-  if (!(area_per_point_mm2 > 0.0)) throw InputError("SampleMeshSurface: area_per_point_mm2 must be > 0");
+PointCloud SampleMeshSurface(const TriangleMesh& mesh, double area_per_point_mm2,
+                             std::uint64_t seed) {
+  if (!(area_per_point_mm2 > 0.0))
+    throw InputError("SampleMeshSurface: area_per_point_mm2 must be > 0");
   const auto& v = mesh.vertices;
-  if (v.normals.size() != v.positions.size()) throw InputError("SampleMeshSurface: the mesh has no vertex normals");
+  if (v.normals.size() != v.positions.size())
+    throw InputError("SampleMeshSurface: the mesh has no vertex normals");
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   PointCloud out;
@@ -67,8 +73,9 @@ PointCloud SampleMeshSurface(const TriangleMesh& mesh, double area_per_point_mm2
       double s = u(rng), t = u(rng);
       if (s + t > 1.0) s = 1.0 - s, t = 1.0 - t;  // fold the square onto the triangle
       out.positions.push_back(a + s * (b - a) + t * (c - a));
-      out.normals.push_back(((1 - s - t) * v.normals[f(0)].normalized() + s * v.normals[f(1)].normalized() +
-                             t * v.normals[f(2)].normalized()).normalized());
+      out.normals.push_back(((1 - s - t) * v.normals[f(0)].normalized() +
+                             s * v.normals[f(1)].normalized() + t * v.normals[f(2)].normalized())
+                                .normalized());
     }
   }
   return out;
@@ -85,9 +92,10 @@ PointCloud CutOutModel(const PointCloud& scene, const PointCloud& posed_model, d
   return scene.Subset(keep);
 }
 
-std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, double cell_mm, double depth_tolerance_mm,
-                                           double reference_range_mm) {
-  if (cloud.normals.size() != cloud.positions.size()) throw InputError("VisibleFromOrigin: the cloud needs normals");
+std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, double cell_mm,
+                                           double depth_tolerance_mm, double reference_range_mm) {
+  if (cloud.normals.size() != cloud.positions.size())
+    throw InputError("VisibleFromOrigin: the cloud needs normals");
   const double scale = reference_range_mm / cell_mm;
   auto key = [&](const Eigen::Vector3d& p) {
     const double depth = p.norm();
@@ -104,7 +112,8 @@ std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, double cell_
   std::vector<std::size_t> visible;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d& p = cloud.positions[i];
-    if (cloud.normals[i].dot(-p) > 0.0 && p.norm() <= front.at(key(p)) + depth_tolerance_mm) visible.push_back(i);
+    if (cloud.normals[i].dot(-p) > 0.0 && p.norm() <= front.at(key(p)) + depth_tolerance_mm)
+      visible.push_back(i);
   }
   return visible;
 }
@@ -113,10 +122,12 @@ SyntheticScan RenderSyntheticScan(const PointCloud& clutter, const PointCloud& p
                                   const std::vector<Eigen::Isometry3d>& scene_from_model,
                                   const SyntheticScanOptions& options, std::mt19937_64& rng) {
   options.Check();
-  if (clutter.normals.size() != clutter.positions.size() || part_surface.normals.size() != part_surface.positions.size())
+  if (clutter.normals.size() != clutter.positions.size() ||
+      part_surface.normals.size() != part_surface.positions.size())
     throw InputError("RenderSyntheticScan: clutter and part surface need normals");
   PointCloud part;
-  for (const Eigen::Isometry3d& pose : scene_from_model) part.Append(part_surface.Transformed(pose));
+  for (const Eigen::Isometry3d& pose : scene_from_model)
+    part.Append(part_surface.Transformed(pose));
   // The scanner measures range: noise along the line of sight (the sensor is at the origin).
   if (options.noise_sigma_mm > 0.0) {
     std::normal_distribution<double> g(0.0, options.noise_sigma_mm);
@@ -134,8 +145,9 @@ SyntheticScan RenderSyntheticScan(const PointCloud& clutter, const PointCloud& p
   if (!part.empty()) combined.Append(part);
   const std::size_t n_clutter = clutter_used->size();
   std::vector<std::size_t> visible_clutter, visible_part;
-  for (std::size_t i : VisibleFromOrigin(combined, options.zbuffer_cell_mm, options.zbuffer_depth_tolerance_mm,
-                                         options.zbuffer_reference_range_mm)) {
+  for (std::size_t i :
+       VisibleFromOrigin(combined, options.zbuffer_cell_mm, options.zbuffer_depth_tolerance_mm,
+                         options.zbuffer_reference_range_mm)) {
     if (i < n_clutter) {
       visible_clutter.push_back(i);
     } else {
@@ -167,29 +179,34 @@ SyntheticScan RenderSyntheticScan(const PointCloud& clutter, const PointCloud& p
 Eigen::Isometry3d RandomPose(std::mt19937_64& rng, double half_mm) {
   std::normal_distribution<double> g(0.0, 1.0);
   std::uniform_real_distribution<double> u(-half_mm, half_mm);
-  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));  // normalized Gaussian 4-vector: uniform on SO(3)
+  Eigen::Quaterniond q(g(rng), g(rng), g(rng),
+                       g(rng));  // normalized Gaussian 4-vector: uniform on SO(3)
   q.normalize();
   return PoseFromQuaternion(q, Eigen::Vector3d(u(rng), u(rng), u(rng)));
 }
 
-Eigen::Isometry3d RandomPlacementInRs1(const Eigen::Vector3d& model_centroid, std::mt19937_64& rng) {
+Eigen::Isometry3d RandomPlacementInRs1(const Eigen::Vector3d& model_centroid,
+                                       std::mt19937_64& rng) {
   std::uniform_real_distribution<double> x(-110.0, 70.0), y(-90.0, 90.0), z(-640.0, -600.0);
   Eigen::Isometry3d pose = RandomPose(rng, 0.0);
   pose.translation() = Eigen::Vector3d(x(rng), y(rng), z(rng)) - pose.linear() * model_centroid;
   return pose;
 }
 
-Rs1SyntheticData LoadRs1SyntheticData(const std::string& uwa_dir, const std::string& reference_pose_file) {
+Rs1SyntheticData LoadRs1SyntheticData(const std::string& uwa_dir,
+                                      const std::string& reference_pose_file) {
   const std::string model_path = uwa_dir + "/parasaurolophus_6700.ply";
   const std::string scene_path = uwa_dir + "/rs1_normals.bin.ply";
   for (const std::string& path : {model_path, scene_path, reference_pose_file}) {
-    if (!std::filesystem::is_regular_file(path)) throw FileError(path, "not found (bundled in datasets/real/uwa)");
+    if (!std::filesystem::is_regular_file(path))
+      throw FileError(path, "not found (bundled in datasets/real/uwa)");
   }
   Rs1SyntheticData data;
   data.model = io::ReadPointCloud(model_path);
   data.reference_scene_from_model = ReadPoseFile(reference_pose_file);
   data.part_surface = SampleMeshSurface(io::ReadPlyMesh(model_path), 0.5, 99);
-  data.clutter = CutOutModel(io::ReadPointCloud(scene_path), data.model.Transformed(data.reference_scene_from_model), 8.0);
+  data.clutter = CutOutModel(io::ReadPointCloud(scene_path),
+                             data.model.Transformed(data.reference_scene_from_model), 8.0);
   for (auto& n : data.clutter.normals) n.normalize();
   return data;
 }

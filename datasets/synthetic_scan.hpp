@@ -6,7 +6,8 @@
 // Frames: the scene frame is the scanner's (sensor at the origin, looking down -z, rs1 lies at
 // z ~ -600 mm); poses are scene_from_model. Units: mm. Seeded: the same seed and inputs give the
 // same scan (std::mt19937_64 and the standard distributions, so bit-identical per standard
-// library). Nothing here reads files except LoadRs1SyntheticData, which reads the paths it is given.
+// library). Nothing here reads files except LoadRs1SyntheticData, which reads the paths it is
+// given.
 
 #include <Eigen/Geometry>
 #include <cstddef>
@@ -54,7 +55,8 @@ struct Rs1SyntheticData {
   PointCloud model;         ///< parasaurolophus_6700.ply as shipped (6700 points with normals).
   PointCloud part_surface;  ///< The model's mesh sampled at rs1's density (SampleMeshSurface).
   PointCloud clutter;       ///< rs1 with the real parasaurolophus cut out (unit normals).
-  Eigen::Isometry3d reference_scene_from_model = Eigen::Isometry3d::Identity();  ///< Its pose in rs1.
+  Eigen::Isometry3d reference_scene_from_model =
+      Eigen::Isometry3d::Identity();  ///< Its pose in rs1.
 };
 
 /// Reads a 4x4 row-major pose (16 numbers; lines starting with '#' are comments). Throws
@@ -64,7 +66,8 @@ Eigen::Isometry3d ReadPoseFile(const std::string& path);
 /// Uniform random points on a mesh surface, one per `area_per_point_mm2` on average (stochastic
 /// rounding per face), normals interpolated from the (normalized) vertex normals, which the mesh
 /// must have. Seeded by `seed`.
-PointCloud SampleMeshSurface(const TriangleMesh& mesh, double area_per_point_mm2, std::uint64_t seed);
+PointCloud SampleMeshSurface(const TriangleMesh& mesh, double area_per_point_mm2,
+                             std::uint64_t seed);
 
 /// `scene` without the points within `margin_mm` of `posed_model` (an instance cut out).
 PointCloud CutOutModel(const PointCloud& scene, const PointCloud& posed_model, double margin_mm);
@@ -72,7 +75,8 @@ PointCloud CutOutModel(const PointCloud& scene, const PointCloud& posed_model, d
 /// Perspective z-buffer from the origin: indices of the points that face the origin (normal
 /// toward it) and lie within `depth_tolerance_mm` of the nearest front-facing point of their
 /// angular cell (`cell_mm` wide at `reference_range_mm`). Normals must be present.
-std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, double cell_mm, double depth_tolerance_mm,
+std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, double cell_mm,
+                                           double depth_tolerance_mm,
                                            double reference_range_mm = 600.0);
 
 /// Renders `part_surface` (model frame) at every pose of `scene_from_model` into `clutter`
@@ -101,6 +105,7 @@ Eigen::Isometry3d RandomPlacementInRs1(const Eigen::Vector3d& model_centroid, st
 /// (datasets/real/uwa) and the reference pose file (tests/registration/data/
 /// rs1_parasaurolophus_reference.txt); samples the surface at 0.5 mm^2 per point (seed 99) and
 /// cuts the instance out with an 8 mm margin. Throws FileError for a missing file.
-Rs1SyntheticData LoadRs1SyntheticData(const std::string& uwa_dir, const std::string& reference_pose_file);
+Rs1SyntheticData LoadRs1SyntheticData(const std::string& uwa_dir,
+                                      const std::string& reference_pose_file);
 
 }  // namespace lasercell::datasets

@@ -13,17 +13,19 @@ namespace lasercell::registration {
 
 void PoseClusteringOptions::Check() const {
   if (!(translation_radius_mm > 0.0) || !std::isfinite(translation_radius_mm)) {
-    throw OptionError("PoseClusteringOptions.translation_radius_mm = " + std::to_string(translation_radius_mm) +
-                      ": must be a positive distance in mm");
+    throw OptionError(
+        "PoseClusteringOptions.translation_radius_mm = " + std::to_string(translation_radius_mm) +
+        ": must be a positive distance in mm");
   }
   if (!(rotation_threshold_rad > 0.0 && rotation_threshold_rad <= std::numbers::pi)) {
-    throw OptionError("PoseClusteringOptions.rotation_threshold_rad = " + std::to_string(rotation_threshold_rad) +
-                      ": must be in (0, pi] rad");
+    throw OptionError("PoseClusteringOptions.rotation_threshold_rad = " +
+                      std::to_string(rotation_threshold_rad) + ": must be in (0, pi] rad");
   }
   if (max_clusters < 1) throw OptionError("PoseClusteringOptions.max_clusters must be >= 1");
   if (!(duplicate_radius_mm >= 0.0) || !std::isfinite(duplicate_radius_mm)) {
-    throw OptionError("PoseClusteringOptions.duplicate_radius_mm = " + std::to_string(duplicate_radius_mm) +
-                      ": must be >= 0 mm (0 disables the suppression)");
+    throw OptionError(
+        "PoseClusteringOptions.duplicate_radius_mm = " + std::to_string(duplicate_radius_mm) +
+        ": must be >= 0 mm (0 disables the suppression)");
   }
 }
 
@@ -31,7 +33,8 @@ double QuaternionDistance(const Eigen::Quaterniond& q1, const Eigen::Quaterniond
   return 2.0 * std::acos(std::min(1.0, std::abs(q1.coeffs().dot(q2.coeffs()))));
 }
 
-ClusteringResult ClusterPoses(std::span<const PoseHypothesis> hypotheses, const PoseClusteringOptions& options) {
+ClusteringResult ClusterPoses(std::span<const PoseHypothesis> hypotheses,
+                              const PoseClusteringOptions& options) {
   options.Check();
   ClusteringResult result;
   const std::size_t n = hypotheses.size();
@@ -45,8 +48,9 @@ ClusteringResult ClusterPoses(std::span<const PoseHypothesis> hypotheses, const 
   }
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](std::size_t a, std::size_t b) { return hypotheses[a].votes > hypotheses[b].votes; });
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return hypotheses[a].votes > hypotheses[b].votes;
+  });
 
   const KdTree tree(translations);
   std::vector<bool> assigned(n, false);
@@ -65,7 +69,9 @@ ClusteringResult ClusterPoses(std::span<const PoseHypothesis> hypotheses, const 
     member_votes.clear();
     for (const Neighbor& h : hits) {
       if (assigned[h.index]) continue;
-      if (h.index != seed && QuaternionDistance(rotations[seed], rotations[h.index]) >= options.rotation_threshold_rad) continue;
+      if (h.index != seed &&
+          QuaternionDistance(rotations[seed], rotations[h.index]) >= options.rotation_threshold_rad)
+        continue;
       assigned[h.index] = true;
       cluster.score += hypotheses[h.index].votes;
       ++cluster.members;
@@ -84,7 +90,8 @@ ClusteringResult ClusterPoses(std::span<const PoseHypothesis> hypotheses, const 
     for (std::size_t j = 0; j < i && options.duplicate_radius_mm > 0.0; ++j) {
       const PoseCluster& better = result.clusters[j];
       if (better.suppressed_by >= 0) continue;
-      if ((better.scene_from_centered.translation() - c.scene_from_centered.translation()).norm() < options.duplicate_radius_mm) {
+      if ((better.scene_from_centered.translation() - c.scene_from_centered.translation()).norm() <
+          options.duplicate_radius_mm) {
         c.suppressed_by = static_cast<int>(j);
         break;
       }

@@ -37,10 +37,10 @@ struct PoseClusteringOptions {
 /// One cluster of hypotheses.
 struct PoseCluster {
   Eigen::Isometry3d scene_from_centered = Eigen::Isometry3d::Identity();  ///< Weighted mean pose.
-  double score = 0.0;            ///< Sum of member votes.
-  double seed_votes = 0.0;       ///< Votes of the seed (the best member).
-  std::size_t members = 0;       ///< Hypotheses in the cluster.
-  std::size_t seed = 0;          ///< Index of the seed hypothesis.
+  double score = 0.0;                                                     ///< Sum of member votes.
+  double seed_votes = 0.0;  ///< Votes of the seed (the best member).
+  std::size_t members = 0;  ///< Hypotheses in the cluster.
+  std::size_t seed = 0;     ///< Index of the seed hypothesis.
   /// -1 when kept; otherwise index (into ClusteringResult::clusters) of the better cluster
   /// that suppressed it as a different orientation at the same place.
   int suppressed_by = -1;
@@ -53,7 +53,8 @@ struct ClusteringResult {
 };
 
 /// Skotheim IV-E clustering. Deterministic: ties in votes are broken by hypothesis index.
-ClusteringResult ClusterPoses(std::span<const PoseHypothesis> hypotheses, const PoseClusteringOptions& options);
+ClusteringResult ClusterPoses(std::span<const PoseHypothesis> hypotheses,
+                              const PoseClusteringOptions& options);
 
 /// theta = 2 acos(|<q1, q2>|), rad in [0, pi] (Skotheim IV-E).
 double QuaternionDistance(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2);

@@ -16,7 +16,9 @@ namespace {
 // the order in which unions happen.
 class DisjointSets {
  public:
-  explicit DisjointSets(std::size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0U); }
+  explicit DisjointSets(std::size_t n) : parent_(n) {
+    std::iota(parent_.begin(), parent_.end(), 0U);
+  }
   std::uint32_t Find(std::uint32_t i) {
     while (parent_[i] != i) {
       parent_[i] = parent_[parent_[i]];
@@ -28,7 +30,10 @@ class DisjointSets {
     a = Find(a);
     b = Find(b);
     if (a == b) return;
-    if (a < b) parent_[b] = a; else parent_[a] = b;
+    if (a < b)
+      parent_[b] = a;
+    else
+      parent_[a] = b;
   }
 
  private:
@@ -150,9 +155,11 @@ ClusterFilterResult RemoveSmallClusters(const PointCloud& cloud,
           const int r = r0 + dr;
           const int c = c0 + dc;
           if (r >= cloud.grid_rows || c < 0 || c >= cloud.grid_cols) continue;
-          const std::int32_t j = cell[static_cast<std::size_t>(r) * cols + static_cast<std::size_t>(c)];
+          const std::int32_t j =
+              cell[static_cast<std::size_t>(r) * cols + static_cast<std::size_t>(c)];
           if (j < 0) continue;
-          if ((cloud.positions[i] - cloud.positions[static_cast<std::size_t>(j)]).squaredNorm() <= radius_sq) {
+          if ((cloud.positions[i] - cloud.positions[static_cast<std::size_t>(j)]).squaredNorm() <=
+              radius_sq) {
             sets.Union(static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j));
           }
         }
@@ -215,7 +222,8 @@ PointCloud VoxelGridDownsample(const PointCloud& cloud, const VoxelGridOptions& 
                               (static_cast<std::uint64_t>(c.y()) << 21) |
                               static_cast<std::uint64_t>(c.z());
     bool inserted = false;
-    const std::uint32_t id = map.FindOrInsert(key, static_cast<std::uint32_t>(count.size()), &inserted);
+    const std::uint32_t id =
+        map.FindOrInsert(key, static_cast<std::uint32_t>(count.size()), &inserted);
     if (inserted) {
       sum_p.push_back(Eigen::Vector3d::Zero());
       sum_n.push_back(Eigen::Vector3d::Zero());
@@ -236,8 +244,10 @@ PointCloud VoxelGridDownsample(const PointCloud& cloud, const VoxelGridOptions& 
   if (has_normals && options.normal_mode == VoxelNormalMode::kAverage) {
     for (std::size_t v = 0; v < voxels; ++v) {
       const double length = sum_n[v].norm();
-      if (length / count[v] < options.min_normal_coherence || length == 0.0) keep[v] = false;
-      else normal[v] = sum_n[v] / length;
+      if (length / count[v] < options.min_normal_coherence || length == 0.0)
+        keep[v] = false;
+      else
+        normal[v] = sum_n[v] / length;
     }
   } else if (has_normals) {
     // Carry the dense normal of the point nearest the centroid (seed: normals are estimated on

@@ -40,11 +40,11 @@ struct ClusterFilterOptions {
 
 /// What RemoveSmallClusters found.
 struct ClusterFilterResult {
-  std::vector<std::int32_t> labels;   ///< Component id per input point (ids by first point).
-  std::vector<std::size_t> kept;      ///< Indices of points in large-enough components, ascending.
-  std::size_t components = 0;         ///< Number of connected components.
-  std::size_t removed_components = 0; ///< Components smaller than min_cluster_size.
-  bool used_grid = false;             ///< True when grid adjacency was used.
+  std::vector<std::int32_t> labels;    ///< Component id per input point (ids by first point).
+  std::vector<std::size_t> kept;       ///< Indices of points in large-enough components, ascending.
+  std::size_t components = 0;          ///< Number of connected components.
+  std::size_t removed_components = 0;  ///< Components smaller than min_cluster_size.
+  bool used_grid = false;              ///< True when grid adjacency was used.
 };
 
 /// Connected components by radius (kd-tree) or by grid adjacency on organized clouds, and the
@@ -61,7 +61,7 @@ enum class VoxelNormalMode {
 
 /// Options for VoxelGridDownsample.
 struct VoxelGridOptions {
-  double voxel_size_mm = 1.0;  ///< Edge of the cubic voxels, mm (> 0).
+  double voxel_size_mm = 1.0;                               ///< Edge of the cubic voxels, mm (> 0).
   VoxelNormalMode normal_mode = VoxelNormalMode::kAverage;  ///< Ignored when input has no normals.
   /// With kAverage: drop voxels whose mean normal is shorter than this (normals disagree, e.g.
   /// on a sharp edge); 0 keeps every voxel. In [0, 1].

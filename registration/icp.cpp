@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "core/error.hpp"
-#include "core/se3.hpp"
 #include "core/parallel.hpp"
+#include "core/se3.hpp"
 
 namespace lasercell::registration {
 namespace {
@@ -30,8 +30,10 @@ struct Match {
 double Weight(RobustKernel kernel, double r, double sigma) {
   const double a = std::abs(r);
   switch (kernel) {
-    case RobustKernel::kNone: return 1.0;
-    case RobustKernel::kHuber: return a <= 1.345 * sigma ? 1.0 : 1.345 * sigma / a;
+    case RobustKernel::kNone:
+      return 1.0;
+    case RobustKernel::kHuber:
+      return a <= 1.345 * sigma ? 1.0 : 1.345 * sigma / a;
     case RobustKernel::kTukey: {
       const double c = 4.685 * sigma;
       if (a >= c) return 0.0;
@@ -49,9 +51,9 @@ double Weight(RobustKernel kernel, double r, double sigma) {
 
 // Sums over one chunk of correspondences (both metrics' statistics; only one is used).
 struct Partial {
-  Matrix6d h = Matrix6d::Zero();      // point-to-plane normal equations
+  Matrix6d h = Matrix6d::Zero();  // point-to-plane normal equations
   Vector6d b = Vector6d::Zero();
-  double w = 0.0;                     // point-to-point weighted moments about the centroid c
+  double w = 0.0;  // point-to-point weighted moments about the centroid c
   Eigen::Vector3d sum_a = Eigen::Vector3d::Zero(), sum_b = Eigen::Vector3d::Zero();
   Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
 };
@@ -60,10 +62,13 @@ struct Partial {
 
 void IcpOptions::Check() const {
   auto positive = [](double v, const char* field) {
-    if (!(v > 0.0) || !std::isfinite(v)) throw OptionError(std::string("IcpOptions.") + field + " = " + std::to_string(v) + ": must be > 0");
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw OptionError(std::string("IcpOptions.") + field + " = " + std::to_string(v) +
+                        ": must be > 0");
   };
   if (!(kernel_scale_mm >= 0.0) || !std::isfinite(kernel_scale_mm)) {
-    throw OptionError("IcpOptions.kernel_scale_mm = " + std::to_string(kernel_scale_mm) + ": must be >= 0 mm (0 = from MAD)");
+    throw OptionError("IcpOptions.kernel_scale_mm = " + std::to_string(kernel_scale_mm) +
+                      ": must be >= 0 mm (0 = from MAD)");
   }
   positive(min_kernel_scale_mm, "min_kernel_scale_mm");
   positive(max_correspondence_distance_mm, "max_correspondence_distance_mm");
@@ -75,18 +80,21 @@ void IcpOptions::Check() const {
 
 const char* ToString(IcpTermination t) {
   switch (t) {
-    case IcpTermination::kConverged: return "converged";
-    case IcpTermination::kMaxIterations: return "max_iterations";
-    case IcpTermination::kTooFewCorrespondences: return "too_few_correspondences";
+    case IcpTermination::kConverged:
+      return "converged";
+    case IcpTermination::kMaxIterations:
+      return "max_iterations";
+    case IcpTermination::kTooFewCorrespondences:
+      return "too_few_correspondences";
   }
   return "unknown";
 }
 
 std::string IcpResult::Summary() const {
   std::ostringstream s;
-  s << ToString(termination) << " after " << iterations << " iterations: rmse " << rmse_mm << " mm (point "
-    << point_rmse_mm << " mm), " << inliers << "/" << correspondences << " inliers, sigma " << kernel_scale_mm << " mm"
-    << (degenerate ? ", degenerate" : "");
+  s << ToString(termination) << " after " << iterations << " iterations: rmse " << rmse_mm
+    << " mm (point " << point_rmse_mm << " mm), " << inliers << "/" << correspondences
+    << " inliers, sigma " << kernel_scale_mm << " mm" << (degenerate ? ", degenerate" : "");
   return s.str();
 }
 
@@ -97,14 +105,16 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
   const bool plane = options.metric == IcpMetric::kPointToPlane;
   if (plane && target_normals.size() != target.size()) {
     throw InputError("AlignIcp: point-to-plane needs one target normal per target point (" +
-                     std::to_string(target_normals.size()) + " normals for " + std::to_string(target.size()) + " points)");
+                     std::to_string(target_normals.size()) + " normals for " +
+                     std::to_string(target.size()) + " points)");
   }
   IcpResult result;
   result.target_from_source = initial_target_from_source;
   const std::size_t n = source.size();
   std::vector<Match> matches(n);
   std::vector<Eigen::Vector3d> moved(n);
-  const double max_sq = options.max_correspondence_distance_mm * options.max_correspondence_distance_mm;
+  const double max_sq =
+      options.max_correspondence_distance_mm * options.max_correspondence_distance_mm;
   const auto& target_points = target.points();
 
   // Nearest target point and residual for every source point at the current pose.
@@ -117,7 +127,8 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
         m.valid = target.Nearest(moved[i], &nn) && nn.distance_sq <= max_sq;
         if (!m.valid) continue;
         m.target = nn.index;
-        m.residual = plane ? target_normals[nn.index].dot(moved[i] - target_points[nn.index]) : std::sqrt(nn.distance_sq);
+        m.residual = plane ? target_normals[nn.index].dot(moved[i] - target_points[nn.index])
+                           : std::sqrt(nn.distance_sq);
       }
     });
     std::vector<double> abs_r;
@@ -148,7 +159,10 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
     std::size_t valid = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      if (matches[i].valid) { c += moved[i]; ++valid; }
+      if (matches[i].valid) {
+        c += moved[i];
+        ++valid;
+      }
     }
     c /= static_cast<double>(valid);
 
@@ -228,7 +242,8 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
     ++result.iterations;
     // Step size: motion of the linearization centre (the source centroid) and the turn.
     const double turned = Eigen::AngleAxisd(d_rot).angle();
-    if (d_trans.norm() < options.translation_tolerance_mm && turned < options.rotation_tolerance_rad) {
+    if (d_trans.norm() < options.translation_tolerance_mm &&
+        turned < options.rotation_tolerance_rad) {
       result.termination = IcpTermination::kConverged;
       break;
     }

@@ -56,14 +56,14 @@ struct IcpResult {
   Eigen::Isometry3d target_from_source = Eigen::Isometry3d::Identity();
   bool converged = false;
   IcpTermination termination = IcpTermination::kMaxIterations;
-  int iterations = 0;                 ///< Pose updates applied.
-  std::size_t correspondences = 0;    ///< Source points with a target point within max distance.
-  std::size_t inliers = 0;            ///< Correspondences with |r| <= 3 sigma.
-  double inlier_fraction = 0.0;       ///< inliers / source points.
-  double rmse_mm = 0.0;               ///< RMS of the metric's residual over inliers.
-  double point_rmse_mm = 0.0;         ///< RMS nearest-neighbour distance over inliers.
-  double kernel_scale_mm = 0.0;       ///< Final sigma.
-  bool degenerate = false;            ///< The last step was rank-deficient (e.g. a plane).
+  int iterations = 0;               ///< Pose updates applied.
+  std::size_t correspondences = 0;  ///< Source points with a target point within max distance.
+  std::size_t inliers = 0;          ///< Correspondences with |r| <= 3 sigma.
+  double inlier_fraction = 0.0;     ///< inliers / source points.
+  double rmse_mm = 0.0;             ///< RMS of the metric's residual over inliers.
+  double point_rmse_mm = 0.0;       ///< RMS nearest-neighbour distance over inliers.
+  double kernel_scale_mm = 0.0;     ///< Final sigma.
+  bool degenerate = false;          ///< The last step was rank-deficient (e.g. a plane).
   /// One line, e.g. "converged after 7 iterations: rmse 0.41 mm, 812/903 inliers".
   std::string Summary() const;
 };
@@ -75,6 +75,7 @@ const char* ToString(IcpTermination termination);
 /// order, required for point-to-plane) starting from `initial_target_from_source`.
 IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target,
                    std::span<const Eigen::Vector3d> target_normals,
-                   const Eigen::Isometry3d& initial_target_from_source, const IcpOptions& options = {});
+                   const Eigen::Isometry3d& initial_target_from_source,
+                   const IcpOptions& options = {});
 
 }  // namespace lasercell::registration

@@ -31,7 +31,8 @@ using NanoTree = nanoflann::KDTreeSingleIndexAdaptor<
 // Result set writing straight into a Neighbor vector (avoids nanoflann's pair vector).
 class RadiusCollector {
  public:
-  RadiusCollector(double radius_sq, std::vector<Neighbor>* out) : radius_sq_(radius_sq), out_(out) {}
+  RadiusCollector(double radius_sq, std::vector<Neighbor>* out)
+      : radius_sq_(radius_sq), out_(out) {}
   std::size_t size() const { return out_->size(); }
   bool full() const { return true; }
   bool addPoint(double distance_sq, std::uint32_t index) {
@@ -39,7 +40,9 @@ class RadiusCollector {
     return true;
   }
   // nanoflann keeps a point only when strictly nearer than worstDist(): make the radius inclusive.
-  double worstDist() const { return std::nextafter(radius_sq_, std::numeric_limits<double>::max()); }
+  double worstDist() const {
+    return std::nextafter(radius_sq_, std::numeric_limits<double>::max());
+  }
 
  private:
   double radius_sq_;
@@ -85,7 +88,8 @@ struct KdTree::Index {
   NanoTree tree;
   Index(const std::vector<Eigen::Vector3d>& points, int leaf_size)
       : adaptor{points.data(), points.size()},
-        tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(static_cast<std::size_t>(leaf_size))) {
+        tree(3, adaptor,
+             nanoflann::KDTreeSingleIndexAdaptorParams(static_cast<std::size_t>(leaf_size))) {
     tree.buildIndex();
   }
 };

@@ -25,8 +25,9 @@ void CheckSizes(const PointCloud& scene) {
   const std::size_t n = scene.size();
   auto check = [&](std::size_t size, const char* name) {
     if (size != 0 && size != n) {
-      throw InputError(std::string("LocalizeInCloud scene: attribute '") + name + "' has " + std::to_string(size) +
-                       " values for " + std::to_string(n) + " points; every attribute must be empty or one per point");
+      throw InputError(std::string("LocalizeInCloud scene: attribute '") + name + "' has " +
+                       std::to_string(size) + " values for " + std::to_string(n) +
+                       " points; every attribute must be empty or one per point");
     }
   };
   check(scene.normals.size(), "normals");
@@ -43,7 +44,8 @@ PointCloud CleanScene(const PointCloud& scene, std::size_t* dropped) {
   keep.reserve(scene.size());
   for (std::size_t i = 0; i < scene.size(); ++i) {
     if (!scene.positions[i].allFinite()) continue;
-    if (scene.HasNormals() && !(scene.normals[i].allFinite() && scene.normals[i].norm() > 1e-12)) continue;
+    if (scene.HasNormals() && !(scene.normals[i].allFinite() && scene.normals[i].norm() > 1e-12))
+      continue;
     keep.push_back(i);
   }
   *dropped = scene.size() - keep.size();
@@ -54,7 +56,8 @@ PointCloud CleanScene(const PointCloud& scene, std::size_t* dropped) {
 
 // Evenly spaced subset of at most `limit` indices (deterministic thinning of the ICP source).
 std::vector<Eigen::Vector3d> ThinnedPoints(const std::vector<Eigen::Vector3d>& points,
-                                           const std::vector<std::uint32_t>& indices, std::size_t limit) {
+                                           const std::vector<std::uint32_t>& indices,
+                                           std::size_t limit) {
   std::vector<Eigen::Vector3d> out;
   const std::size_t n = indices.size();
   const std::size_t m = std::min(n, limit);
@@ -65,7 +68,8 @@ std::vector<Eigen::Vector3d> ThinnedPoints(const std::vector<Eigen::Vector3d>& p
 
 // One point per occupied cubic cell of edge `cell_mm`: the first in input order (deterministic).
 // Every input point then has a kept point within sqrt(3) x cell_mm, wherever the cells fall.
-std::vector<Eigen::Vector3d> SpatiallyThinned(const std::vector<Eigen::Vector3d>& points, double cell_mm) {
+std::vector<Eigen::Vector3d> SpatiallyThinned(const std::vector<Eigen::Vector3d>& points,
+                                              double cell_mm) {
   struct KeyHash {
     std::size_t operator()(const std::array<std::int64_t, 3>& k) const {
       return static_cast<std::size_t>((static_cast<std::uint64_t>(k[0]) * 73856093ULL) ^
@@ -98,14 +102,16 @@ struct RefineContext {
   LocalizationTimings* timings;
 };
 
-LocalizationCandidate CandidateFromCluster(const ClusteringResult& clustering, std::size_t index, const PpfModel& model) {
+LocalizationCandidate CandidateFromCluster(const ClusteringResult& clustering, std::size_t index,
+                                           const PpfModel& model) {
   const PoseCluster& cluster = clustering.clusters[index];
   LocalizationCandidate candidate;
   candidate.cluster = index;
   candidate.votes = cluster.seed_votes;
   candidate.score = cluster.score;
   candidate.cluster_members = cluster.members;
-  candidate.coarse_scene_from_model = cluster.scene_from_centered * model.model_from_centered().inverse();
+  candidate.coarse_scene_from_model =
+      cluster.scene_from_centered * model.model_from_centered().inverse();
   candidate.scene_from_model = candidate.coarse_scene_from_model;
   return candidate;
 }
@@ -113,29 +119,36 @@ LocalizationCandidate CandidateFromCluster(const ClusteringResult& clustering, s
 // Skotheim IV-G, repeated: ICP on the scene points the projection grid selects around the current
 // pose, then a new selection around the refined pose (so clutter picked up by a coarse pose drops
 // out), then the final verification with the tighter support distance.
-void Refine(const RefineContext& ctx, std::vector<std::uint32_t> overlap, LocalizationCandidate* candidate) {
+void Refine(const RefineContext& ctx, std::vector<std::uint32_t> overlap,
+            LocalizationCandidate* candidate) {
   const PpfModel& model = ctx.model;
   const LocalizeOptions& options = ctx.options;
   int iterations = 0;
   for (int round = 0; round < options.icp_rounds; ++round) {
     auto t = Clock::now();
     if (round > 0) {
-      VerifyPose(ctx.points, model, candidate->scene_from_model, options.viewpoint, ctx.refined, &overlap);
+      VerifyPose(ctx.points, model, candidate->scene_from_model, options.viewpoint, ctx.refined,
+                 &overlap);
       ctx.timings->verification_ms += MillisecondsSince(t);
       t = Clock::now();
     }
-    const std::vector<Eigen::Vector3d> source = ThinnedPoints(ctx.points, overlap, options.max_icp_source_points);
-    const Eigen::Isometry3d centered_from_scene = (candidate->scene_from_model * model.model_from_centered()).inverse();
-    candidate->icp = AlignIcp(source, model.refinement_tree(), model.refinement_normals(), centered_from_scene, options.icp);
+    const std::vector<Eigen::Vector3d> source =
+        ThinnedPoints(ctx.points, overlap, options.max_icp_source_points);
+    const Eigen::Isometry3d centered_from_scene =
+        (candidate->scene_from_model * model.model_from_centered()).inverse();
+    candidate->icp = AlignIcp(source, model.refinement_tree(), model.refinement_normals(),
+                              centered_from_scene, options.icp);
     candidate->icp_run = true;
     iterations += candidate->icp.iterations;
     ctx.timings->icp_ms += MillisecondsSince(t);
     if (candidate->icp.termination == IcpTermination::kTooFewCorrespondences) break;
-    candidate->scene_from_model = candidate->icp.target_from_source.inverse() * model.model_from_centered().inverse();
+    candidate->scene_from_model =
+        candidate->icp.target_from_source.inverse() * model.model_from_centered().inverse();
   }
   candidate->icp.iterations = iterations;
   const auto t = Clock::now();
-  candidate->verification = VerifyPose(ctx.points, model, candidate->scene_from_model, options.viewpoint, ctx.refined);
+  candidate->verification =
+      VerifyPose(ctx.points, model, candidate->scene_from_model, options.viewpoint, ctx.refined);
   ctx.timings->verification_ms += MillisecondsSince(t);
 }
 
@@ -147,7 +160,8 @@ LocalizeOptions DerivedOptions(const LocalizeOptions& options_in, const PpfModel
     options.clustering.translation_radius_mm = options.cluster_radius_relative * diameter;
     options.clustering.duplicate_radius_mm = options.cluster_radius_relative * diameter;
   }
-  if (options.support_distance_relative > 0.0) options.verification.support_distance_mm = options.support_distance_relative * diameter;
+  if (options.support_distance_relative > 0.0)
+    options.verification.support_distance_mm = options.support_distance_relative * diameter;
   if (options.icp_max_distance_relative > 0.0) {
     options.icp.max_correspondence_distance_mm = options.icp_max_distance_relative * diameter;
     options.verification.overlap_band_mm = options.icp.max_correspondence_distance_mm;
@@ -164,7 +178,8 @@ PointCloud PreprocessScene(const PointCloud& scene_in, const LocalizeOptions& op
   auto t = Clock::now();
   PointCloud scene = CleanScene(scene_in, &result->dropped_points);
   if (options.use_roi) scene = CropBox(scene, options.roi, options.roi_from_scene);
-  if (options.remove_small_clusters && !scene.empty()) scene = scene.Subset(RemoveSmallClusters(scene, options.cluster_filter).kept);
+  if (options.remove_small_clusters && !scene.empty())
+    scene = scene.Subset(RemoveSmallClusters(scene, options.cluster_filter).kept);
   result->timings.preprocess_ms = MillisecondsSince(t);
   ReportProgress(options.progress, "preprocess", 1.0);
 
@@ -190,8 +205,11 @@ ClusteringResult MatchAndCluster(const PointCloud& scene, const PpfModel& model,
                                  const LocalizeOptions& options, LocalizationResult* result) {
   auto t = Clock::now();
   VoxelGridOptions voxel;
-  voxel.voxel_size_mm = options.scene_sampling_step_mm > 0.0 ? options.scene_sampling_step_mm : model.sampling_step_mm();
-  voxel.normal_mode = options.scene_normal_mode == VoxelNormalMode::kNone ? VoxelNormalMode::kAverage : options.scene_normal_mode;
+  voxel.voxel_size_mm = options.scene_sampling_step_mm > 0.0 ? options.scene_sampling_step_mm
+                                                             : model.sampling_step_mm();
+  voxel.normal_mode = options.scene_normal_mode == VoxelNormalMode::kNone
+                          ? VoxelNormalMode::kAverage
+                          : options.scene_normal_mode;
   PointCloud sampled = VoxelGridDownsample(scene, voxel);
   result->sampled_points = sampled.size();
   result->timings.subsample_ms = MillisecondsSince(t);
@@ -239,7 +257,8 @@ std::vector<Pending> CoarseBatch(const RefineContext& ctx, const ClusteringResul
                    options.verification, &p.overlap);
     p.candidate.verification = p.candidate.coarse_verification;
     if (!p.candidate.coarse_verification.accepted) {
-      p.candidate.rejection_reason = "before ICP: " + p.candidate.coarse_verification.rejection_reason;
+      p.candidate.rejection_reason =
+          "before ICP: " + p.candidate.coarse_verification.rejection_reason;
       result->rejected.push_back(std::move(p.candidate));
       return false;
     }
@@ -287,7 +306,8 @@ std::vector<LocalizationCandidate> VerifyAndRefine(const RefineContext& ctx,
         CoarseBatch(ctx, clustering, batch_size, &next_cluster, &examined, result);
     result->timings.verification_ms += MillisecondsSince(t);
     if (batch.empty()) break;
-    for (const Pending& p : batch) best_coarse_support = std::max(best_coarse_support, p.candidate.coarse_verification.support);
+    for (const Pending& p : batch)
+      best_coarse_support = std::max(best_coarse_support, p.candidate.coarse_verification.support);
     std::size_t primary_rank = 0;
     for (Pending& p : batch) {
       LocalizationCandidate& candidate = p.candidate;
@@ -296,9 +316,11 @@ std::vector<LocalizationCandidate> VerifyAndRefine(const RefineContext& ctx,
         refined.push_back(std::move(candidate));
         continue;
       }
-      if (!always && candidate.coarse_verification.support < options.extra_refined_min_relative_support * best_coarse_support) {
-        candidate.rejection_reason = "coarse support " + std::to_string(candidate.coarse_verification.support) +
-                                     " far below the best " + std::to_string(best_coarse_support) + " (not refined)";
+      if (!always && candidate.coarse_verification.support <
+                         options.extra_refined_min_relative_support * best_coarse_support) {
+        candidate.rejection_reason =
+            "coarse support " + std::to_string(candidate.coarse_verification.support) +
+            " far below the best " + std::to_string(best_coarse_support) + " (not refined)";
         result->rejected.push_back(std::move(candidate));
         continue;
       }
@@ -323,28 +345,34 @@ void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& 
                                std::to_string(var(2) / var(0)) +
                                "): rotations about its normal are not observable";
   }
-  std::stable_sort(refined.begin(), refined.end(), [](const LocalizationCandidate& a, const LocalizationCandidate& b) {
-    if (a.verification.accepted != b.verification.accepted) return a.verification.accepted;
-    if (a.verification.support != b.verification.support) return a.verification.support > b.verification.support;
-    return a.score > b.score;
-  });
+  std::stable_sort(refined.begin(), refined.end(),
+                   [](const LocalizationCandidate& a, const LocalizationCandidate& b) {
+                     if (a.verification.accepted != b.verification.accepted)
+                       return a.verification.accepted;
+                     if (a.verification.support != b.verification.support)
+                       return a.verification.support > b.verification.support;
+                     return a.score > b.score;
+                   });
   const double same_place_mm = options.clustering.duplicate_radius_mm;
   for (LocalizationCandidate& candidate : refined) {
     if (!candidate.verification.accepted) {
-      candidate.rejection_reason = (candidate.icp_run ? "after ICP: " : "") + candidate.verification.rejection_reason;
+      candidate.rejection_reason =
+          (candidate.icp_run ? "after ICP: " : "") + candidate.verification.rejection_reason;
       result->rejected.push_back(std::move(candidate));
       continue;
     }
     const LocalizationCandidate* same_place = nullptr;
     for (const LocalizationCandidate& kept : result->candidates) {
       if (TranslationDistance(kept.scene_from_model * model.model_from_centered(),
-                              candidate.scene_from_model * model.model_from_centered()) < same_place_mm) {
+                              candidate.scene_from_model * model.model_from_centered()) <
+          same_place_mm) {
         same_place = &kept;
         break;
       }
     }
     if (same_place != nullptr) {
-      const double turn = RotationDistance(same_place->scene_from_model, candidate.scene_from_model);
+      const double turn =
+          RotationDistance(same_place->scene_from_model, candidate.scene_from_model);
       if (!result->ambiguous && turn > options.clustering.rotation_threshold_rad &&
           candidate.verification.support >=
               options.ambiguity_score_ratio * same_place->verification.support) {
@@ -354,7 +382,8 @@ void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& 
                                    std::to_string(same_place->verification.support) + " and " +
                                    std::to_string(candidate.verification.support);
       }
-      candidate.rejection_reason = "duplicate of rank " + std::to_string(same_place->rank) + " (same place after ICP)";
+      candidate.rejection_reason =
+          "duplicate of rank " + std::to_string(same_place->rank) + " (same place after ICP)";
       result->rejected.push_back(std::move(candidate));
       continue;
     }
@@ -522,7 +551,8 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
 }
 
 LocalizationResult LocalizeInCloud(const PointCloud& scene, const PointCloud& model_cloud,
-                                   const PpfModelOptions& model_options, const LocalizeOptions& options) {
+                                   const PpfModelOptions& model_options,
+                                   const LocalizeOptions& options) {
   return LocalizeInCloud(scene, PpfModel::Build(model_cloud, model_options), options);
 }
 

@@ -42,11 +42,11 @@ struct LocalizeOptions {
   ProgressCallback progress;
 
   // Step 1: region of interest and small-cluster removal.
-  bool use_roi = false;                                          ///< Crop to `roi` first.
-  BoundingBox roi;                                               ///< Box in the roi frame, mm.
+  bool use_roi = false;                                              ///< Crop to `roi` first.
+  BoundingBox roi;                                                   ///< Box in the roi frame, mm.
   Eigen::Isometry3d roi_from_scene = Eigen::Isometry3d::Identity();  ///< Frame of the box.
-  bool remove_small_clusters = false;                            ///< Connected-component filter.
-  ClusterFilterOptions cluster_filter;                           ///< Its parameters.
+  bool remove_small_clusters = false;   ///< Connected-component filter.
+  ClusterFilterOptions cluster_filter;  ///< Its parameters.
 
   // Step 2: normals.
   bool recompute_normals = false;  ///< Estimate normals even when the scene has them.
@@ -62,14 +62,15 @@ struct LocalizeOptions {
   // Steps 4-5: voting and clustering.
   PpfMatchOptions matching;
   PoseClusteringOptions clustering;
-  double cluster_radius_relative = 0.1;  ///< -> clustering.translation_radius_mm and duplicate_radius_mm.
+  double cluster_radius_relative =
+      0.1;  ///< -> clustering.translation_radius_mm and duplicate_radius_mm.
 
   // Step 6: verification (coarse pose, before ICP) and after ICP.
   VerificationOptions verification;
-  double support_distance_relative = 0.02;          ///< -> verification.support_distance_mm (coarse).
-  double refined_support_distance_relative = 0.008; ///< Support distance after ICP (> 0).
-  double refined_min_support = 0.4;                 ///< Minimum support after ICP, fraction.
-  std::size_t max_verified_clusters = 12;           ///< Kept clusters examined at most, best score first.
+  double support_distance_relative = 0.02;  ///< -> verification.support_distance_mm (coarse).
+  double refined_support_distance_relative = 0.008;  ///< Support distance after ICP (> 0).
+  double refined_min_support = 0.4;                  ///< Minimum support after ICP, fraction.
+  std::size_t max_verified_clusters = 12;  ///< Kept clusters examined at most, best score first.
   /// The scene used for verification and as ICP source keeps one point per cubic cell whose edge
   /// is this fraction of the refined support distance (0 = every point). Dense scans carry far
   /// more points than the support test needs; thinning in space (not by index, which leaves
@@ -81,12 +82,14 @@ struct LocalizeOptions {
   // Step 7: ICP.
   bool run_icp = true;
   IcpOptions icp;
-  double icp_max_distance_relative = 0.03;  ///< -> icp.max_correspondence_distance_mm and overlap band.
+  double icp_max_distance_relative =
+      0.03;  ///< -> icp.max_correspondence_distance_mm and overlap band.
   /// ICP rounds; each round after the first re-selects the overlapping scene points around the
   /// refined pose (clutter selected by a coarse pose drops out). In [1, 10].
   int icp_rounds = 2;
-  std::size_t max_icp_source_points = 1500; ///< Grid-selected scene points are thinned to this (>= 10).
-  std::size_t extra_refined_candidates = 2; ///< Refine max_instances + this many candidates...
+  std::size_t max_icp_source_points =
+      1500;  ///< Grid-selected scene points are thinned to this (>= 10).
+  std::size_t extra_refined_candidates = 2;  ///< Refine max_instances + this many candidates...
   /// ... but the extra ones only with coarse support >= this fraction of the best coarse support.
   double extra_refined_min_relative_support = 0.5;
 
@@ -108,24 +111,24 @@ struct LocalizationCandidate {
   int rank = 0;  ///< 1 = best; 0 for rejected candidates.
   Eigen::Isometry3d scene_from_model = Eigen::Isometry3d::Identity();         ///< Final pose.
   Eigen::Isometry3d coarse_scene_from_model = Eigen::Isometry3d::Identity();  ///< From clustering.
-  double votes = 0.0;               ///< Votes of the cluster's best hypothesis.
-  double score = 0.0;               ///< Cluster score (sum of member votes).
-  std::size_t cluster_members = 0;  ///< Hypotheses in the cluster.
-  std::size_t cluster = 0;          ///< Index into the (score-ordered) clustering output.
+  double votes = 0.0;                      ///< Votes of the cluster's best hypothesis.
+  double score = 0.0;                      ///< Cluster score (sum of member votes).
+  std::size_t cluster_members = 0;         ///< Hypotheses in the cluster.
+  std::size_t cluster = 0;                 ///< Index into the (score-ordered) clustering output.
   VerificationResult coarse_verification;  ///< Before ICP.
   VerificationResult verification;         ///< After ICP (the coarse one when ICP did not run).
   bool icp_run = false;
   IcpResult icp;  ///< Last ICP round (iterations summed over rounds); valid when icp_run.
-  std::string rejection_reason;            ///< Why it was rejected; empty for ranked candidates.
+  std::string rejection_reason;  ///< Why it was rejected; empty for ranked candidates.
 };
 
 /// Wall time per stage, milliseconds.
 struct LocalizationTimings {
-  double preprocess_ms = 0.0;    ///< Cleaning, ROI, cluster filter.
-  double normals_ms = 0.0;       ///< Normal estimation or orientation.
-  double subsample_ms = 0.0;     ///< Voxel grid.
-  double kdtree_ms = 0.0;        ///< Scene kd-tree.
-  double matching_ms = 0.0;      ///< PPF voting.
+  double preprocess_ms = 0.0;  ///< Cleaning, ROI, cluster filter.
+  double normals_ms = 0.0;     ///< Normal estimation or orientation.
+  double subsample_ms = 0.0;   ///< Voxel grid.
+  double kdtree_ms = 0.0;      ///< Scene kd-tree.
+  double matching_ms = 0.0;    ///< PPF voting.
   double clustering_ms = 0.0;
   double verification_ms = 0.0;  ///< Both verification passes.
   double icp_ms = 0.0;
@@ -134,20 +137,20 @@ struct LocalizationTimings {
 
 /// Everything LocalizeInCloud found.
 struct LocalizationResult {
-  bool found = false;                               ///< At least one candidate accepted.
-  std::vector<LocalizationCandidate> candidates;    ///< Accepted, best first, <= max_instances.
-  std::vector<LocalizationCandidate> rejected;      ///< Examined and rejected, with reasons.
-  bool ambiguous = false;                           ///< Planar/symmetric: see ambiguity_reason.
+  bool found = false;                             ///< At least one candidate accepted.
+  std::vector<LocalizationCandidate> candidates;  ///< Accepted, best first, <= max_instances.
+  std::vector<LocalizationCandidate> rejected;    ///< Examined and rejected, with reasons.
+  bool ambiguous = false;                         ///< Planar/symmetric: see ambiguity_reason.
   std::string ambiguity_reason;
-  std::string message;                              ///< Why nothing was found (when !found).
+  std::string message;  ///< Why nothing was found (when !found).
   LocalizationTimings timings;
-  std::size_t scene_points = 0;        ///< Input points.
-  std::size_t dropped_points = 0;      ///< Non-finite positions/normals or zero normals.
-  std::size_t used_points = 0;         ///< After ROI, filters and normals.
-  std::size_t sampled_points = 0;      ///< After the voxel grid.
+  std::size_t scene_points = 0;    ///< Input points.
+  std::size_t dropped_points = 0;  ///< Non-finite positions/normals or zero normals.
+  std::size_t used_points = 0;     ///< After ROI, filters and normals.
+  std::size_t sampled_points = 0;  ///< After the voxel grid.
   std::size_t reference_points = 0;
-  std::size_t scene_pairs = 0;         ///< Scene pairs looked up in the model table.
-  std::size_t votes_cast = 0;          ///< Accumulator increments.
+  std::size_t scene_pairs = 0;  ///< Scene pairs looked up in the model table.
+  std::size_t votes_cast = 0;   ///< Accumulator increments.
   std::size_t hypotheses = 0;
   std::size_t clusters = 0;
   /// One line: found, best pose support/rmse, timings.
@@ -156,10 +159,12 @@ struct LocalizationResult {
 
 /// Localizes `model` in `scene` (see the file comment). Throws InputError for an empty scene or
 /// attribute sizes that disagree, OptionError for bad options.
-LocalizationResult LocalizeInCloud(const PointCloud& scene, const PpfModel& model, const LocalizeOptions& options = {});
+LocalizationResult LocalizeInCloud(const PointCloud& scene, const PpfModel& model,
+                                   const LocalizeOptions& options = {});
 
 /// Convenience: builds the model from `model_cloud` first (model build time not in timings).
 LocalizationResult LocalizeInCloud(const PointCloud& scene, const PointCloud& model_cloud,
-                                   const PpfModelOptions& model_options, const LocalizeOptions& options = {});
+                                   const PpfModelOptions& model_options,
+                                   const LocalizeOptions& options = {});
 
 }  // namespace lasercell::registration

@@ -42,7 +42,8 @@ bool FitPlane(std::size_t count, const Accessor& point, Eigen::Vector3d* normal,
 }  // namespace
 
 void NormalOptions::Check() const {
-  if (k < 3) throw OptionError("NormalOptions.k = " + std::to_string(k) + ": must be >= 3 neighbours");
+  if (k < 3)
+    throw OptionError("NormalOptions.k = " + std::to_string(k) + ": must be >= 3 neighbours");
   if (!(radius_mm >= 0.0) || !std::isfinite(radius_mm)) {
     throw OptionError("NormalOptions.radius_mm = " + std::to_string(radius_mm) +
                       ": must be >= 0 mm (0 selects the k nearest neighbours)");
@@ -79,8 +80,8 @@ NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOpti
   if (result.used_grid) {
     cell.assign(static_cast<std::size_t>(cloud.grid_rows) * cols, -1);
     for (std::size_t i = 0; i < n; ++i) {
-      cell[static_cast<std::size_t>(cloud.profile[i]) * cols + static_cast<std::size_t>(cloud.column[i])] =
-          static_cast<std::int32_t>(i);
+      cell[static_cast<std::size_t>(cloud.profile[i]) * cols +
+           static_cast<std::size_t>(cloud.column[i])] = static_cast<std::int32_t>(i);
     }
   } else {
     tree = KdTree(cloud.positions);
@@ -105,22 +106,28 @@ NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOpti
           if (r < 0 || r >= cloud.grid_rows) continue;
           for (int c = cloud.column[i] - w; c <= cloud.column[i] + w; ++c) {
             if (c < 0 || c >= cloud.grid_cols) continue;
-            const std::int32_t j = cell[static_cast<std::size_t>(r) * cols + static_cast<std::size_t>(c)];
-            if (j >= 0 && (cloud.positions[static_cast<std::size_t>(j)] - p).squaredNorm() <= max_d_sq) {
+            const std::int32_t j =
+                cell[static_cast<std::size_t>(r) * cols + static_cast<std::size_t>(c)];
+            if (j >= 0 &&
+                (cloud.positions[static_cast<std::size_t>(j)] - p).squaredNorm() <= max_d_sq) {
               grid_hits.push_back(static_cast<std::uint32_t>(j));
             }
           }
         }
         if (grid_hits.size() >= options.min_neighbors) {
-          ok = FitPlane(grid_hits.size(), [&](std::size_t m) { return cloud.positions[grid_hits[m]]; },
-                        &normal, &curvature);
+          ok = FitPlane(
+              grid_hits.size(), [&](std::size_t m) { return cloud.positions[grid_hits[m]]; },
+              &normal, &curvature);
         }
       } else {
-        if (options.radius_mm > 0.0) tree.RadiusSearch(p, options.radius_mm, &hits);
-        else tree.KNearest(p, options.k, &hits);
+        if (options.radius_mm > 0.0)
+          tree.RadiusSearch(p, options.radius_mm, &hits);
+        else
+          tree.KNearest(p, options.k, &hits);
         if (hits.size() >= options.min_neighbors) {
-          ok = FitPlane(hits.size(), [&](std::size_t m) { return cloud.positions[hits[m].index]; },
-                        &normal, &curvature);
+          ok = FitPlane(
+              hits.size(), [&](std::size_t m) { return cloud.positions[hits[m].index]; }, &normal,
+              &curvature);
         }
       }
       if (!ok) continue;
@@ -153,8 +160,9 @@ PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& op
 
 std::vector<Eigen::Vector3d> MeshVertexNormals(const TriangleMesh& mesh) {
   if (mesh.faces.empty()) {
-    throw InputError("mesh normals: the mesh has no faces; give a PLY mesh with faces, or a cloud "
-                     "with normals");
+    throw InputError(
+        "mesh normals: the mesh has no faces; give a PLY mesh with faces, or a cloud "
+        "with normals");
   }
   const std::size_t n = mesh.vertices.size();
   std::vector<Eigen::Vector3d> normals(n, Eigen::Vector3d::Zero());

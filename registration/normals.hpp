@@ -41,9 +41,9 @@ struct NormalOptions {
 struct NormalEstimationResult {
   std::vector<Eigen::Vector3d> normals;  ///< Unit normal per point (zero when invalid).
   std::vector<std::uint8_t> valid;       ///< 1 when the plane fit had enough neighbours.
-  std::vector<float> curvature;          ///< Surface variation l0/(l0+l1+l2) per point, in [0, 1/3].
-  std::size_t invalid_count = 0;         ///< Points without a normal.
-  bool used_grid = false;                ///< True when grid neighbours were used.
+  std::vector<float> curvature;   ///< Surface variation l0/(l0+l1+l2) per point, in [0, 1/3].
+  std::size_t invalid_count = 0;  ///< Points without a normal.
+  bool used_grid = false;         ///< True when grid neighbours were used.
 };
 
 /// PCA plane fit per point: normal = eigenvector of the smallest eigenvalue of the neighbourhood

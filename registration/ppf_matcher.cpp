@@ -57,12 +57,15 @@ int SpreadFeatureKeys(const PpfModel& model, const PpfFeature& f, std::uint32_t 
 }  // namespace
 
 void PpfMatchOptions::Check() const {
-  if (reference_stride < 1) throw OptionError("PpfMatchOptions.reference_stride must be >= 1 (1 = every scene point)");
+  if (reference_stride < 1)
+    throw OptionError("PpfMatchOptions.reference_stride must be >= 1 (1 = every scene point)");
   if (peaks_per_reference < 1 || peaks_per_reference > 16) {
-    throw OptionError("PpfMatchOptions.peaks_per_reference = " + std::to_string(peaks_per_reference) + ": must be in [1, 16]");
+    throw OptionError("PpfMatchOptions.peaks_per_reference = " +
+                      std::to_string(peaks_per_reference) + ": must be in [1, 16]");
   }
   if (!(peak_min_relative >= 0.0 && peak_min_relative <= 1.0)) {
-    throw OptionError("PpfMatchOptions.peak_min_relative = " + std::to_string(peak_min_relative) + ": must be in [0, 1]");
+    throw OptionError("PpfMatchOptions.peak_min_relative = " + std::to_string(peak_min_relative) +
+                      ": must be in [0, 1]");
   }
   if (min_votes < 1) throw OptionError("PpfMatchOptions.min_votes must be >= 1");
 }
@@ -72,12 +75,15 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
   options.Check();
   if (scene_normals.size() != scene_tree.size()) {
     throw InputError("MatchPpf: " + std::to_string(scene_normals.size()) + " scene normals for " +
-                     std::to_string(scene_tree.size()) + " scene points; give one unit normal per point");
+                     std::to_string(scene_tree.size()) +
+                     " scene points; give one unit normal per point");
   }
   PpfMatchResult result;
   const std::vector<Eigen::Vector3d>& scene = scene_tree.points();
   std::size_t stride = options.reference_stride;
-  if (options.max_reference_points > 0) stride = std::max(stride, (scene.size() + options.max_reference_points - 1) / options.max_reference_points);
+  if (options.max_reference_points > 0)
+    stride = std::max(
+        stride, (scene.size() + options.max_reference_points - 1) / options.max_reference_points);
   const std::size_t refs = (scene.size() + stride - 1) / stride;
   result.reference_points = refs;
   if (refs == 0 || model.points().empty()) return result;
@@ -112,8 +118,10 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
         const Eigen::Vector3d& s_i = scene[hit.index];
         const Eigen::Vector3d& n_i = scene_normals[hit.index];
         int key_count = 0;
-        if (options.spread_features) key_count = SpreadFeatureKeys(model, ComputePpf(s_r, n_r, s_i, n_i), keys);
-        else key_count = model.PairKey(s_r, n_r, s_i, n_i, &keys[0]) ? 1 : 0;
+        if (options.spread_features)
+          key_count = SpreadFeatureKeys(model, ComputePpf(s_r, n_r, s_i, n_i), keys);
+        else
+          key_count = model.PairKey(s_r, n_r, s_i, n_i, &keys[0]) ? 1 : 0;
         if (key_count == 0) continue;
         ++pairs;
         // alpha = phi_s - phi_m (Drost Sec. 3.5, alpha split into a scene and a model part), in
@@ -123,14 +131,17 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
           const std::span<const PpfPairEntry> entries = model.Lookup(keys[k]);
           votes += entries.size() << spread_alpha;
           for (const PpfPairEntry& e : entries) {
-            const std::uint32_t scaled = static_cast<std::uint16_t>(phi_s - e.plane_angle) * static_cast<std::uint32_t>(alpha_bins);
+            const std::uint32_t scaled = static_cast<std::uint16_t>(phi_s - e.plane_angle) *
+                                         static_cast<std::uint32_t>(alpha_bins);
             const std::uint32_t bin = scaled >> 16;
             std::uint32_t* row = acc + static_cast<std::size_t>(e.reference) * alpha_bins;
             ++row[bin];
             if (spread_alpha) {
-              // The nearer neighbouring alpha bin also gets a vote (upper or lower half of the bin).
+              // The nearer neighbouring alpha bin also gets a vote (upper or lower half of the
+              // bin).
               const bool upper = (scaled >> 15) & 1U;
-              ++row[upper ? (bin + 1 == alpha_bins ? 0 : bin + 1) : (bin == 0 ? alpha_bins - 1 : bin - 1)];
+              ++row[upper ? (bin + 1 == alpha_bins ? 0 : bin + 1)
+                          : (bin == 0 ? alpha_bins - 1 : bin - 1)];
             }
           }
         }
@@ -168,8 +179,10 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
         // scene_from_centered = T(s_r)^-1 R_x(alpha) T(m_r), alpha at the bin centre.
         const double alpha = (h.alpha_bin + 0.5) * alpha_step;
         const Eigen::Vector3d& m_r = model.points()[h.model_reference];
-        const Eigen::Matrix3d rot = rot_s.transpose() * Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX()).toRotationMatrix() *
-                                    RotationNormalToX(model.normals()[h.model_reference]);
+        const Eigen::Matrix3d rot =
+            rot_s.transpose() *
+            Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+            RotationNormalToX(model.normals()[h.model_reference]);
         h.scene_from_centered.linear() = rot;
         h.scene_from_centered.translation() = s_r - rot * m_r;
         per_reference[ref].push_back(h);
@@ -180,7 +193,8 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
   for (std::size_t ref = 0; ref < refs; ++ref) {
     result.scene_pairs += pairs_of[ref];
     result.votes_cast += votes_of[ref];
-    result.hypotheses.insert(result.hypotheses.end(), per_reference[ref].begin(), per_reference[ref].end());
+    result.hypotheses.insert(result.hypotheses.end(), per_reference[ref].begin(),
+                             per_reference[ref].end());
   }
   return result;
 }

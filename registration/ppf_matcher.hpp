@@ -25,10 +25,10 @@ struct PpfMatchOptions {
   /// Every n-th sampled scene point is used as a reference point (Drost: 1/5 of the points).
   std::size_t reference_stride = 5;
   /// At most this many reference points (0 = no cap): the stride becomes
-  /// max(reference_stride, ceil(points / max_reference_points)). Voting costs reference points x neighbours within the
-  /// model diameter x model pairs per feature, so a scene much larger than the model (a room-size
-  /// Kinect view around a carton) would otherwise take seconds while adding few references on
-  /// the part. Deterministic: the stride depends only on the scene size.
+  /// max(reference_stride, ceil(points / max_reference_points)). Voting costs reference points x
+  /// neighbours within the model diameter x model pairs per feature, so a scene much larger than
+  /// the model (a room-size Kinect view around a carton) would otherwise take seconds while adding
+  /// few references on the part. Deterministic: the stride depends only on the scene size.
   std::size_t max_reference_points = 1000;
   /// Accumulator maxima kept per reference point (several peaks, as in Drost Sec. 3.4), 1..16.
   std::size_t peaks_per_reference = 3;
@@ -51,10 +51,10 @@ struct PpfMatchOptions {
 /// One accumulator peak turned into a pose.
 struct PoseHypothesis {
   Eigen::Isometry3d scene_from_centered = Eigen::Isometry3d::Identity();  ///< Model pose.
-  double votes = 0.0;                   ///< Accumulator value at the peak.
-  std::uint32_t scene_reference = 0;    ///< Index of s_r in the sampled scene.
-  std::uint32_t model_reference = 0;    ///< Index of m_r in PpfModel::points().
-  std::int32_t alpha_bin = 0;           ///< Alpha bin of the peak.
+  double votes = 0.0;                 ///< Accumulator value at the peak.
+  std::uint32_t scene_reference = 0;  ///< Index of s_r in the sampled scene.
+  std::uint32_t model_reference = 0;  ///< Index of m_r in PpfModel::points().
+  std::int32_t alpha_bin = 0;         ///< Alpha bin of the peak.
 };
 
 /// Hypotheses and counters from MatchPpf.

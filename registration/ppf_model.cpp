@@ -51,21 +51,29 @@ PointCloud OrientedModel(const PointCloud& model, const PpfModelOptions& options
 
 void PpfModelOptions::Check() const {
   CheckNonNegative(sampling_step_mm, "sampling_step_mm", "absolute voxel size in mm; 0 = relative");
-  CheckNonNegative(distance_step_mm, "distance_step_mm", "absolute distance step in mm; 0 = relative");
-  if (sampling_step_mm == 0.0) CheckPositive(sampling_step_relative, "sampling_step_relative", "fraction of the diameter, e.g. 0.04");
-  if (distance_step_mm == 0.0) CheckPositive(distance_step_relative, "distance_step_relative", "fraction of the diameter, e.g. 0.05");
+  CheckNonNegative(distance_step_mm, "distance_step_mm",
+                   "absolute distance step in mm; 0 = relative");
+  if (sampling_step_mm == 0.0)
+    CheckPositive(sampling_step_relative, "sampling_step_relative",
+                  "fraction of the diameter, e.g. 0.04");
+  if (distance_step_mm == 0.0)
+    CheckPositive(distance_step_relative, "distance_step_relative",
+                  "fraction of the diameter, e.g. 0.05");
   if (sampling_step_relative > 1.0) {
-    throw OptionError("PpfModelOptions.sampling_step_relative = " + std::to_string(sampling_step_relative) +
-                      ": must be <= 1 (fraction of the model diameter)");
+    throw OptionError(
+        "PpfModelOptions.sampling_step_relative = " + std::to_string(sampling_step_relative) +
+        ": must be <= 1 (fraction of the model diameter)");
   }
   CheckPositive(angle_step_rad, "angle_step_rad", "angle quantization in rad, e.g. pi/15");
   if (angle_step_rad > std::numbers::pi / 2.0 || angle_step_rad < std::numbers::pi / 180.0) {
     throw OptionError("PpfModelOptions.angle_step_rad = " + std::to_string(angle_step_rad) +
                       ": must be in [pi/180, pi/2] rad (Drost uses 2 pi / 30)");
   }
-  CheckNonNegative(refinement_step_relative, "refinement_step_relative", "fraction of the diameter; 0 keeps all points");
+  CheckNonNegative(refinement_step_relative, "refinement_step_relative",
+                   "fraction of the diameter; 0 keeps all points");
   if (max_model_points < 2 || max_model_points > 65535) {
-    throw OptionError("PpfModelOptions.max_model_points = " + std::to_string(max_model_points) + ": must be in [2, 65535]");
+    throw OptionError("PpfModelOptions.max_model_points = " + std::to_string(max_model_points) +
+                      ": must be in [2, 65535]");
   }
   normals.Check();
 }
@@ -118,20 +126,23 @@ PpfModel PpfModel::Build(const PointCloud& model_cloud, const PpfModelOptions& o
   if (!(model.diameter_mm_ > 0.0)) throw InputError("PPF model cloud has no spatial extent");
 
   // Drost Sec. 3.2: subsample with tau_d relative to the diameter.
-  model.sampling_step_mm_ = StepFrom(options.sampling_step_mm, options.sampling_step_relative, model.diameter_mm_);
+  model.sampling_step_mm_ =
+      StepFrom(options.sampling_step_mm, options.sampling_step_relative, model.diameter_mm_);
   VoxelGridOptions voxel;
   voxel.voxel_size_mm = model.sampling_step_mm_;
-  voxel.normal_mode = options.normal_mode == VoxelNormalMode::kNone ? VoxelNormalMode::kAverage : options.normal_mode;
+  voxel.normal_mode = options.normal_mode == VoxelNormalMode::kNone ? VoxelNormalMode::kAverage
+                                                                    : options.normal_mode;
   const PointCloud sampled = VoxelGridDownsample(oriented, voxel);
   if (sampled.size() > options.max_model_points) {
     throw OptionError("PpfModelOptions.sampling_step: the model subsampled at " +
-                      std::to_string(model.sampling_step_mm_) + " mm has " + std::to_string(sampled.size()) +
-                      " points, more than max_model_points = " + std::to_string(options.max_model_points) +
-                      "; use a larger sampling step");
+                      std::to_string(model.sampling_step_mm_) + " mm has " +
+                      std::to_string(sampled.size()) + " points, more than max_model_points = " +
+                      std::to_string(options.max_model_points) + "; use a larger sampling step");
   }
   if (sampled.size() < 2) {
     throw OptionError("PpfModelOptions.sampling_step: the model subsampled at " +
-                      std::to_string(model.sampling_step_mm_) + " mm has fewer than 2 points; use a smaller step");
+                      std::to_string(model.sampling_step_mm_) +
+                      " mm has fewer than 2 points; use a smaller step");
   }
 
   // Skotheim IV-E: the model is centred at its centroid, so pose translations cluster well.
@@ -155,26 +166,33 @@ PpfModel PpfModel::Build(const PointCloud& model_cloud, const PpfModelOptions& o
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (const auto& p : model.points_) cov.noalias() += p * p.transpose();
   cov /= static_cast<double>(model.points_.size());
-  model.principal_variances_ = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues().reverse();
+  model.principal_variances_ =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvalues().reverse();
 
   // Quantization (Drost Sec. 3.2): distance step and angle step; alpha over a full turn.
-  model.distance_step_mm_ = StepFrom(options.distance_step_mm, options.distance_step_relative, model.diameter_mm_);
+  model.distance_step_mm_ =
+      StepFrom(options.distance_step_mm, options.distance_step_relative, model.diameter_mm_);
   model.angle_step_rad_ = options.angle_step_rad;
   model.angle_bins_ = static_cast<int>(std::ceil(std::numbers::pi / options.angle_step_rad - 1e-9));
-  model.alpha_bins_ = std::max(1, static_cast<int>(std::lround(2.0 * std::numbers::pi / options.angle_step_rad)));
+  model.alpha_bins_ =
+      std::max(1, static_cast<int>(std::lround(2.0 * std::numbers::pi / options.angle_step_rad)));
   const std::size_t n = model.points_.size();
   double max_sq = 0.0;
   for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t j = i + 1; j < n; ++j) max_sq = std::max(max_sq, (model.points_[i] - model.points_[j]).squaredNorm());
+    for (std::size_t j = i + 1; j < n; ++j)
+      max_sq = std::max(max_sq, (model.points_[i] - model.points_[j]).squaredNorm());
   }
   model.max_pair_distance_mm_ = std::sqrt(max_sq);
-  model.distance_bins_ = static_cast<int>(model.max_pair_distance_mm_ / model.distance_step_mm_) + 1;
+  model.distance_bins_ =
+      static_cast<int>(model.max_pair_distance_mm_ / model.distance_step_mm_) + 1;
   const std::size_t a = static_cast<std::size_t>(model.angle_bins_);
   const std::size_t key_space = static_cast<std::size_t>(model.distance_bins_) * a * a * a;
   if (key_space > kMaxKeySpace) {
-    throw OptionError("PpfModelOptions.distance_step / angle_step_rad: " + std::to_string(model.distance_bins_) +
-                      " distance bins x " + std::to_string(a) + "^3 angle bins exceed the 2^25 supported keys; "
-                      "use a larger distance or angle step");
+    throw OptionError(
+        "PpfModelOptions.distance_step / angle_step_rad: " + std::to_string(model.distance_bins_) +
+        " distance bins x " + std::to_string(a) +
+        "^3 angle bins exceed the 2^25 supported keys; "
+        "use a larger distance or angle step");
   }
 
   // Every ordered pair (m_r, m_i), i != r: key and phi_m. Each reference writes its own row.
@@ -188,9 +206,11 @@ PpfModel PpfModel::Build(const PointCloud& model_cloud, const PpfModelOptions& o
       std::size_t slot = r * row;
       for (std::size_t i = 0; i < n; ++i) {
         if (i == r) continue;
-        const bool in_range = model.PairKey(model.points_[r], model.normals_[r], model.points_[i], model.normals_[i], &pair_key[slot]);
+        const bool in_range = model.PairKey(model.points_[r], model.normals_[r], model.points_[i],
+                                            model.normals_[i], &pair_key[slot]);
         LASERCELL_CHECK(in_range, "model pair beyond max_pair_distance or coincident");
-        pair_angle[slot] = PlaneAngleToTurn16(PairPlaneAngle(rot, model.points_[r], model.points_[i]));
+        pair_angle[slot] =
+            PlaneAngleToTurn16(PairPlaneAngle(rot, model.points_[r], model.points_[i]));
         ++slot;
       }
     }
@@ -230,7 +250,8 @@ void PpfModel::BuildDenseIndex() {
   std::size_t next = 0;
   for (std::size_t k = 0; k <= key_space; ++k) {
     while (next < keys_.size() && keys_[next] < k) ++next;
-    dense_offsets_[k] = next < keys_.size() ? offsets_[next] : static_cast<std::uint32_t>(entries_.size());
+    dense_offsets_[k] =
+        next < keys_.size() ? offsets_[next] : static_cast<std::uint32_t>(entries_.size());
   }
 }
 

@@ -12,8 +12,8 @@
 // and entries grouped by key; a dense key -> offset index is rebuilt in memory for O(1) lookup.
 
 #include <Eigen/Geometry>
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <numbers>
 #include <span>
@@ -106,7 +106,9 @@ class PpfModel {
   /// Unit normals of points().
   const std::vector<Eigen::Vector3d>& normals() const { return normals_; }
   /// Denser points for verification and ICP (refinement_step_relative), in `centered`.
-  const std::vector<Eigen::Vector3d>& refinement_points() const { return refinement_tree_.points(); }
+  const std::vector<Eigen::Vector3d>& refinement_points() const {
+    return refinement_tree_.points();
+  }
   /// Unit normals of refinement_points().
   const std::vector<Eigen::Vector3d>& refinement_normals() const { return refinement_normals_; }
   /// kd-tree over refinement_points() (rebuilt on load).
@@ -154,8 +156,8 @@ class PpfModel {
     const double distance_bin = distance * inv_distance_step_;
     if (!(distance_bin < distance_bins_)) return false;
     const double inv = 1.0 / distance;
-    *key = Key({static_cast<int>(distance_bin), CosineBin(n1.dot(d) * inv), CosineBin(n2.dot(d) * inv),
-                CosineBin(n1.dot(n2))});
+    *key = Key({static_cast<int>(distance_bin), CosineBin(n1.dot(d) * inv),
+                CosineBin(n2.dot(d) * inv), CosineBin(n1.dot(n2))});
     return true;
   }
   /// Quantizes a feature given as distance and angles (same bins as PairKey up to rounding at
@@ -172,8 +174,12 @@ class PpfModel {
   /// Hash key of a feature cell; bins must be in range.
   std::uint32_t Key(const PpfBins& b) const {
     const auto a = static_cast<std::uint32_t>(angle_bins_);
-    return ((static_cast<std::uint32_t>(b.distance) * a + static_cast<std::uint32_t>(b.angle_n1_d)) * a +
-            static_cast<std::uint32_t>(b.angle_n2_d)) * a + static_cast<std::uint32_t>(b.angle_n1_n2);
+    return ((static_cast<std::uint32_t>(b.distance) * a +
+             static_cast<std::uint32_t>(b.angle_n1_d)) *
+                a +
+            static_cast<std::uint32_t>(b.angle_n2_d)) *
+               a +
+           static_cast<std::uint32_t>(b.angle_n1_n2);
   }
   /// Every model pair stored under `key` (empty when none).
   std::span<const PpfPairEntry> Lookup(std::uint32_t key) const {

@@ -2,7 +2,8 @@
 //   "LCPPFMDL" | u32 version | u32 reserved | f64 diameter, max_pair, sampling, distance step,
 //   angle step | i32 distance_bins, angle_bins, alpha_bins | f64[12] model_from_centered (3x4
 //   row-major) | f64[3] principal variances | points | normals | refinement points | refinement
-//   normals | keys | offsets | entries (u16 reference, u16 plane angle) | u64 FNV-1a checksum of everything before it.
+//   normals | keys | offsets | entries (u16 reference, u16 plane angle) | u64 FNV-1a checksum of
+//   everything before it.
 // Arrays are u64 count + raw elements. The dense key index is rebuilt on load.
 
 #include <bit>
@@ -41,7 +42,8 @@ class Writer {
   template <typename T>
   void PutArray(const std::vector<T>& values) {
     Put(static_cast<std::uint64_t>(values.size()));
-    if (!values.empty()) out_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+    if (!values.empty())
+      out_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
   }
   std::string& bytes() { return out_; }
 
@@ -63,16 +65,20 @@ class Reader {
   template <typename T>
   std::vector<T> GetArray(const char* field) {
     const auto count = Get<std::uint64_t>(field);
-    if (count > (bytes_.size() - pos_) / sizeof(T)) Fail(std::string("truncated array '") + field + "'");
+    if (count > (bytes_.size() - pos_) / sizeof(T))
+      Fail(std::string("truncated array '") + field + "'");
     std::vector<T> values(static_cast<std::size_t>(count));
     // Element types are plain fixed-layout records (doubles, u32/f32), safe to copy bytewise.
-    if (count > 0) std::memcpy(static_cast<void*>(values.data()), bytes_.data() + pos_, values.size() * sizeof(T));
+    if (count > 0)
+      std::memcpy(static_cast<void*>(values.data()), bytes_.data() + pos_,
+                  values.size() * sizeof(T));
     pos_ += values.size() * sizeof(T);
     return values;
   }
   std::size_t position() const { return pos_; }
   [[noreturn]] void Fail(const std::string& problem) const {
-    throw InputError(name_ + ": not a valid lasercell PPF model (" + problem + "); rebuild the model");
+    throw InputError(name_ + ": not a valid lasercell PPF model (" + problem +
+                     "); rebuild the model");
   }
 
  private:
@@ -94,8 +100,11 @@ class PpfModelCodec {
     w.bytes().append(kMagic, sizeof(kMagic));
     w.Put(kVersion);
     w.Put(std::uint32_t{0});
-    for (double v : {m.diameter_mm_, m.max_pair_distance_mm_, m.sampling_step_mm_, m.distance_step_mm_, m.angle_step_rad_}) w.Put(v);
-    for (int v : {m.distance_bins_, m.angle_bins_, m.alpha_bins_}) w.Put(static_cast<std::int32_t>(v));
+    for (double v : {m.diameter_mm_, m.max_pair_distance_mm_, m.sampling_step_mm_,
+                     m.distance_step_mm_, m.angle_step_rad_})
+      w.Put(v);
+    for (int v : {m.distance_bins_, m.angle_bins_, m.alpha_bins_})
+      w.Put(static_cast<std::int32_t>(v));
     for (int r = 0; r < 3; ++r) {
       for (int c = 0; c < 4; ++c) w.Put(m.model_from_centered_.matrix()(r, c));
     }
@@ -119,12 +128,14 @@ class PpfModelCodec {
     for (std::size_t i = 0; i < sizeof(kMagic); ++i) r.Get<char>("magic");
     const auto version = r.Get<std::uint32_t>("version");
     if (version != kVersion) {
-      r.Fail("format version " + std::to_string(version) + ", this build reads version " + std::to_string(kVersion));
+      r.Fail("format version " + std::to_string(version) + ", this build reads version " +
+             std::to_string(kVersion));
     }
     if (bytes.size() < sizeof(std::uint64_t)) r.Fail("truncated");
     std::uint64_t stored_sum;
     std::memcpy(&stored_sum, bytes.data() + bytes.size() - sizeof(stored_sum), sizeof(stored_sum));
-    if (Fnv1a(bytes.substr(0, bytes.size() - sizeof(stored_sum))) != stored_sum) r.Fail("checksum mismatch: the file is corrupt or truncated");
+    if (Fnv1a(bytes.substr(0, bytes.size() - sizeof(stored_sum))) != stored_sum)
+      r.Fail("checksum mismatch: the file is corrupt or truncated");
     r.Get<std::uint32_t>("reserved");
     PpfModel m;
     m.diameter_mm_ = r.Get<double>("diameter");
@@ -136,7 +147,8 @@ class PpfModelCodec {
     m.angle_bins_ = r.Get<std::int32_t>("angle_bins");
     m.alpha_bins_ = r.Get<std::int32_t>("alpha_bins");
     for (int row = 0; row < 3; ++row) {
-      for (int c = 0; c < 4; ++c) m.model_from_centered_.matrix()(row, c) = r.Get<double>("model_from_centered");
+      for (int c = 0; c < 4; ++c)
+        m.model_from_centered_.matrix()(row, c) = r.Get<double>("model_from_centered");
     }
     for (int i = 0; i < 3; ++i) m.principal_variances_(i) = r.Get<double>("principal_variances");
     m.points_ = r.GetArray<Eigen::Vector3d>("points");
@@ -146,7 +158,8 @@ class PpfModelCodec {
     m.keys_ = r.GetArray<std::uint32_t>("keys");
     m.offsets_ = r.GetArray<std::uint32_t>("offsets");
     m.entries_ = r.GetArray<PpfPairEntry>("entries");
-    if (r.position() + sizeof(std::uint64_t) != bytes.size()) r.Fail("unexpected bytes after the pair table");
+    if (r.position() + sizeof(std::uint64_t) != bytes.size())
+      r.Fail("unexpected bytes after the pair table");
     Validate(m, refinement.size(), r);
     m.refinement_tree_ = KdTree(std::move(refinement));
     m.BuildDenseIndex();
@@ -156,19 +169,23 @@ class PpfModelCodec {
  private:
   // Structural checks so a decoded model can never index out of bounds.
   static void Validate(const PpfModel& m, std::size_t refinement_size, const Reader& r) {
-    if (!(m.distance_step_mm_ > 0.0) || !(m.angle_step_rad_ > 0.0) || m.distance_bins_ < 1 || m.angle_bins_ < 1 ||
-        m.alpha_bins_ < 1 || m.distance_bins_ > (1 << 25) || m.angle_bins_ > 180 || m.points_.size() > 65535) {
+    if (!(m.distance_step_mm_ > 0.0) || !(m.angle_step_rad_ > 0.0) || m.distance_bins_ < 1 ||
+        m.angle_bins_ < 1 || m.alpha_bins_ < 1 || m.distance_bins_ > (1 << 25) ||
+        m.angle_bins_ > 180 || m.points_.size() > 65535) {
       r.Fail("quantization fields out of range");
     }
     const auto a = static_cast<std::size_t>(m.angle_bins_);
     const std::size_t key_space = static_cast<std::size_t>(m.distance_bins_) * a * a * a;
     if (key_space > (std::size_t{1} << 25)) r.Fail("key space too large");
-    if (m.normals_.size() != m.points_.size() || m.refinement_normals_.size() != refinement_size) r.Fail("normals do not match points");
-    if (m.offsets_.size() != m.keys_.size() + 1 || m.offsets_.front() != 0 || m.offsets_.back() != m.entries_.size()) {
+    if (m.normals_.size() != m.points_.size() || m.refinement_normals_.size() != refinement_size)
+      r.Fail("normals do not match points");
+    if (m.offsets_.size() != m.keys_.size() + 1 || m.offsets_.front() != 0 ||
+        m.offsets_.back() != m.entries_.size()) {
       r.Fail("offsets do not match the pair table");
     }
     for (std::size_t k = 0; k < m.keys_.size(); ++k) {
-      if (m.keys_[k] >= key_space || (k > 0 && m.keys_[k] <= m.keys_[k - 1]) || m.offsets_[k + 1] < m.offsets_[k]) {
+      if (m.keys_[k] >= key_space || (k > 0 && m.keys_[k] <= m.keys_[k - 1]) ||
+          m.offsets_[k + 1] < m.offsets_[k]) {
         r.Fail("pair table keys are not sorted or out of range");
       }
     }
@@ -186,6 +203,8 @@ PpfModel PpfModel::Deserialize(std::string_view bytes, const std::string& name) 
 
 void PpfModel::Save(const std::string& path) const { io::WriteFileAtomically(path, Serialize()); }
 
-PpfModel PpfModel::Load(const std::string& path) { return Deserialize(io::ReadFileBytes(path), path); }
+PpfModel PpfModel::Load(const std::string& path) {
+  return Deserialize(io::ReadFileBytes(path), path);
+}
 
 }  // namespace lasercell::registration

@@ -14,40 +14,48 @@ void PoseConstraints::Check(const std::string& owner) const {
   if (!plane_normal.allFinite() || plane_normal.norm() < 1e-9) {
     throw OptionError(owner + ".constraints.plane_normal must be a finite non-zero vector");
   }
-  if (!std::isfinite(plane_offset_mm)) throw OptionError(owner + ".constraints.plane_offset_mm must be finite");
+  if (!std::isfinite(plane_offset_mm))
+    throw OptionError(owner + ".constraints.plane_offset_mm must be finite");
   for (std::size_t i = 0; i < up_in_model.size(); ++i) {
     if (!up_in_model[i].allFinite() || up_in_model[i].norm() < 1e-9) {
-      throw OptionError(owner + ".constraints.up_in_model[" + std::to_string(i) + "] must be a finite non-zero vector");
+      throw OptionError(owner + ".constraints.up_in_model[" + std::to_string(i) +
+                        "] must be a finite non-zero vector");
     }
   }
   if (!(max_tilt_rad >= 0.0 && max_tilt_rad <= std::numbers::pi)) {
-    throw OptionError(owner + ".constraints.max_tilt_rad = " + std::to_string(max_tilt_rad) + ": must be in [0, pi] rad");
+    throw OptionError(owner + ".constraints.max_tilt_rad = " + std::to_string(max_tilt_rad) +
+                      ": must be in [0, pi] rad");
   }
-  if (!std::isfinite(max_penetration_mm)) throw OptionError(owner + ".constraints.max_penetration_mm must be finite");
+  if (!std::isfinite(max_penetration_mm))
+    throw OptionError(owner + ".constraints.max_penetration_mm must be finite");
 }
 
 void VerificationOptions::Check() const {
   if (grid_rows < 2 || grid_cols < 2 || grid_rows > 4096 || grid_cols > 4096) {
-    throw OptionError("VerificationOptions.grid_rows/grid_cols = " + std::to_string(grid_rows) + "x" +
-                      std::to_string(grid_cols) + ": the projection grid needs 2..4096 cells per side");
+    throw OptionError("VerificationOptions.grid_rows/grid_cols = " + std::to_string(grid_rows) +
+                      "x" + std::to_string(grid_cols) +
+                      ": the projection grid needs 2..4096 cells per side");
   }
   if (!(support_distance_mm > 0.0) || !std::isfinite(support_distance_mm)) {
-    throw OptionError("VerificationOptions.support_distance_mm = " + std::to_string(support_distance_mm) +
-                      ": must be a positive distance in mm");
+    throw OptionError("VerificationOptions.support_distance_mm = " +
+                      std::to_string(support_distance_mm) + ": must be a positive distance in mm");
   }
   if (!(min_support >= 0.0 && min_support <= 1.0)) {
-    throw OptionError("VerificationOptions.min_support = " + std::to_string(min_support) + ": must be a fraction in [0, 1]");
+    throw OptionError("VerificationOptions.min_support = " + std::to_string(min_support) +
+                      ": must be a fraction in [0, 1]");
   }
   if (!(overlap_band_mm > 0.0) || !std::isfinite(overlap_band_mm)) {
-    throw OptionError("VerificationOptions.overlap_band_mm = " + std::to_string(overlap_band_mm) + ": must be > 0 mm");
+    throw OptionError("VerificationOptions.overlap_band_mm = " + std::to_string(overlap_band_mm) +
+                      ": must be > 0 mm");
   }
   constraints.Check("VerificationOptions");
 }
 
 std::string VerificationResult::Summary() const {
   std::ostringstream s;
-  s << (accepted ? "accepted" : "rejected") << ": support " << support << " (" << supported_cells << "/" << visible_cells
-    << " cells; occluded " << occluded_cells << ", conflicting " << conflicting_cells << ", empty " << empty_cells << ")";
+  s << (accepted ? "accepted" : "rejected") << ": support " << support << " (" << supported_cells
+    << "/" << visible_cells << " cells; occluded " << occluded_cells << ", conflicting "
+    << conflicting_cells << ", empty " << empty_cells << ")";
   if (!accepted) s << ", " << rejection_reason;
   return s.str();
 }
@@ -61,22 +69,26 @@ bool CheckPoseConstraints(const PpfModel& model, const Eigen::Isometry3d& scene_
     result->tilt_rad = std::numeric_limits<double>::infinity();
     for (const Eigen::Vector3d& a : c.up_in_model) {
       const Eigen::Vector3d a_in_scene = scene_from_model.linear() * a.normalized();
-      result->tilt_rad = std::min(result->tilt_rad, std::acos(std::clamp(a_in_scene.dot(up), -1.0, 1.0)));
+      result->tilt_rad =
+          std::min(result->tilt_rad, std::acos(std::clamp(a_in_scene.dot(up), -1.0, 1.0)));
     }
   }
   const Eigen::Isometry3d scene_from_centered = scene_from_model * model.model_from_centered();
   double lowest = std::numeric_limits<double>::infinity();
-  for (const Eigen::Vector3d& p : model.refinement_points()) lowest = std::min(lowest, up.dot(scene_from_centered * p));
+  for (const Eigen::Vector3d& p : model.refinement_points())
+    lowest = std::min(lowest, up.dot(scene_from_centered * p));
   result->penetration_mm = std::max(0.0, c.plane_offset_mm - lowest);
   if (result->tilt_rad > c.max_tilt_rad) {
-    result->rejection_reason = "pose constraint: tilt " + std::to_string(result->tilt_rad * 180.0 / std::numbers::pi) +
+    result->rejection_reason = "pose constraint: tilt " +
+                               std::to_string(result->tilt_rad * 180.0 / std::numbers::pi) +
                                " deg from the nearest stable pose exceeds " +
                                std::to_string(c.max_tilt_rad * 180.0 / std::numbers::pi) + " deg";
     return false;
   }
   if (c.max_penetration_mm >= 0.0 && result->penetration_mm > c.max_penetration_mm) {
-    result->rejection_reason = "pose constraint: model sinks " + std::to_string(result->penetration_mm) +
-                               " mm below the support plane (allowed " + std::to_string(c.max_penetration_mm) + " mm)";
+    result->rejection_reason =
+        "pose constraint: model sinks " + std::to_string(result->penetration_mm) +
+        " mm below the support plane (allowed " + std::to_string(c.max_penetration_mm) + " mm)";
     return false;
   }
   return true;
@@ -84,12 +96,14 @@ bool CheckPoseConstraints(const PpfModel& model, const Eigen::Isometry3d& scene_
 
 VerificationResult VerifyPose(std::span<const Eigen::Vector3d> scene_points, const PpfModel& model,
                               const Eigen::Isometry3d& scene_from_model, const Viewpoint& viewpoint,
-                              const VerificationOptions& options, std::vector<std::uint32_t>* overlap) {
+                              const VerificationOptions& options,
+                              std::vector<std::uint32_t>* overlap) {
   options.Check();
   viewpoint.Check("VerifyPose viewpoint");
   VerificationResult result;
   if (overlap) overlap->clear();
-  const bool constraints_ok = CheckPoseConstraints(model, scene_from_model, options.constraints, &result);
+  const bool constraints_ok =
+      CheckPoseConstraints(model, scene_from_model, options.constraints, &result);
 
   // Grid perpendicular to the line of sight through the model centre (Skotheim IV-F).
   const Eigen::Isometry3d scene_from_centered = scene_from_model * model.model_from_centered();
@@ -119,7 +133,8 @@ VerificationResult VerifyPose(std::span<const Eigen::Vector3d> scene_points, con
   const auto& points = model.refinement_points();
   const auto& normals = model.refinement_normals();
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (options.cull_back_faces && (scene_from_centered.linear() * normals[i]).dot(view) >= 0.0) continue;
+    if (options.cull_back_faces && (scene_from_centered.linear() * normals[i]).dot(view) >= 0.0)
+      continue;
     const Eigen::Vector3d q = scene_from_centered * points[i];
     int r, c;
     if (!cell_of(q - centre, &r, &c)) continue;
@@ -150,7 +165,8 @@ VerificationResult VerifyPose(std::span<const Eigen::Vector3d> scene_points, con
   std::vector<std::uint32_t> bucket(scene_index.size());
   {
     std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
-    for (std::size_t m = 0; m < scene_index.size(); ++m) bucket[cursor[scene_cell[m]]++] = scene_index[m];
+    for (std::size_t m = 0; m < scene_index.size(); ++m)
+      bucket[cursor[scene_cell[m]]++] = scene_index[m];
   }
 
   const double tol_sq = options.support_distance_mm * options.support_distance_mm;
@@ -172,10 +188,14 @@ VerificationResult VerifyPose(std::span<const Eigen::Vector3d> scene_points, con
           }
         }
       }
-      if (supported) ++result.supported_cells;
-      else if (scene_front[k] == kInf) ++result.empty_cells;
-      else if (scene_front[k] < model_depth[k]) ++result.occluded_cells;
-      else ++result.conflicting_cells;
+      if (supported)
+        ++result.supported_cells;
+      else if (scene_front[k] == kInf)
+        ++result.empty_cells;
+      else if (scene_front[k] < model_depth[k])
+        ++result.occluded_cells;
+      else
+        ++result.conflicting_cells;
     }
   }
   if (overlap) {
@@ -183,19 +203,23 @@ VerificationResult VerifyPose(std::span<const Eigen::Vector3d> scene_points, con
       const std::uint32_t k = scene_cell[m];
       if (model_depth[k] == kInf) continue;
       const double depth = (scene_points[scene_index[m]] - centre).dot(view);
-      if (std::abs(depth - model_depth[k]) <= options.overlap_band_mm) overlap->push_back(scene_index[m]);
+      if (std::abs(depth - model_depth[k]) <= options.overlap_band_mm)
+        overlap->push_back(scene_index[m]);
     }
   }
   result.overlapping_scene_points = overlap ? overlap->size() : 0;
-  result.support = result.visible_cells > 0 ? static_cast<double>(result.supported_cells) / result.visible_cells : 0.0;
+  result.support = result.visible_cells > 0
+                       ? static_cast<double>(result.supported_cells) / result.visible_cells
+                       : 0.0;
 
   if (!constraints_ok) return result;  // reason already set
   if (result.visible_cells < options.min_visible_cells) {
     result.rejection_reason = "projection grid: only " + std::to_string(result.visible_cells) +
-                              " visible model cells (minimum " + std::to_string(options.min_visible_cells) + ")";
+                              " visible model cells (minimum " +
+                              std::to_string(options.min_visible_cells) + ")";
   } else if (result.support < options.min_support) {
-    result.rejection_reason = "projection grid: support " + std::to_string(result.support) + " below min_support " +
-                              std::to_string(options.min_support);
+    result.rejection_reason = "projection grid: support " + std::to_string(result.support) +
+                              " below min_support " + std::to_string(options.min_support);
   } else {
     result.accepted = true;
   }

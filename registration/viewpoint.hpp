@@ -16,9 +16,9 @@ namespace lasercell::registration {
 /// The sensor's line of sight, as a point or as a constant direction.
 struct Viewpoint {
   enum class Kind { kPoint, kDirection };
-  Kind kind = Kind::kPoint;                                     ///< Perspective or constant.
-  Eigen::Vector3d position = Eigen::Vector3d::Zero();           ///< Sensor position, mm (kPoint).
-  Eigen::Vector3d direction = -Eigen::Vector3d::UnitZ();        ///< Viewing direction (kDirection).
+  Kind kind = Kind::kPoint;                               ///< Perspective or constant.
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();     ///< Sensor position, mm (kPoint).
+  Eigen::Vector3d direction = -Eigen::Vector3d::UnitZ();  ///< Viewing direction (kDirection).
 
   /// A perspective viewpoint at `position_mm`.
   static Viewpoint AtPoint(const Eigen::Vector3d& position_mm) {

@@ -17,15 +17,16 @@ void AddCalibrationBenchCommand(CLI::App& bench);
 
 /// Arguments of `lasercell bench robustness`.
 struct RobustnessBenchArgs {
-  int placements = 200;                                  ///< Random model poses per noise level.
+  int placements = 200;  ///< Random model poses per noise level.
   std::vector<double> noise_mm = {0.0, 0.3, 0.5, 1.0, 2.0};  ///< Gaussian sigma per level, mm.
-  unsigned seed = 1;                                     ///< Placement/noise seed.
-  int threads = 1;                                       ///< Localization threads.
-  std::string json_out;                                  ///< Optional JSON with every trial.
+  unsigned seed = 1;                                         ///< Placement/noise seed.
+  int threads = 1;                                           ///< Localization threads.
+  std::string json_out;                                      ///< Optional JSON with every trial.
 };
 
 /// Synthetic robustness curve: the UWA parasaurolophus at random poses in real rs1 clutter with
-/// noise; prints found rate (ADD <= 0.05 x diameter after ICP) per noise level (bench_robustness.cpp).
+/// noise; prints found rate (ADD <= 0.05 x diameter after ICP) per noise level
+/// (bench_robustness.cpp).
 void RunRobustnessBench(const RobustnessBenchArgs& args);
 
 }  // namespace lasercell::tools

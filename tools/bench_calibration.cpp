@@ -161,7 +161,10 @@ std::vector<Row> RunMethods(std::vector<calib::HandEyeView>& views,
   for (auto m : {calib::HandEyeMethod::kTsaiLenz, calib::HandEyeMethod::kParkMartin,
                  calib::HandEyeMethod::kDaniilidis}) {
     rows.push_back({"lasercell closed form " + calib::HandEyeMethodName(m),
-                    calib::SolveHandEyeClosedForm(a, c, m), {}, false, ""});
+                    calib::SolveHandEyeClosedForm(a, c, m),
+                    {},
+                    false,
+                    ""});
   }
   rows.push_back({"lasercell Ceres refinement (X and Y, reprojection)", ours->flange_from_camera,
                   ours->base_from_board, true, ""});
@@ -208,8 +211,9 @@ nlohmann::json PrintSimTable(const std::string& title, const std::vector<Row>& r
                              const calib::HandEyeResult& ours, const calib::CameraModel& camera,
                              const Eigen::Isometry3d& x_true) {
   std::printf("\n### %s\n\n", title.c_str());
-  std::printf("| method | rot err deg | trans err mm | AX-XB RMS deg | AX-XB RMS mm | reproj RMS px |\n"
-              "|---|---|---|---|---|---|\n");
+  std::printf(
+      "| method | rot err deg | trans err mm | AX-XB RMS deg | AX-XB RMS mm | reproj RMS px |\n"
+      "|---|---|---|---|---|---|\n");
   nlohmann::json j = nlohmann::json::array();
   for (const Row& r : rows) {
     if (r.note == "threw") {
@@ -230,9 +234,10 @@ nlohmann::json PrintSimTable(const std::string& title, const std::vector<Row>& r
                  {"reprojection_rms_px", c.reproj_rms_px}});
   }
   const Eigen::Vector3d sr = ours.SigmaRotationDeg(), st = ours.SigmaTranslationMm();
-  std::printf("\nlasercell reported 1 sigma: rotation [%.5f %.5f %.5f] deg, translation "
-              "[%.4f %.4f %.4f] mm; %s\n",
-              sr.x(), sr.y(), sr.z(), st.x(), st.y(), st.z(), ours.Summary().c_str());
+  std::printf(
+      "\nlasercell reported 1 sigma: rotation [%.5f %.5f %.5f] deg, translation "
+      "[%.4f %.4f %.4f] mm; %s\n",
+      sr.x(), sr.y(), sr.z(), st.x(), st.y(), st.z(), ours.Summary().c_str());
   return j;
 }
 
@@ -255,7 +260,8 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
     calib::HandEyeView v;
     v.base_from_flange = truth.true_vision_robot.BaseFromFlange(im.joints_rad);
     v.corners_in_board = corners;
-    for (const auto& q : im.corners_px) v.corners_px.push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
+    for (const auto& q : im.corners_px)
+      v.corners_px.push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
     views.push_back(v);
     v.base_from_flange = truth.nominal_vision_robot.BaseFromFlange(im.joints_rad);
     nominal_views.push_back(v);
@@ -263,7 +269,8 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   // Sanity: the truth chain closes (A_i X C_i is one board pose).
   const Eigen::Isometry3d y0 = views[0].base_from_flange * x_true * set.images[0].camera_from_board;
   for (std::size_t i = 0; i < views.size(); ++i) {
-    const Eigen::Isometry3d yi = views[i].base_from_flange * x_true * set.images[i].camera_from_board;
+    const Eigen::Isometry3d yi =
+        views[i].base_from_flange * x_true * set.images[i].camera_from_board;
     if (TranslationDistance(yi, y0) > 1e-6) {
       throw InternalError("bench calibration: simulator truth chain does not close");
     }
@@ -273,8 +280,8 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   std::snprintf(title, sizeof title,
                 "Simulated cell (seed %u): %zu views of a %dx%d-inner-corner board (%.0f mm), "
                 "true robot poses, true projections + N(0, %.2f px)",
-                args.seed, views.size(), board.squares_x - 1, board.squares_y - 1,
-                board.square_mm, args.sim_noise_px);
+                args.seed, views.size(), board.squares_x - 1, board.squares_y - 1, board.square_mm,
+                args.sim_noise_px);
   calib::HandEyeResult ours;
   std::vector<Row> rows = RunMethods(views, camera, &ours);
   out["synthetic_noise"] = PrintSimTable(title, rows, views, ours, camera, x_true);
@@ -318,10 +325,11 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
         ++total;
       }
     }
-    std::printf("\n### Simulated cell, %d draws of N(0, %.2f px) on the true projections (same "
-                "poses): RMS error over the draws\n\n| method | RMS rot err deg | RMS trans err mm "
-                "| draws that threw |\n|---|---|---|---|\n",
-                args.sim_draws, args.sim_noise_px);
+    std::printf(
+        "\n### Simulated cell, %d draws of N(0, %.2f px) on the true projections (same "
+        "poses): RMS error over the draws\n\n| method | RMS rot err deg | RMS trans err mm "
+        "| draws that threw |\n|---|---|---|---|\n",
+        args.sim_draws, args.sim_noise_px);
     nlohmann::json mc = nlohmann::json::array();
     for (std::size_t m = 0; m < names.size(); ++m) {
       const int ok = args.sim_draws - threw[m];
@@ -337,9 +345,10 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
                     {"rms_translation_error_mm", rt},
                     {"threw", threw[m]}});
     }
-    std::printf("\nlasercell 1-sigma coverage: truth inside the reported 1 sigma for %.1f %% of "
-                "%d components (68.3 %% expected)\n",
-                100.0 * inside / std::max(total, 1), total);
+    std::printf(
+        "\nlasercell 1-sigma coverage: truth inside the reported 1 sigma for %.1f %% of "
+        "%d components (68.3 %% expected)\n",
+        100.0 * inside / std::max(total, 1), total);
     out["monte_carlo"] = {{"draws", args.sim_draws},
                           {"rows", mc},
                           {"coverage_1sigma", static_cast<double>(inside) / std::max(total, 1)}};
@@ -391,13 +400,13 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
       v.corners_px = std::move(best);
       detected.push_back(v);
     }
-    std::snprintf(title, sizeof title,
-                  "Simulated cell, rendered images (default image noise/blur), corners by "
-                  "calib::DetectTarget (findChessboardCornersSB + cornerSubPix): %zu of %zu boards "
-                  "found, detection "
-                  "error vs true projections %.3f px RMS, %d corner orderings relabelled from truth",
-                  detected.size(), set.images.size(), std::sqrt(det_ss / std::max(det_n, 1)),
-                  flipped);
+    std::snprintf(
+        title, sizeof title,
+        "Simulated cell, rendered images (default image noise/blur), corners by "
+        "calib::DetectTarget (findChessboardCornersSB + cornerSubPix): %zu of %zu boards "
+        "found, detection "
+        "error vs true projections %.3f px RMS, %d corner orderings relabelled from truth",
+        detected.size(), set.images.size(), std::sqrt(det_ss / std::max(det_n, 1)), flipped);
     if (detected.size() >= 3) {
       rows = RunMethods(detected, camera, &ours);
       out["rendered"] = PrintSimTable(title, rows, detected, ours, camera, x_true);
@@ -431,9 +440,10 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
   const calib::ChessboardDetections& det = set.detections;
   const calib::CameraModel& camera = *set.camera;
   const std::vector<double>& intr = camera.intrinsics();
-  std::printf("\nkuka2 intrinsics (stand-in): OpenCV calibrateCamera on the same 28 images, "
-              "k1 k2 p1 p2 k3, RMS %.3f px: fx %.2f fy %.2f cx %.2f cy %.2f\n",
-              set.calibration_rms_px, intr[0], intr[1], intr[2], intr[3]);
+  std::printf(
+      "\nkuka2 intrinsics (stand-in): OpenCV calibrateCamera on the same 28 images, "
+      "k1 k2 p1 p2 k3, RMS %.3f px: fx %.2f fy %.2f cx %.2f cy %.2f\n",
+      set.calibration_rms_px, intr[0], intr[1], intr[2], intr[3]);
   const calib::RobotPoses poses =
       calib::LoadRobotPoses(args.kuka2_dir + "/RobotPosesVec.txt", "kuka");
   if (poses.base_from_flange.size() != det.images.size()) {
@@ -447,11 +457,13 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
   }
   calib::HandEyeResult ours;
   const std::vector<Row> rows = RunMethods(views, camera, &ours);
-  std::printf("\n### Real kuka2 (%s): %zu views, 24x17 inner corners (25x18 squares), 15 mm; "
-              "no ground truth\n\n",
-              source.c_str(), views.size());
-  std::printf("| method | AX-XB RMS deg | AX-XB RMS mm | reproj RMS px | t_X mm |\n"
-              "|---|---|---|---|---|\n");
+  std::printf(
+      "\n### Real kuka2 (%s): %zu views, 24x17 inner corners (25x18 squares), 15 mm; "
+      "no ground truth\n\n",
+      source.c_str(), views.size());
+  std::printf(
+      "| method | AX-XB RMS deg | AX-XB RMS mm | reproj RMS px | t_X mm |\n"
+      "|---|---|---|---|---|\n");
   nlohmann::json j = nlohmann::json::array();
   for (const Row& r : rows) {
     if (r.note == "threw") {
@@ -469,18 +481,20 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
                  {"reprojection_rms_px", c.reproj_rms_px}});
   }
   const Eigen::Vector3d sr = ours.SigmaRotationDeg(), st = ours.SigmaTranslationMm();
-  std::printf("\nlasercell reported 1 sigma: rotation [%.4f %.4f %.4f] deg, translation "
-              "[%.3f %.3f %.3f] mm; %s\n",
-              sr.x(), sr.y(), sr.z(), st.x(), st.y(), st.z(), ours.Summary().c_str());
+  std::printf(
+      "\nlasercell reported 1 sigma: rotation [%.4f %.4f %.4f] deg, translation "
+      "[%.3f %.3f %.3f] mm; %s\n",
+      sr.x(), sr.y(), sr.z(), st.x(), st.y(), st.z(), ours.Summary().c_str());
   return j;
 }
 
 void RunCalibrationBench(const CalibrationBenchArgs& args) {
-  std::printf("lasercell bench calibration (eye-in-hand). Same detections and the same per-view "
-              "PnP board poses for every method. OpenCV is Debian's 4.6, which predates the fixes "
-              "of its Tsai, Horaud and Daniilidis implementations (opencv#24871). reproj RMS: "
-              "every corner reprojected with the method's X and Y (Y = average of A_i X C_i for "
-              "hand-eye-only methods).\n");
+  std::printf(
+      "lasercell bench calibration (eye-in-hand). Same detections and the same per-view "
+      "PnP board poses for every method. OpenCV is Debian's 4.6, which predates the fixes "
+      "of its Tsai, Horaud and Daniilidis implementations (opencv#24871). reproj RMS: "
+      "every corner reprojected with the method's X and Y (Y = average of A_i X C_i for "
+      "hand-eye-only methods).\n");
   nlohmann::json j = {{"format", "lasercell.bench_calibration"}, {"version", 1}};
   j["simulated"] = RunSimulated(args);
   j["kuka2"] = RunKuka2(args);

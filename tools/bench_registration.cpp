@@ -3,17 +3,12 @@
 // headers (PCL compiles slowly); see bench_registration.hpp.
 #include "tools/bench_registration.hpp"
 
-#include <opencv2/core.hpp>
-#include <opencv2/surface_matching.hpp>
-#include <opencv2/surface_matching/ppf_helpers.hpp>
 #include <pcl/console/print.h>
-#include <pcl/features/impl/ppf.hpp>
 #include <pcl/features/ppf.h>
 #include <pcl/filters/voxel_grid.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/registration/icp.h>
-#include <pcl/registration/impl/ppf_registration.hpp>
 #include <pcl/registration/ppf_registration.h>
 
 #include <algorithm>
@@ -22,6 +17,11 @@
 #include <cstdio>
 #include <ctime>
 #include <memory>
+#include <opencv2/core.hpp>
+#include <opencv2/surface_matching.hpp>
+#include <opencv2/surface_matching/ppf_helpers.hpp>
+#include <pcl/features/impl/ppf.hpp>
+#include <pcl/registration/impl/ppf_registration.hpp>
 #include <random>
 #include <sstream>
 

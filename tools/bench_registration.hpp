@@ -79,9 +79,9 @@ std::string Ms(double ms);
 /// Pose error of a scene_from_model against the reference, in the table's terms.
 struct PoseError {
   double rotation_deg = 0.0;  ///< Rotation angle between the poses.
-  double centroid_mm = 0.0;  ///< Displacement of the model centroid.
-  double rms_mm = 0.0;       ///< RMS displacement of all model points (the issue's measure).
-  double within_2mm = 0.0;   ///< Fraction of model points within 2 mm of a scene point.
+  double centroid_mm = 0.0;   ///< Displacement of the model centroid.
+  double rms_mm = 0.0;        ///< RMS displacement of all model points (the issue's measure).
+  double within_2mm = 0.0;    ///< Fraction of model points within 2 mm of a scene point.
 };
 
 /// Evaluates poses against the reference (model points, scene kd-tree for the 2 mm fraction).

@@ -45,7 +45,9 @@ std::string FindSourceRoot() {
     return fs::is_regular_file(root / kUwaDir / "parasaurolophus_6700.ply", ec);
   };
   if (const char* env = std::getenv("LASERCELL_SOURCE_DIR"); env != nullptr && *env != '\0') {
-    if (!has_data(env)) throw FileError(std::string(env) + "/" + kUwaDir, "LASERCELL_SOURCE_DIR has no bundled UWA data");
+    if (!has_data(env))
+      throw FileError(std::string(env) + "/" + kUwaDir,
+                      "LASERCELL_SOURCE_DIR has no bundled UWA data");
     return env;
   }
   std::vector<fs::path> starts;
@@ -59,12 +61,14 @@ std::string FindSourceRoot() {
       if (dir == dir.parent_path()) break;
     }
   }
-  throw FileError(kUwaDir, "bundled UWA data not found above the working directory or the executable; "
-                           "run from the source tree or set LASERCELL_SOURCE_DIR");
+  throw FileError(kUwaDir,
+                  "bundled UWA data not found above the working directory or the executable; "
+                  "run from the source tree or set LASERCELL_SOURCE_DIR");
 }
 
 // Mean distance of the model's points between two poses, mm (ADD).
-double AddMm(const std::vector<Eigen::Vector3d>& points, const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+double AddMm(const std::vector<Eigen::Vector3d>& points, const Eigen::Isometry3d& a,
+             const Eigen::Isometry3d& b) {
   double sum = 0.0;
   for (const auto& p : points) sum += (a * p - b * p).norm();
   return sum / static_cast<double>(points.size());
@@ -96,11 +100,14 @@ std::string Cell(double v, const char* format) {
 
 void RunRobustnessBench(const RobustnessBenchArgs& args) {
   if (args.placements < 1) throw OptionError("bench robustness: --placements must be >= 1");
-  if (args.noise_mm.empty()) throw OptionError("bench robustness: --noise needs at least one level");
+  if (args.noise_mm.empty())
+    throw OptionError("bench robustness: --noise needs at least one level");
   for (double sigma : args.noise_mm) {
-    if (!(sigma >= 0.0) || !std::isfinite(sigma)) throw OptionError("bench robustness: noise levels must be >= 0 mm");
+    if (!(sigma >= 0.0) || !std::isfinite(sigma))
+      throw OptionError("bench robustness: noise levels must be >= 0 mm");
   }
-  if (args.threads < 0) throw OptionError("bench robustness: --threads must be >= 0 (0 = all cores)");
+  if (args.threads < 0)
+    throw OptionError("bench robustness: --threads must be >= 0 (0 = all cores)");
 
   const std::string root = FindSourceRoot();
   std::fprintf(stderr, "[robustness] loading %s/%s ...\n", root.c_str(), kUwaDir);
@@ -108,11 +115,15 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
       datasets::LoadRs1SyntheticData(root + "/" + kUwaDir, root + "/" + kReferenceFile);
   const auto build_start = std::chrono::steady_clock::now();
   const registration::PpfModel model = registration::PpfModel::Build(data.model);
-  const double build_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start).count();
+  const double build_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start)
+          .count();
   const double diameter_mm = model.diameter_mm();
   const double threshold_mm = 0.05 * diameter_mm;
   const Eigen::Vector3d centroid = data.model.Centroid();
-  std::fprintf(stderr, "[robustness] model: %zu points, diameter %.1f mm (ADD threshold %.2f mm), built in %.0f ms\n",
+  std::fprintf(stderr,
+               "[robustness] model: %zu points, diameter %.1f mm (ADD threshold %.2f mm), built in "
+               "%.0f ms\n",
                data.model.size(), diameter_mm, threshold_mm, build_ms);
 
   registration::LocalizeOptions options;
@@ -129,16 +140,24 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
     for (int i = 0; i < args.placements; ++i) {
       // Same placement at every level; the noise has its own stream per level and placement.
       std::mt19937_64 pose_rng(datasets::StreamSeed(args.seed, static_cast<std::uint64_t>(i)));
-      std::mt19937_64 noise_rng(datasets::StreamSeed(datasets::StreamSeed(args.seed, 1000003 + level), static_cast<std::uint64_t>(i)));
+      std::mt19937_64 noise_rng(datasets::StreamSeed(
+          datasets::StreamSeed(args.seed, 1000003 + level), static_cast<std::uint64_t>(i)));
       const Eigen::Isometry3d truth = datasets::RandomPlacementInRs1(centroid, pose_rng);
-      const datasets::SyntheticScan scan = datasets::RenderSyntheticScan(data.clutter, data.part_surface, {truth}, scan_options, noise_rng);
-      // Fraction of the part's surface that the clutter leaves visible (the part alone, rendered alike).
-      const std::size_t alone = datasets::VisibleFromOrigin(data.part_surface.Transformed(truth), scan_options.zbuffer_cell_mm,
-                                                            scan_options.zbuffer_depth_tolerance_mm).size();
-      const double unoccluded = alone > 0 ? static_cast<double>(scan.part_points) / static_cast<double>(alone) : 0.0;
+      const datasets::SyntheticScan scan = datasets::RenderSyntheticScan(
+          data.clutter, data.part_surface, {truth}, scan_options, noise_rng);
+      // Fraction of the part's surface that the clutter leaves visible (the part alone, rendered
+      // alike).
+      const std::size_t alone = datasets::VisibleFromOrigin(data.part_surface.Transformed(truth),
+                                                            scan_options.zbuffer_cell_mm,
+                                                            scan_options.zbuffer_depth_tolerance_mm)
+                                    .size();
+      const double unoccluded =
+          alone > 0 ? static_cast<double>(scan.part_points) / static_cast<double>(alone) : 0.0;
 
-      const registration::LocalizationResult result = registration::LocalizeInCloud(scan.cloud, model, options);
-      const double add = result.found ? AddMm(data.model.positions, truth, result.candidates.front().scene_from_model)
+      const registration::LocalizationResult result =
+          registration::LocalizeInCloud(scan.cloud, model, options);
+      const double add = result.found ? AddMm(data.model.positions, truth,
+                                              result.candidates.front().scene_from_model)
                                       : std::numeric_limits<double>::infinity();
       const bool success = add <= threshold_mm;
       ++stats.trials;
@@ -163,7 +182,8 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
       if (result.found) {
         const registration::LocalizationCandidate& best = result.candidates.front();
         t["add_mm"] = add;
-        t["rotation_error_deg"] = RotationDistance(best.scene_from_model, truth) * 180.0 / 3.14159265358979323846;
+        t["rotation_error_deg"] =
+            RotationDistance(best.scene_from_model, truth) * 180.0 / 3.14159265358979323846;
         t["translation_error_mm"] = TranslationDistance(best.scene_from_model, truth);
         t["scene_from_model_found"] = json::MatrixFlat(best.scene_from_model);
         t["support"] = best.verification.support;
@@ -174,8 +194,8 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
       }
       trials.push_back(std::move(t));
       if ((i + 1) % 20 == 0 || i + 1 == args.placements) {
-        std::fprintf(stderr, "[robustness] sigma %.2f mm: %d/%d placements, %d found\n", stats.noise_mm, i + 1,
-                     args.placements, stats.found);
+        std::fprintf(stderr, "[robustness] sigma %.2f mm: %d/%d placements, %d found\n",
+                     stats.noise_mm, i + 1, args.placements, stats.found);
       }
     }
 
@@ -183,27 +203,37 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
     datasets::SyntheticScanOptions empty_options = scan_options;
     empty_options.clutter_noise_sigma_mm = stats.noise_mm;
     std::mt19937_64 empty_rng(datasets::StreamSeed(args.seed, 2000003 + level));
-    datasets::SyntheticScan empty = datasets::RenderSyntheticScan(data.clutter, data.part_surface, {}, empty_options, empty_rng);
+    datasets::SyntheticScan empty = datasets::RenderSyntheticScan(data.clutter, data.part_surface,
+                                                                  {}, empty_options, empty_rng);
     if (stats.noise_mm > 0.0) empty.cloud.normals.clear();
-    const registration::LocalizationResult empty_result = registration::LocalizeInCloud(empty.cloud, model, options);
+    const registration::LocalizationResult empty_result =
+        registration::LocalizeInCloud(empty.cloud, model, options);
     stats.no_part_found = empty_result.found;
     no_part.push_back({{"noise_mm", stats.noise_mm},
                        {"scene_points", empty.cloud.size()},
                        {"found", empty_result.found},
                        {"message", empty_result.message},
                        {"time_ms", empty_result.timings.total_ms}});
-    std::fprintf(stderr, "[robustness] sigma %.2f mm: scene without the part -> found = %s\n", stats.noise_mm,
-                 empty_result.found ? "true (FALSE POSITIVE)" : "false");
+    std::fprintf(stderr, "[robustness] sigma %.2f mm: scene without the part -> found = %s\n",
+                 stats.noise_mm, empty_result.found ? "true (FALSE POSITIVE)" : "false");
     levels.push_back(std::move(stats));
   }
 
-  std::printf("Synthetic robustness: UWA parasaurolophus in real rs1 clutter, %d placements per level, seed %u, "
-              "%d thread(s)\n", args.placements, args.seed, args.threads);
-  std::printf("model diameter %.1f mm; success = top candidate's ADD <= 0.05 x diameter = %.2f mm after ICP\n\n",
-              diameter_mm, threshold_mm);
-  std::printf("| noise sigma (mm) | trials | found (ADD <= %.2f mm) | ADD <= 1 mm | wrong pose | nothing found | "
-              "failures < 50 %% visible | median ADD (mm) | p90 ADD (mm) | median time (ms) | scene without part |\n",
-              threshold_mm);
+  std::printf(
+      "Synthetic robustness: UWA parasaurolophus in real rs1 clutter, %d placements per level, "
+      "seed %u, "
+      "%d thread(s)\n",
+      args.placements, args.seed, args.threads);
+  std::printf(
+      "model diameter %.1f mm; success = top candidate's ADD <= 0.05 x diameter = %.2f mm after "
+      "ICP\n\n",
+      diameter_mm, threshold_mm);
+  std::printf(
+      "| noise sigma (mm) | trials | found (ADD <= %.2f mm) | ADD <= 1 mm | wrong pose | nothing "
+      "found | "
+      "failures < 50 %% visible | median ADD (mm) | p90 ADD (mm) | median time (ms) | scene "
+      "without part |\n",
+      threshold_mm);
   std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
   nlohmann::json summary = nlohmann::json::array();
   for (LevelStats& s : levels) {
@@ -212,23 +242,29 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
     const double n = s.trials;
     const double median_add = Percentile(s.add_mm, 0.5), p90_add = Percentile(s.add_mm, 0.9);
     const double median_ms = Percentile(s.time_ms, 0.5);
-    std::printf("| %.2f | %d | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %d | %s | %s | %.1f | %s |\n", s.noise_mm, s.trials,
-                100.0 * s.found / n, 100.0 * s.within_1mm / n, 100.0 * s.wrong_pose / n, 100.0 * s.nothing / n,
-                s.failed_occluded, Cell(median_add, "%.3f").c_str(), Cell(p90_add, "%.3f").c_str(), median_ms,
-                s.no_part_found ? "found (false positive)" : "not found (correct)");
-    summary.push_back({{"noise_mm", s.noise_mm},
-                       {"trials", s.trials},
-                       {"found_fraction", s.found / n},
-                       {"within_1mm_fraction", s.within_1mm / n},
-                       {"wrong_pose_fraction", s.wrong_pose / n},
-                       {"nothing_found_fraction", s.nothing / n},
-                       {"median_add_mm", std::isfinite(median_add) ? nlohmann::json(median_add) : nlohmann::json(nullptr)},
-                       {"p90_add_mm", std::isfinite(p90_add) ? nlohmann::json(p90_add) : nlohmann::json(nullptr)},
-                       {"median_time_ms", median_ms},
-                       {"no_part_false_positive", s.no_part_found}});
+    std::printf(
+        "| %.2f | %d | %.1f %% | %.1f %% | %.1f %% | %.1f %% | %d | %s | %s | %.1f | %s |\n",
+        s.noise_mm, s.trials, 100.0 * s.found / n, 100.0 * s.within_1mm / n,
+        100.0 * s.wrong_pose / n, 100.0 * s.nothing / n, s.failed_occluded,
+        Cell(median_add, "%.3f").c_str(), Cell(p90_add, "%.3f").c_str(), median_ms,
+        s.no_part_found ? "found (false positive)" : "not found (correct)");
+    summary.push_back(
+        {{"noise_mm", s.noise_mm},
+         {"trials", s.trials},
+         {"found_fraction", s.found / n},
+         {"within_1mm_fraction", s.within_1mm / n},
+         {"wrong_pose_fraction", s.wrong_pose / n},
+         {"nothing_found_fraction", s.nothing / n},
+         {"median_add_mm",
+          std::isfinite(median_add) ? nlohmann::json(median_add) : nlohmann::json(nullptr)},
+         {"p90_add_mm", std::isfinite(p90_add) ? nlohmann::json(p90_add) : nlohmann::json(nullptr)},
+         {"median_time_ms", median_ms},
+         {"no_part_false_positive", s.no_part_found}});
   }
-  std::printf("\n(ADD percentiles count a trial with nothing found as infinite; time is LocalizeInCloud's total, "
-              "scene generation excluded.)\n");
+  std::printf(
+      "\n(ADD percentiles count a trial with nothing found as infinite; time is LocalizeInCloud's "
+      "total, "
+      "scene generation excluded.)\n");
   std::fflush(stdout);
 
   if (!args.json_out.empty()) {

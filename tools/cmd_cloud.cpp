@@ -38,8 +38,8 @@ void PrintInfo(const std::string& path) {
     std::printf("ignored fields: %s\n", ignored.c_str());
   }
   if (cloud.IsOrganized()) {
-    std::printf("organized: yes, %d rows x %d columns (%zu of %lld cells valid)\n",
-                cloud.grid_rows, cloud.grid_cols, cloud.size(),
+    std::printf("organized: yes, %d rows x %d columns (%zu of %lld cells valid)\n", cloud.grid_rows,
+                cloud.grid_cols, cloud.size(),
                 static_cast<long long>(cloud.grid_rows) * cloud.grid_cols);
   } else {
     std::printf("organized: no\n");
@@ -97,10 +97,10 @@ void Convert(const ConvertArgs& args) {
     io::WritePointCloud(args.out, mesh.vertices, options);
   }
   std::printf("wrote %s: %zu points%s\n", args.out.c_str(), mesh.vertices.size(),
-              report.dropped_non_finite > 0
-                  ? (" (" + std::to_string(report.dropped_non_finite) +
-                     " non-finite points of the input dropped)").c_str()
-                  : "");
+              report.dropped_non_finite > 0 ? (" (" + std::to_string(report.dropped_non_finite) +
+                                               " non-finite points of the input dropped)")
+                                                  .c_str()
+                                            : "");
 }
 
 }  // namespace

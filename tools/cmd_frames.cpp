@@ -1,6 +1,6 @@
 // `lasercell frames show CELL.yaml` and `lasercell frames get CELL.yaml --to A --from B`.
-#include <cmath>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -92,7 +92,8 @@ void Show(const std::string& path) {
   std::set<std::string> seen;
   // Roots first (frames that are nobody's child), then anything left (other trees).
   std::vector<std::string> order;
-  for (const auto& f : graph.Frames()) if (!children.count(f)) order.push_back(f);
+  for (const auto& f : graph.Frames())
+    if (!children.count(f)) order.push_back(f);
   for (const auto& f : graph.Frames()) order.push_back(f);
   for (const auto& f : order) {
     if (seen.count(f)) continue;

@@ -54,13 +54,15 @@ void AddSimulateCommands(CLI::App& app) {
   sim->require_subcommand(1);
 
   CLI::App* cell = sim->add_subcommand(
-      "cell", "Every calibration capture (planes, spheres, trajectory), part scenes, images, truth");
+      "cell",
+      "Every calibration capture (planes, spheres, trajectory), part scenes, images, truth");
   auto cell_args = std::make_shared<SimulateArgs>();
   AddCommon(cell, *cell_args);
   cell->callback([cell_args] {
     const auto report = datasets::SimulateCell(Config(*cell_args), cell_args->out,
                                                Progress(cell_args->quiet), cell_args->threads);
-    if (!cell_args->quiet) std::printf("%s -> %s\n", report.Summary().c_str(), cell_args->out.c_str());
+    if (!cell_args->quiet)
+      std::printf("%s -> %s\n", report.Summary().c_str(), cell_args->out.c_str());
   });
 
   CLI::App* seat = sim->add_subcommand(
@@ -70,10 +72,11 @@ void AddSimulateCommands(CLI::App& app) {
   seat->add_option("--placements", seat_args->placements, "Number of scenes (>= 1)")
       ->check(CLI::PositiveNumber);
   seat->callback([seat_args] {
-    const auto report = datasets::SimulateSeats(Config(*seat_args), seat_args->placements,
-                                                seat_args->out, Progress(seat_args->quiet),
-                                                seat_args->threads);
-    if (!seat_args->quiet) std::printf("%s -> %s\n", report.Summary().c_str(), seat_args->out.c_str());
+    const auto report =
+        datasets::SimulateSeats(Config(*seat_args), seat_args->placements, seat_args->out,
+                                Progress(seat_args->quiet), seat_args->threads);
+    if (!seat_args->quiet)
+      std::printf("%s -> %s\n", report.Summary().c_str(), seat_args->out.c_str());
   });
 }
 

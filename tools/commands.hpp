@@ -4,9 +4,9 @@
 #include <CLI/CLI.hpp>
 
 namespace lasercell::tools {
-void AddCloudCommands(CLI::App& app);   ///< cloud info, cloud convert
-void AddFramesCommands(CLI::App& app);  ///< frames show, frames get
-void AddLocalizeCommand(CLI::App& app);  ///< localize
+void AddCloudCommands(CLI::App& app);     ///< cloud info, cloud convert
+void AddFramesCommands(CLI::App& app);    ///< frames show, frames get
+void AddLocalizeCommand(CLI::App& app);   ///< localize
 void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
 /// calibrate spheres (under the `calibrate` parent created in main.cpp)
 void AddCalibrateSpheresCommand(CLI::App& calibrate);

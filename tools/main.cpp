@@ -10,8 +10,9 @@
 #include "tools/commands.hpp"
 
 int main(int argc, char** argv) {
-  CLI::App app{"lasercell: calibrate a laser-triangulation cell, scan and localize parts.\n"
-               "Units: millimetres and radians. See README.md."};
+  CLI::App app{
+      "lasercell: calibrate a laser-triangulation cell, scan and localize parts.\n"
+      "Units: millimetres and radians. See README.md."};
   app.require_subcommand(1);
   app.set_version_flag("--version", std::string("lasercell ") + LASERCELL_VERSION);
   lasercell::tools::AddCloudCommands(app);

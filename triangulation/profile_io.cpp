@@ -42,8 +42,8 @@ T Get(const char* p) {
 }
 
 std::uint64_t PaddedHeaderBytes(const ProfileHeader& header) {
-  const std::uint64_t raw = kFixedHeaderBytes + 4 + header.robot.size() + 4 +
-                            header.metadata.size();
+  const std::uint64_t raw =
+      kFixedHeaderBytes + 4 + header.robot.size() + 4 + header.metadata.size();
   return (raw + 7) / 8 * 8;
 }
 
@@ -53,17 +53,16 @@ void CheckProfile(const ProfileHeader& header, const Profile& profile, const std
   const auto columns = static_cast<std::size_t>(header.columns);
   if (profile.row_px.size() != columns || profile.intensity.size() != columns ||
       profile.width_px.size() != columns) {
-    throw InputError(what + ": row_px/intensity/width_px hold " +
-                     std::to_string(profile.row_px.size()) + "/" +
-                     std::to_string(profile.intensity.size()) + "/" +
-                     std::to_string(profile.width_px.size()) +
-                     " values but the header says columns = " + std::to_string(columns) +
-                     "; every profile needs exactly one value per column");
+    throw InputError(
+        what + ": row_px/intensity/width_px hold " + std::to_string(profile.row_px.size()) + "/" +
+        std::to_string(profile.intensity.size()) + "/" + std::to_string(profile.width_px.size()) +
+        " values but the header says columns = " + std::to_string(columns) +
+        "; every profile needs exactly one value per column");
   }
   if (profile.joints_rad.size() != header.joint_count) {
-    throw InputError(what + ": joints_rad holds " + std::to_string(profile.joints_rad.size()) +
-                     " values but the header says joint_count = " +
-                     std::to_string(header.joint_count));
+    throw InputError(
+        what + ": joints_rad holds " + std::to_string(profile.joints_rad.size()) +
+        " values but the header says joint_count = " + std::to_string(header.joint_count));
   }
   for (std::size_t c = 0; c < columns; ++c) {
     const float row = profile.row_px[c];
@@ -95,8 +94,8 @@ void ProfileHeader::Check(const std::string& what) const {
                      " exceeds image_width = " + std::to_string(image_width));
   }
   if (joint_count > kMaxJoints) {
-    throw InputError(what + ": joint_count = " + std::to_string(joint_count) +
-                     " is more than " + std::to_string(kMaxJoints));
+    throw InputError(what + ": joint_count = " + std::to_string(joint_count) + " is more than " +
+                     std::to_string(kMaxJoints));
   }
   if (robot.size() > kMaxStringBytes || metadata.size() > kMaxStringBytes) {
     throw InputError(what + ": robot or metadata text longer than 16 MiB");
@@ -228,8 +227,8 @@ ProfileSet DecodeProfiles(std::string_view bytes, const std::string& name) {
                " does not match the header's strings (" + std::to_string(offset) + " bytes)");
   }
   if (header_bytes > bytes.size()) {
-    throw fail("truncated header: header_bytes = " + std::to_string(header_bytes) +
-               ", file has " + std::to_string(bytes.size()) + " bytes");
+    throw fail("truncated header: header_bytes = " + std::to_string(header_bytes) + ", file has " +
+               std::to_string(bytes.size()) + " bytes");
   }
   try {
     h.Check("header");

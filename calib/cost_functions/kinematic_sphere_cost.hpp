@@ -86,8 +86,8 @@ void PerturbedFlangeFromSensor(const Eigen::Isometry3d& reference, const T* w_u,
   ceres::AngleAxisToRotationMatrix(w_u, ceres::ColumnMajorAdapter3x3(exp_w));
   const Eigen::Map<const Eigen::Matrix<T, 3, 3>> e(exp_w);
   *rotation = e * reference.linear().cast<T>();
-  *translation = e * reference.translation().cast<T>() +
-                 Eigen::Matrix<T, 3, 1>(w_u[3], w_u[4], w_u[5]);
+  *translation =
+      e * reference.translation().cast<T>() + Eigen::Matrix<T, 3, 1>(w_u[3], w_u[4], w_u[5]);
 }
 
 /// Residuals of one profile's points against one sphere (see the file comment).

@@ -18,7 +18,8 @@ struct PlanePointDistanceCost {
 
   template <typename T>
   bool operator()(const T* normal, const T* offset, T* residual) const {
-    residual[0] = T(w_) * (normal[0] * p_.x() + normal[1] * p_.y() + normal[2] * p_.z() + offset[0]);
+    residual[0] =
+        T(w_) * (normal[0] * p_.x() + normal[1] * p_.y() + normal[2] * p_.z() + offset[0]);
     return true;
   }
 
@@ -58,7 +59,8 @@ struct HeightPlaneRayCost {
     return true;
   }
 
-  static ceres::CostFunction* Create(const Eigen::Vector3d& ray, const Eigen::Vector3d& white_normal,
+  static ceres::CostFunction* Create(const Eigen::Vector3d& ray,
+                                     const Eigen::Vector3d& white_normal,
                                      const Eigen::Vector3d& tilt_direction, double height_mm,
                                      double weight) {
     return new ceres::AutoDiffCostFunction<HeightPlaneRayCost, 1, 3, 1, 1, 1>(

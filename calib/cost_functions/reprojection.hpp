@@ -27,9 +27,9 @@ namespace lasercell::calib {
 /// How the optimised intrinsics block maps to mrcal's full vector (fx fy cx cy distortion...).
 /// With fix_aspect the block is (f, cx, cy, distortion...) and fy = aspect * f.
 struct IntrinsicsLayout {
-  int num_full = 0;      ///< mrcal's intrinsics count for the lens model.
+  int num_full = 0;  ///< mrcal's intrinsics count for the lens model.
   bool fix_aspect = false;
-  double aspect = 1.0;   ///< fy / fx when fix_aspect.
+  double aspect = 1.0;  ///< fy / fx when fix_aspect.
 
   int NumFree() const { return fix_aspect ? num_full - 1 : num_full; }
   void ToFull(const double* free, double* full) const {
@@ -68,8 +68,8 @@ class ReprojectionCost final : public ceres::CostFunction {
  public:
   /// `camera` (its lens model) must outlive the cost. warp: add the warp block.
   ReprojectionCost(const CameraModel* camera, const IntrinsicsLayout& layout,
-                   const Eigen::Vector3d& p_in_board, const Eigen::Vector2d& observed_px,
-                   bool warp, const Eigen::Vector2d& board_extent_mm, double weight = 1.0)
+                   const Eigen::Vector3d& p_in_board, const Eigen::Vector2d& observed_px, bool warp,
+                   const Eigen::Vector2d& board_extent_mm, double weight = 1.0)
       : camera_(camera),
         layout_(layout),
         p_in_board_(p_in_board),

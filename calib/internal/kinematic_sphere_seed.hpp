@@ -22,12 +22,12 @@ std::optional<SeedSphere> AlgebraicSphere(const std::vector<Eigen::Vector3d>& po
 
 /// Options of FindSphere.
 struct FindSphereOptions {
-  double min_radius_mm = 5;            ///< Smallest plausible radius.
-  double max_radius_mm = 150;          ///< Largest plausible radius (rejects planes).
-  double neighbourhood_mm = 80;        ///< Samples are drawn within this distance of a seed point.
-  double inlier_gate_mm = 1.0;         ///< |distance - radius| for an inlier.
-  int hypotheses = 400;                ///< RANSAC hypotheses.
-  unsigned seed = 1;                   ///< Random seed (std::mt19937 raw draws: deterministic).
+  double min_radius_mm = 5;      ///< Smallest plausible radius.
+  double max_radius_mm = 150;    ///< Largest plausible radius (rejects planes).
+  double neighbourhood_mm = 80;  ///< Samples are drawn within this distance of a seed point.
+  double inlier_gate_mm = 1.0;   ///< |distance - radius| for an inlier.
+  int hypotheses = 400;          ///< RANSAC hypotheses.
+  unsigned seed = 1;             ///< Random seed (std::mt19937 raw draws: deterministic).
   /// When set, only points within this distance of `near_centre` are considered.
   std::optional<Eigen::Vector3d> near_centre;
   double near_distance_mm = 0;

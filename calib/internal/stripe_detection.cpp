@@ -75,8 +75,9 @@ Eigen::Isometry3d BoardPose(const CameraModel& camera, const std::vector<Eigen::
   return pose;
 }
 
-std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser, const std::vector<cv::Point2f>& region,
-                                         bool along_rows, const StripeOptions& options) {
+std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser,
+                                         const std::vector<cv::Point2f>& region, bool along_rows,
+                                         const StripeOptions& options) {
   std::vector<Eigen::Vector2d> peaks;
   const int lines = along_rows ? laser.rows : laser.cols;
   const int length = along_rows ? laser.cols : laser.rows;
@@ -106,7 +107,8 @@ std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser, const std::vector
           along_rows ? laser.at<float>(line, k) : laser.at<float>(k, line);
     }
     sorted.assign(profile.begin() + first, profile.begin() + last + 1);
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2), sorted.end());
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(sorted.size() / 2),
+                     sorted.end());
     const float background = sorted[sorted.size() / 2];
     const auto max_it = std::max_element(profile.begin() + first, profile.begin() + last + 1);
     const int kmax = static_cast<int>(max_it - profile.begin());

@@ -1,6 +1,6 @@
 #pragma once
-// Private helpers of the stripe-on-chessboard laser calibration (calib/laser_plane_stripe.cpp): board
-// pose through the camera model, the laser channel of a colour image, and one subpixel
+// Private helpers of the stripe-on-chessboard laser calibration (calib/laser_plane_stripe.cpp):
+// board pose through the camera model, the laser channel of a colour image, and one subpixel
 // laser-stripe peak per scan line inside the board region. The board itself is found by the
 // shared detector, calib/target_detection.hpp.
 
@@ -26,8 +26,9 @@ Eigen::Isometry3d BoardPose(const CameraModel& camera, const std::vector<Eigen::
 /// inside `region` (a convex polygon in pixels): the maximum, rejected below the contrast or
 /// when a second maximum is too strong, refined by the centre of gravity of the samples above
 /// half the peak. Returns (column, row) pixels.
-std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser, const std::vector<cv::Point2f>& region,
-                                         bool along_rows, const StripeOptions& options);
+std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser,
+                                         const std::vector<cv::Point2f>& region, bool along_rows,
+                                         const StripeOptions& options);
 
 /// The laser channel (CV_32F) of an image for the configured colour.
 cv::Mat LaserChannel(const StripeImage& image, const std::string& color);

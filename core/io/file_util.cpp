@@ -11,8 +11,8 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <utility>
 #include <fstream>
+#include <utility>
 #include <vector>
 
 #include "core/error.hpp"
@@ -41,7 +41,8 @@ MappedFile::MappedFile(const std::string& path) {
     throw FileError(path, "is a directory, expected a file");
   }
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw FileError(path, std::string("cannot open for reading: ") + std::strerror(errno));
+  if (fd < 0)
+    throw FileError(path, std::string("cannot open for reading: ") + std::strerror(errno));
   struct stat st {};
   if (::fstat(fd, &st) != 0) {
     const std::string reason = std::strerror(errno);
@@ -89,7 +90,8 @@ void WriteFileAtomically(const std::string& path, std::string_view bytes) {
   std::vector<char> name(tmpl.begin(), tmpl.end());
   name.push_back('\0');
   const int fd = ::mkstemp(name.data());
-  if (fd < 0) throw FileError(path, std::string("cannot create a temporary file: ") + std::strerror(errno));
+  if (fd < 0)
+    throw FileError(path, std::string("cannot create a temporary file: ") + std::strerror(errno));
   const std::string tmp_path(name.data());
   auto fail = [&](const std::string& what) {
     const std::string reason = std::strerror(errno);

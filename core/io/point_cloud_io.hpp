@@ -5,10 +5,10 @@
 // Units: lasercell works in millimetres; files are read as they are (see ReadReport::unit_hint).
 // Normals are returned unit length (normalized on read when a file stores them otherwise).
 // Points with a non-finite coordinate or an invalid normal (NaN/inf or zero length) are never
-// passed on: they are dropped and counted in ReadReport::dropped_non_finite (organized PCD keeps the grid cell of every kept
-// point in profile/column). PLY faces are remapped to the kept vertices; a triangle that uses
-// a dropped vertex is dropped too (ReadReport::dropped_faces). Writes are atomic
-// (file_util.hpp) and default to binary PLY.
+// passed on: they are dropped and counted in ReadReport::dropped_non_finite (organized PCD keeps
+// the grid cell of every kept point in profile/column). PLY faces are remapped to the kept
+// vertices; a triangle that uses a dropped vertex is dropped too (ReadReport::dropped_faces).
+// Writes are atomic (file_util.hpp) and default to binary PLY.
 //
 // Field names written and recognised: x y z, nx ny nz (PCD: normal_x normal_y normal_z),
 // intensity, profile, column, timestamp (seconds). lasercell PLY files carry the comments
@@ -33,8 +33,9 @@ namespace lasercell::io {
 struct ReadReport {
   std::string format;              ///< e.g. "ply binary_little_endian", "pcd binary_compressed".
   std::size_t points_in_file = 0;  ///< Vertex/point count declared by the header.
-  std::size_t dropped_non_finite = 0;       ///< Points dropped: NaN/inf position, NaN/inf or zero-length normal.
-  std::size_t faces = 0;                    ///< Triangles read (PLY meshes; polygons fanned).
+  std::size_t dropped_non_finite =
+      0;                  ///< Points dropped: NaN/inf position, NaN/inf or zero-length normal.
+  std::size_t faces = 0;  ///< Triangles read (PLY meshes; polygons fanned).
   std::size_t dropped_faces = 0;            ///< Triangles dropped: they used a dropped vertex.
   std::vector<std::string> fields_in_file;  ///< Vertex property names in file order.
   std::vector<std::string> ignored_fields;  ///< Properties read but not kept (e.g. rgb, curvature).

@@ -13,10 +13,10 @@ namespace lasercell::calib {
 namespace {
 
 CameraModel Opencv8() {
-  return CameraModel("LENSMODEL_OPENCV8",
-                     {1132.0, 1131.5, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011,
-                      -0.006, 0.002},
-                     1024, 1024);
+  return CameraModel(
+      "LENSMODEL_OPENCV8",
+      {1132.0, 1131.5, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011, -0.006, 0.002},
+      1024, 1024);
 }
 
 TEST(CameraModel, ProjectUnprojectRoundTrip) {

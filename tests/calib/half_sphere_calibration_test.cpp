@@ -32,7 +32,8 @@ struct PoseError {
 PoseError Compare(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth,
                   const std::vector<Eigen::Vector3d>& centers_in_sweep) {
   PoseError e{RotationDistance(est, truth) * kRadToDeg, TranslationDistance(est, truth), 0};
-  for (const auto& c : centers_in_sweep) e.at_spheres_mm = std::max(e.at_spheres_mm, (est * c - truth * c).norm());
+  for (const auto& c : centers_in_sweep)
+    e.at_spheres_mm = std::max(e.at_spheres_mm, (est * c - truth * c).norm());
   return e;
 }
 
@@ -49,17 +50,19 @@ TEST(CalibrateHalfSpheres, SimulatedCellAgreesWithTheTruthWithinItsReportedSigma
   ASSERT_EQ(r.spheres.size(), 4u);
   for (const auto& s : r.spheres) {
     // The match is right: the swept sphere lies where the truth puts sphere s.sphere.
-    EXPECT_LT((s.center_in_sweep - sim.centers_in_sweep[static_cast<std::size_t>(s.sphere)]).norm(), 0.05);
+    EXPECT_LT((s.center_in_sweep - sim.centers_in_sweep[static_cast<std::size_t>(s.sphere)]).norm(),
+              0.05);
   }
-  const PoseError e = Compare(r.handling_base_from_sweep, sim.handling_base_from_sweep,
-                              sim.centers_in_sweep);
+  const PoseError e =
+      Compare(r.handling_base_from_sweep, sim.handling_base_from_sweep, sim.centers_in_sweep);
   const Vector6d xi = RotationVectorTranslation(sim.handling_base_from_sweep *
                                                 r.handling_base_from_sweep.inverse());
   const double mahalanobis = std::sqrt(xi.dot(r.covariance.inverse() * xi));
   std::printf("[ measured ] touch sigma 0.05: %s\n", r.Summary().c_str());
-  std::printf("[ measured ] error vs truth: rotation %.5f deg, translation %.4f mm, at the spheres "
-              "%.4f mm; Mahalanobis %.2f (6 dof)\n", e.rotation_deg, e.translation_mm,
-              e.at_spheres_mm, mahalanobis);
+  std::printf(
+      "[ measured ] error vs truth: rotation %.5f deg, translation %.4f mm, at the spheres "
+      "%.4f mm; Mahalanobis %.2f (6 dof)\n",
+      e.rotation_deg, e.translation_mm, e.at_spheres_mm, mahalanobis);
   // 6-dof chi2 at p = 0.999: 22.5 -> Mahalanobis 4.7.
   EXPECT_LT(mahalanobis, 4.7);
   EXPECT_TRUE(r.unmatched_swept.empty());
@@ -93,17 +96,19 @@ TEST(CalibrateHalfSpheres, FourSpheresMeetTheIssueNumbersAtTouchSigmaFiveMicrome
       HalfSphereCalibrationOptions options;
       options.touch_sigma_mm = sigma;
       const HalfSphereCalibrationResult r = CalibrateHalfSpheres(swept, touches, options);
-      const PoseError e = Compare(r.handling_base_from_sweep, sim.handling_base_from_sweep,
-                                  sim.centers_in_sweep);
+      const PoseError e =
+          Compare(r.handling_base_from_sweep, sim.handling_base_from_sweep, sim.centers_in_sweep);
       worst_rot = std::max(worst_rot, e.rotation_deg);
       worst_trans = std::max(worst_trans, e.translation_mm);
       worst_at = std::max(worst_at, e.at_spheres_mm);
       sigma_trans = r.fit.TranslationSigmaMm().norm();
       sigma_rot = r.fit.RotationSigmaDeg().norm();
     }
-    std::printf("[ measured ] touch sigma %.3f mm, 20 draws: worst rotation %.5f deg, translation "
-                "%.4f mm, at the spheres %.4f mm (reported 1-sigma |rot| %.5f deg, |trans| %.4f "
-                "mm)\n", sigma, worst_rot, worst_trans, worst_at, sigma_rot, sigma_trans);
+    std::printf(
+        "[ measured ] touch sigma %.3f mm, 20 draws: worst rotation %.5f deg, translation "
+        "%.4f mm, at the spheres %.4f mm (reported 1-sigma |rot| %.5f deg, |trans| %.4f "
+        "mm)\n",
+        sigma, worst_rot, worst_trans, worst_at, sigma_rot, sigma_trans);
     if (sigma == 0.005) {
       EXPECT_LE(worst_rot, 0.01);
       EXPECT_LE(worst_trans, 0.05);
@@ -180,8 +185,8 @@ Eigen::Isometry3d SomePose() {
 }
 
 TEST(CalibrateHalfSpheres, TouchOrderDoesNotMatterAndExtraSweptSpheresAreReported) {
-  const std::vector<Eigen::Vector3d> centers = {{-250, -140, 600}, {230, -160, 560},
-                                                {260, 150, 520}, {-220, 170, 480}};
+  const std::vector<Eigen::Vector3d> centers = {
+      {-250, -140, 600}, {230, -160, 560}, {260, 150, 520}, {-220, 170, 480}};
   auto touches = TouchesAt(centers, SomePose());
   std::swap(touches[0], touches[3]);
   auto swept = SweptAt(centers);
@@ -226,9 +231,10 @@ TEST(CalibrateHalfSpheres, FewerThanThreeSpheresIsAnError) {
     CalibrateHalfSpheres(SweptAt(centers), TouchesAt(centers, SomePose()), {});
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_STREQ(e.what(), "half-sphere calibration: 2 sphere touches: at least 3 non-collinear "
-                           "spheres must be both swept and touched (fewer leave the rotation "
-                           "unobservable)");
+    EXPECT_STREQ(e.what(),
+                 "half-sphere calibration: 2 sphere touches: at least 3 non-collinear "
+                 "spheres must be both swept and touched (fewer leave the rotation "
+                 "unobservable)");
   }
 }
 
@@ -246,8 +252,8 @@ TEST(CalibrateHalfSpheres, CollinearSpheresAreAnError) {
 
 TEST(CalibrateHalfSpheres, SymmetricLayoutIsAmbiguous) {
   // A square at one height: rotations by 90 deg map it onto itself.
-  const std::vector<Eigen::Vector3d> centers = {{-200, -200, 600}, {200, -200, 600},
-                                                {200, 200, 600}, {-200, 200, 600}};
+  const std::vector<Eigen::Vector3d> centers = {
+      {-200, -200, 600}, {200, -200, 600}, {200, 200, 600}, {-200, 200, 600}};
   try {
     CalibrateHalfSpheres(SweptAt(centers), TouchesAt(centers, SomePose()), {});
     FAIL();
@@ -258,8 +264,8 @@ TEST(CalibrateHalfSpheres, SymmetricLayoutIsAmbiguous) {
 }
 
 TEST(CalibrateHalfSpheres, TouchesThatMatchNoSweptLayoutAreAnError) {
-  const std::vector<Eigen::Vector3d> centers = {{-250, -140, 600}, {230, -160, 560},
-                                                {260, 150, 520}, {-220, 170, 480}};
+  const std::vector<Eigen::Vector3d> centers = {
+      {-250, -140, 600}, {230, -160, 560}, {260, 150, 520}, {-220, 170, 480}};
   auto touches = TouchesAt(centers, SomePose());
   touches[2].point_in_handling_base *= 0.001;  // one touch in metres
   try {
@@ -309,7 +315,9 @@ TEST(ParseTouchesYaml, ReadsWhatTheSimulatorWrites) {
       ParseTouchesYaml(datasets::TouchesRecordYaml(config, sim.touches), "records/touches.yaml");
   ASSERT_EQ(t.touches.size(), sim.touches.size());
   for (std::size_t i = 0; i < t.touches.size(); ++i) {
-    EXPECT_LT((t.touches[i].point_in_handling_base - sim.touches[i].measured_in_handling_base).norm(), 1e-12);
+    EXPECT_LT(
+        (t.touches[i].point_in_handling_base - sim.touches[i].measured_in_handling_base).norm(),
+        1e-12);
     // Every recorded field reads back exactly (shortest round-trip numbers).
     EXPECT_EQ(t.touches[i].sphere, sim.touches[i].sphere);
     EXPECT_EQ(t.touches[i].point_in_handling_base, sim.touches[i].measured_in_handling_base);
@@ -320,10 +328,10 @@ TEST(ParseTouchesYaml, ReadsWhatTheSimulatorWrites) {
   EXPECT_EQ(t.stated_sigma_mm, config.touches.sigma_mm);
   EXPECT_EQ(t.sphere_radius_mm, config.spheres.radius_mm);
   ASSERT_TRUE(t.handling_flange_from_tool_tip.has_value());
-  EXPECT_LT((t.handling_flange_from_tool_tip->matrix() -
-             datasets::PointingTool(config.touches).matrix())
-                .norm(),
-            1e-12);
+  EXPECT_LT(
+      (t.handling_flange_from_tool_tip->matrix() - datasets::PointingTool(config.touches).matrix())
+          .norm(),
+      1e-12);
 }
 
 void ExpectFileError(const std::string& text, const std::string& expected) {
@@ -358,15 +366,17 @@ TEST(ParseTouchesYaml, MixedUnitsAreErrors) {
                   "line 6: unknown field 'stated_sigma_in'; did you mean 'stated_sigma_mm'? "
                   "(lasercell uses millimetres)");
   // One touch in metres among millimetres.
-  ExpectFileError(Replace(kTouchesYaml, "[1120.0, 160.0, 274.0]", "[1.12, 0.16, 0.274]"),
-                  "line 13: field 'touches[1].point_in_handling_base' is 1.164077 from the base while "
-                  "another is 1623.185772");
+  ExpectFileError(
+      Replace(kTouchesYaml, "[1120.0, 160.0, 274.0]", "[1.12, 0.16, 0.274]"),
+      "line 13: field 'touches[1].point_in_handling_base' is 1.164077 from the base while "
+      "another is 1623.185772");
   ExpectFileError(Replace(kTouchesYaml, "[1120.0, 160.0, 274.0]", "[1.12, 0.16, 0.274]"),
                   "mixed units (metres among millimetres?)");
   // Joints in degrees.
-  ExpectFileError(Replace(kTouchesYaml, "[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]", "[10, 20, 30, 40, 50, 60]"),
-                  "line 11: field 'touches[0].joints_rad' holds 10.000000, beyond +-2 pi: it looks like "
-                  "degrees");
+  ExpectFileError(
+      Replace(kTouchesYaml, "[0.1, 0.2, 0.3, 0.4, 0.5, 0.6]", "[10, 20, 30, 40, 50, 60]"),
+      "line 11: field 'touches[0].joints_rad' holds 10.000000, beyond +-2 pi: it looks like "
+      "degrees");
   // A radius in metres.
   ExpectFileError(Replace(kTouchesYaml, "sphere_radius_mm: 25", "sphere_radius_mm: 0.025"),
                   "line 7: field 'sphere_radius_mm' is 0.025, which looks like metres");
@@ -375,11 +385,13 @@ TEST(ParseTouchesYaml, MixedUnitsAreErrors) {
 TEST(ParseTouchesYaml, OtherProblemsNameTheField) {
   ExpectFileError(Replace(kTouchesYaml, "frame: handling_base", "frame: cell"),
                   "line 4: field 'frame' is 'cell': touches must be given in handling_base");
-  ExpectFileError(Replace(kTouchesYaml, "- sphere: 1", "- sphere: 0"), "line 12: field 'touches[1].sphere' repeats a label: sphere 0 is touched twice");
+  ExpectFileError(Replace(kTouchesYaml, "- sphere: 1", "- sphere: 0"),
+                  "line 12: field 'touches[1].sphere' repeats a label: sphere 0 is touched twice");
   ExpectFileError(Replace(kTouchesYaml, "[1120.0, 160.0, 274.0]", "[1120.0, 160.0]"),
                   "line 13: field 'touches[1].point_in_handling_base' must list exactly 3 numbers "
                   "(got 2)");
-  ExpectFileError(Replace(kTouchesYaml, "version: 1", "version: 2"), "line 2: field 'version' is 2: unsupported version");
+  ExpectFileError(Replace(kTouchesYaml, "version: 1", "version: 2"),
+                  "line 2: field 'version' is 2: unsupported version");
   ExpectFileError("[1, 2]", "is not a touches file");
 }
 

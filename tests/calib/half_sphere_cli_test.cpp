@@ -74,7 +74,8 @@ TEST_F(CalibrateSpheresCli, WritesTheEdgeTheJsonAndTheReport) {
   // Within 5 reported sigmas (chi2 6 dof at 5 sigma-norm is far beyond p = 1e-4).
   const Vector6d xi = RotationVectorTranslation(sim.handling_base_from_sweep * est.inverse());
   Matrix6d cov;
-  for (int i = 0; i < 36; ++i) cov.data()[i] = j["covariance"]["values"][static_cast<std::size_t>(i)];
+  for (int i = 0; i < 36; ++i)
+    cov.data()[i] = j["covariance"]["values"][static_cast<std::size_t>(i)];
   EXPECT_LT(std::sqrt(xi.dot(cov.inverse() * xi)), 5.0);
   ASSERT_EQ(j["spheres"].size(), 4u);
   for (const auto& s : j["spheres"]) {
@@ -94,7 +95,8 @@ TEST_F(CalibrateSpheresCli, WritesTheEdgeTheJsonAndTheReport) {
   ASSERT_TRUE(edge.covariance.has_value());
   EXPECT_LT(RotationDistance(edge.ParentFromChild(), est), 1e-12);
   EXPECT_LT(RotationDistance(graph.Transform("cell", "handling_base"),
-                             truth_.layout.cell_from_handling_base), 1e-15);
+                             truth_.layout.cell_from_handling_base),
+            1e-15);
 
   // Report: the per-sphere bars, one residual histogram per sphere.
   const std::string html = io::ReadFileBytes((dir_ / "r.html").string());
@@ -125,9 +127,10 @@ TEST_F(CalibrateSpheresCli, FreeRadiusFitsTheRadiiAndAgreesWithTheTruth) {
   const auto& pose = j["handling_base_from_sweep_start"];
   const Eigen::Vector3d t(pose["translation_mm"][0], pose["translation_mm"][1],
                           pose["translation_mm"][2]);
-  const double sigma_t = Eigen::Vector3d(j["sigma"]["translation_mm"][0],
-                                         j["sigma"]["translation_mm"][1],
-                                         j["sigma"]["translation_mm"][2]).norm();
+  const double sigma_t =
+      Eigen::Vector3d(j["sigma"]["translation_mm"][0], j["sigma"]["translation_mm"][1],
+                      j["sigma"]["translation_mm"][2])
+          .norm();
   EXPECT_LT((t - testing::DefaultSphereSweep().handling_base_from_sweep.translation()).norm(),
             4 * sigma_t);
 }
@@ -137,7 +140,8 @@ TEST_F(CalibrateSpheresCli, RefusesAnEdgeThatWouldCloseACycle) {
   const CommandResult run = RunCli(Args("truth_cell.yaml"));
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("handling_base and 'sensor' are already connected through other edges"),
-            std::string::npos) << run.err;
+            std::string::npos)
+      << run.err;
   EXPECT_NE(run.err.find("--sweep-frame"), std::string::npos);
   // With a frame of its own it works.
   EXPECT_EQ(RunCli(Args("truth_cell.yaml") + " --sweep-frame sweep_start").exit_code, 0);
@@ -149,15 +153,13 @@ TEST_F(CalibrateSpheresCli, NoSphereInTheSweepIsAClearError) {
                 dir_ / "rs1.ply");
   const CommandResult run = RunCli(Args("cell.yaml", "rs1.ply"));
   EXPECT_EQ(run.exit_code, 2);
-  EXPECT_NE(run.err.find("rs1.ply: no sphere of radius 25 mm found"), std::string::npos)
-      << run.err;
+  EXPECT_NE(run.err.find("rs1.ply: no sphere of radius 25 mm found"), std::string::npos) << run.err;
   EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
 }
 
 TEST_F(CalibrateSpheresCli, BadTouchesFilesAreClearErrors) {
   std::string text = io::ReadFileBytes((dir_ / "touches.yaml").string());
-  io::WriteFileAtomically((dir_ / "t1.yaml").string(),
-                          text + "units: m\n");
+  io::WriteFileAtomically((dir_ / "t1.yaml").string(), text + "units: m\n");
   CommandResult run = RunCli(Args("cell.yaml", "sweep.ply", "t1.yaml"));
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("t1.yaml: line"), std::string::npos) << run.err;

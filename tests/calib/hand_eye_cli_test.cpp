@@ -28,11 +28,11 @@ namespace {
 namespace fs = std::filesystem;
 
 // Skips the calling test (with the reason) when the shared kuka2 set is absent.
-#define REQUIRE_KUKA2()                                                              \
-  do {                                                                               \
-    const calib::realdata::Kuka2* kuka2_ = calib::realdata::LoadKuka2();             \
-    if (kuka2_ == nullptr) GTEST_SKIP() << calib::realdata::Kuka2Missing();          \
-    ASSERT_TRUE(kuka2_->error.empty()) << kuka2_->error;                             \
+#define REQUIRE_KUKA2()                                                     \
+  do {                                                                      \
+    const calib::realdata::Kuka2* kuka2_ = calib::realdata::LoadKuka2();    \
+    if (kuka2_ == nullptr) GTEST_SKIP() << calib::realdata::Kuka2Missing(); \
+    ASSERT_TRUE(kuka2_->error.empty()) << kuka2_->error;                    \
   } while (false)
 
 using ::lasercell::test::CommandResult;
@@ -127,11 +127,11 @@ TEST_F(HandEyeCli, MismatchedPoseCountIsRejected) {
 TEST_F(HandEyeCli, PosesInMetresGivenAsYamlAreRejected) {
   REQUIRE_KUKA2();
   const std::string poses = (dir_ / "poses.yaml").string();
-  io::WriteFileAtomically(
-      poses,
-      "format: lasercell.robot_poses\nversion: 1\nposes:\n"
-      "  - {translation_mm: [0.5, 0.1, 0.9], rotation_wxyz: [1, 0, 0, 0]}\n"
-      "  - {translation_mm: [0.6, 0.1, 0.9], rotation_wxyz: [0.9950041652780258, 0.09983341664682815, 0, 0]}\n");
+  io::WriteFileAtomically(poses,
+                          "format: lasercell.robot_poses\nversion: 1\nposes:\n"
+                          "  - {translation_mm: [0.5, 0.1, 0.9], rotation_wxyz: [1, 0, 0, 0]}\n"
+                          "  - {translation_mm: [0.6, 0.1, 0.9], rotation_wxyz: "
+                          "[0.9950041652780258, 0.09983341664682815, 0, 0]}\n");
   const CommandResult r = RunCliMerged("calibrate handeye --cell " + (dir_ / "cell.yaml").string() +
                                        " --camera " + Data("camera.cameramodel") + " --corners " +
                                        Data("corners.txt") + " --poses " + poses);
@@ -201,7 +201,8 @@ TEST_F(HandEyeCli, CreatesTheCellFileWhenAbsent) {
   std::normal_distribution<double> noise(0.0, 0.03);
   for (std::size_t i = 0; i < set.images.size(); ++i) {
     const std::string name = fs::path(datasets::HandEyeImageFile(i)).filename().string();
-    poses.base_from_flange.push_back(truth.true_vision_robot.BaseFromFlange(set.images[i].joints_rad));
+    poses.base_from_flange.push_back(
+        truth.true_vision_robot.BaseFromFlange(set.images[i].joints_rad));
     poses.images.push_back(name);
     det.images.push_back(name);
     det.corners_px.emplace_back();

@@ -13,8 +13,8 @@
 #include <random>
 #include <sstream>
 
-#include "calib/cost_functions/hand_eye_reprojection.hpp"
 #include "calib/board.hpp"
+#include "calib/cost_functions/hand_eye_reprojection.hpp"
 #include "calib/pose_io.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
@@ -28,10 +28,10 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 
 CameraModel Opencv8() {
-  return CameraModel("LENSMODEL_OPENCV8",
-                     {1132.0, 1131.5, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011,
-                      -0.006, 0.002},
-                     1024, 1024);
+  return CameraModel(
+      "LENSMODEL_OPENCV8",
+      {1132.0, 1131.5, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011, -0.006, 0.002},
+      1024, 1024);
 }
 
 // The true unknowns of the synthetic cell.
@@ -63,7 +63,8 @@ Synthetic MakeViews(const CameraModel& camera, int n_views, int cols, int rows, 
     const double azimuth = (360.0 * (i + u(rng)) / n_views) * kDeg;
     const double roll = (-60 + 120 * u(rng)) * kDeg;
     // board_from_camera: camera looks down -z of the board (board z up) at the centre.
-    const Eigen::Matrix3d down = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const Eigen::Matrix3d down =
+        Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
     const Eigen::Matrix3d r = Eigen::AngleAxisd(azimuth, Eigen::Vector3d::UnitZ()) *
                               Eigen::AngleAxisd(tilt, Eigen::Vector3d::UnitX()) *
                               Eigen::AngleAxisd(-azimuth, Eigen::Vector3d::UnitZ()) * down *
@@ -533,8 +534,7 @@ TEST(HandEyeReal, Kuka2FromSharedImages) {
   };
   for (HandEyeMethod m :
        {HandEyeMethod::kTsaiLenz, HandEyeMethod::kParkMartin, HandEyeMethod::kDaniilidis}) {
-    EXPECT_LT(r.reprojection_rms_px,
-              reproj(SolveHandEyeClosedForm(a, r.camera_from_board, m)))
+    EXPECT_LT(r.reprojection_rms_px, reproj(SolveHandEyeClosedForm(a, r.camera_from_board, m)))
         << HandEyeMethodName(m);
   }
 }

@@ -30,7 +30,8 @@ Synthetic MakeSynthetic(int num_views, std::uint64_t seed) {
   const datasets::ChessboardTarget target;
   s.board = BoardOf(target);
   const Eigen::Vector3d offset(target.square_mm, target.square_mm, 0);  // target -> BoardSpec
-  for (const Eigen::Isometry3d& pose : datasets::DrawChessboardPoses(target, camera, num_views, seed)) {
+  for (const Eigen::Isometry3d& pose :
+       datasets::DrawChessboardPoses(target, camera, num_views, seed)) {
     s.camera_from_board.push_back(pose * Eigen::Translation3d(offset));
     std::vector<Eigen::Vector2d> q;
     for (const Eigen::Vector3d& c : s.board.Corners()) {
@@ -92,21 +93,19 @@ void ExpectJacobiansMatchNumeric(const ceres::CostFunction& cost,
 }
 
 TEST(ReprojectionCost, Opencv8JacobiansWithWarpAndFixedAspectMatchNumericDifferences) {
-  const CameraModel lens("LENSMODEL_OPENCV8",
-                         {1132, 1130, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011,
-                          -0.006, 0.002},
-                         1024, 1024);
+  const CameraModel lens(
+      "LENSMODEL_OPENCV8",
+      {1132, 1130, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011, -0.006, 0.002},
+      1024, 1024);
   for (bool fix_aspect : {false, true}) {
     IntrinsicsLayout layout;
     layout.num_full = 12;
     layout.fix_aspect = fix_aspect;
     const ReprojectionCost cost(&lens, layout, Eigen::Vector3d(120, 80, 0),
                                 Eigen::Vector2d(600, 500), true, Eigen::Vector2d(320, 200));
-    ExpectJacobiansMatchNumeric(cost,
-                                {layout.FromFull(lens.intrinsics()),
-                                 {0.2, -0.3, 0.1, -50, 30, 700},
-                                 {0.8, -0.5}},
-                                1e-6);
+    ExpectJacobiansMatchNumeric(
+        cost, {layout.FromFull(lens.intrinsics()), {0.2, -0.3, 0.1, -50, 30, 700}, {0.8, -0.5}},
+        1e-6);
   }
 }
 
@@ -145,7 +144,9 @@ TEST(CalibrateIntrinsics, RecoversTheTruthWithinThreeSigma) {
   EXPECT_NEAR(r.rms_px, 0.2 * std::sqrt(2.0), 0.03);
   EXPECT_EQ(r.views.size(), 12u);
   for (std::size_t v = 0; v < r.views.size(); ++v) {
-    EXPECT_LT((r.views[v].camera_from_board.translation() - s.camera_from_board[v].translation()).norm(), 4.0);
+    EXPECT_LT(
+        (r.views[v].camera_from_board.translation() - s.camera_from_board[v].translation()).norm(),
+        4.0);
   }
   std::vector<double> u;
   for (int gy = 0; gy < r.uncertainty_px.rows(); ++gy) {
@@ -279,12 +280,14 @@ TEST(CalibrateIntrinsics, BoardWarpIsEstimated) {
     for (int i = 0; i < s.board.NumCorners(); ++i) {
       const Eigen::Vector3d c = s.board.Corner(i);
       const double dz = BoardWarpBasis(c, s.board.Extent()).dot(Eigen::Vector2d(1.5, -0.8));
-      s.exact[v][i] = *datasets::ProjectInView(camera, s.camera_from_board[v] * (c + Eigen::Vector3d(0, 0, dz)));
+      s.exact[v][i] = *datasets::ProjectInView(
+          camera, s.camera_from_board[v] * (c + Eigen::Vector3d(0, 0, dz)));
     }
   }
   IntrinsicsOptions options;
   options.estimate_board_warp = true;
-  const IntrinsicsResult r = CalibrateIntrinsics(NoisyViews(s, 0.1, 3), s.board, 1024, 1024, options);
+  const IntrinsicsResult r =
+      CalibrateIntrinsics(NoisyViews(s, 0.1, 3), s.board, 1024, 1024, options);
   EXPECT_NEAR(r.board_warp_mm.x(), 1.5, 0.1);
   EXPECT_NEAR(r.board_warp_mm.y(), -0.8, 0.1);
   EXPECT_NEAR(r.rms_px, 0.1 * std::sqrt(2.0), 0.02);
@@ -295,7 +298,8 @@ TEST(CalibrateIntrinsics, FixedAspectRatioHoldsFyEqualFx) {
   IntrinsicsOptions options;
   options.fix_aspect_ratio = true;
   options.model = LensModelKind::kOpenCV5;
-  const IntrinsicsResult r = CalibrateIntrinsics(NoisyViews(s, 0.2, 1), s.board, 1024, 1024, options);
+  const IntrinsicsResult r =
+      CalibrateIntrinsics(NoisyViews(s, 0.2, 1), s.board, 1024, 1024, options);
   EXPECT_EQ(r.camera->lensmodel(), "LENSMODEL_OPENCV5");
   EXPECT_EQ(r.camera->intrinsics()[0], r.camera->intrinsics()[1]);
   EXPECT_NEAR(r.intrinsics_sigma[0], r.intrinsics_sigma[1], 1e-12);
@@ -307,7 +311,8 @@ TEST(CalibrateIntrinsics, SplinedModelFitsTheOpencv8TruthToTheNoise) {
   options.model = LensModelKind::kSplined;
   options.spline_nx = 10;
   options.spline_ny = 10;
-  const IntrinsicsResult r = CalibrateIntrinsics(NoisyViews(s, 0.2, 5), s.board, 1024, 1024, options);
+  const IntrinsicsResult r =
+      CalibrateIntrinsics(NoisyViews(s, 0.2, 5), s.board, 1024, 1024, options);
   ASSERT_TRUE(r.camera);
   EXPECT_NE(r.camera->lensmodel().find("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=10_Ny=10"),
             std::string::npos);
@@ -332,7 +337,8 @@ TEST(CalibrateIntrinsics, SplinedModelFitsTheOpencv8TruthToTheNoise) {
         double p[3], q[3] = {700 * (*rays)[i].x(), 700 * (*rays)[i].y(), 700 * (*rays)[i].z()};
         ceres::AngleAxisRotatePoint(rv, q, p);
         const Eigen::Vector2d d =
-            model->Project(Eigen::Vector3d(p[0] + rv[3], p[1] + rv[4], p[2] + rv[5])) - (*expected)[i];
+            model->Project(Eigen::Vector3d(p[0] + rv[3], p[1] + rv[4], p[2] + rv[5])) -
+            (*expected)[i];
         residual[2 * i] = d.x();
         residual[2 * i + 1] = d.y();
       }
@@ -404,13 +410,15 @@ TEST(CalibrateIntrinsics, ParallelViewsFlagTheFocalLengthUnobservable) {
     pose.translation() = Eigen::Vector3d(-160 + 60 * u(rng), -100 + 60 * u(rng), 700 + 80 * u(rng));
     s.camera_from_board.push_back(pose);
     std::vector<Eigen::Vector2d> q;
-    for (const Eigen::Vector3d& c : s.board.Corners()) q.push_back(*datasets::ProjectInView(camera, pose * c));
+    for (const Eigen::Vector3d& c : s.board.Corners())
+      q.push_back(*datasets::ProjectInView(camera, pose * c));
     s.exact.push_back(q);
   }
   const IntrinsicsResult r = CalibrateIntrinsics(NoisyViews(s, 0.2, 2), s.board, 1024, 1024);
   EXPECT_FALSE(r.focal_observable);
   bool said_parallel = false;
-  for (const std::string& w : r.warnings) said_parallel |= w.find("nearly parallel") != std::string::npos;
+  for (const std::string& w : r.warnings)
+    said_parallel |= w.find("nearly parallel") != std::string::npos;
   EXPECT_TRUE(said_parallel);
   EXPECT_NE(r.Summary().find("FOCAL UNOBSERVABLE"), std::string::npos) << r.Summary();
 }
@@ -433,9 +441,10 @@ std::vector<BoardView> OpenCvSampleViews(const BoardSpec& board) {
   for (int i : {1, 2, 3, 4, 5, 6, 7, 8, 9, 11, 12, 13, 14}) {
     char name[32];
     std::snprintf(name, sizeof(name), "left%02d.jpg", i);
-    const TargetDetection d = DetectTargetInEncodedImage(
-        io::ReadFileBytes(std::string(LASERCELL_SOURCE_DIR) + "/datasets/real/opencv_chessboard/" + name),
-        board);
+    const TargetDetection d =
+        DetectTargetInEncodedImage(io::ReadFileBytes(std::string(LASERCELL_SOURCE_DIR) +
+                                                     "/datasets/real/opencv_chessboard/" + name),
+                                   board);
     EXPECT_TRUE(d.found()) << name << ": " << d.message;
     views.push_back({name, d.corners_px, d.corner_ids});
   }
@@ -469,7 +478,8 @@ TEST(CalibrateIntrinsicsRealData, SplinedModelOnTheOpenCvSamples) {
   const BoardSpec board = ParseBoardSpec("chessboard:9x6:25");
   IntrinsicsOptions options;
   options.model = LensModelKind::kSplined;
-  const IntrinsicsResult r = CalibrateIntrinsics(OpenCvSampleViews(board), board, 640, 480, options);
+  const IntrinsicsResult r =
+      CalibrateIntrinsics(OpenCvSampleViews(board), board, 640, 480, options);
   std::printf("%s\n", r.Summary().c_str());
   EXPECT_TRUE(r.converged) << r.termination;
   EXPECT_LT(r.rms_px, 0.3926);

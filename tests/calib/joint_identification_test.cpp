@@ -63,8 +63,8 @@ TEST(KinematicSphereCost, AutodiffDerivativesMatchNumericDifferences) {
   const Eigen::Isometry3d x0(Eigen::Translation3d(12, -95, 160) *
                              Eigen::AngleAxisd(0.04, Eigen::Vector3d(1, 2, 3).normalized()));
   std::vector<Eigen::Vector3d> points = {{10, 5, 690}, {-20, 3, 700}, {0, -4, 710}};
-  std::unique_ptr<ceres::CostFunction> cost(KinematicSphereCost::Create(
-      &ref, &x0, {0.1, -1.2, 1.3, -0.4, 1.5, 0.6}, points, 0.05));
+  std::unique_ptr<ceres::CostFunction> cost(
+      KinematicSphereCost::Create(&ref, &x0, {0.1, -1.2, 1.3, -0.4, 1.5, 0.6}, points, 0.05));
   std::array<double, 24> robot{};
   for (int k = 0; k < 24; ++k) robot[k] = 1e-3 * (k % 5 - 2);
   std::array<double, 6> he = {1e-3, -2e-3, 3e-3, 0.1, -0.2, 0.3};
@@ -86,9 +86,8 @@ TEST(RobotObservability, NamesJointOneAgainstFreeSphereCentres) {
   JointIdentificationOptions options;
   options.point_sigma_mm = 0.05;
   options.max_points_per_sweep = 60;
-  const JointIdentificationResult r = IdentifyRobot(poses.truth.nominal_vision_robot,
-                                                    poses.truth.vision_flange_from_sensor,
-                                                    sweeps, options);
+  const JointIdentificationResult r = IdentifyRobot(
+      poses.truth.nominal_vision_robot, poses.truth.vision_flange_from_sensor, sweeps, options);
   ASSERT_EQ(r.observability.directions.size(), 1u) << r.observability.Summary();
   EXPECT_EQ(r.observability.directions[0].fixed_parameter, "joint_offset_1");
   EXPECT_THAT(r.observability.directions[0].parameters, ::testing::Contains("centre_0_x"));
@@ -104,9 +103,8 @@ TEST(RobotObservability, WithHandEyeJointSixIsAbsorbedInTheMount) {
   options.point_sigma_mm = 0.05;
   options.max_points_per_sweep = 60;
   options.estimate_hand_eye = true;
-  const JointIdentificationResult r = IdentifyRobot(poses.truth.nominal_vision_robot,
-                                                    poses.truth.vision_flange_from_sensor,
-                                                    sweeps, options);
+  const JointIdentificationResult r = IdentifyRobot(
+      poses.truth.nominal_vision_robot, poses.truth.vision_flange_from_sensor, sweeps, options);
   const std::vector<std::string> fixed = r.observability.Fixed();
   EXPECT_THAT(fixed, ::testing::UnorderedElementsAre("joint_offset_1", "joint_offset_6"));
   EXPECT_TRUE(r.flange_from_sensor_covariance.has_value());
@@ -138,9 +136,8 @@ TEST(JointIdentification, RecoversOffsetsAndPositionsHeldOutPoses) {
   options.point_sigma_mm = 0.05;
   options.known_centres_in_base = poses.centres_in_base;
   options.known_centre_sigma_mm = 0.02;
-  const JointIdentificationResult r = IdentifyRobot(poses.truth.nominal_vision_robot,
-                                                    poses.truth.vision_flange_from_sensor,
-                                                    sweeps, options);
+  const JointIdentificationResult r = IdentifyRobot(
+      poses.truth.nominal_vision_robot, poses.truth.vision_flange_from_sensor, sweeps, options);
   ASSERT_TRUE(r.converged) << r.Summary();
   std::printf("%s\n  %s\n", r.Summary().c_str(), r.observability.Summary().c_str());
   EXPECT_TRUE(r.observability.directions.empty()) << r.observability.Summary();
@@ -161,11 +158,14 @@ TEST(JointIdentification, RecoversOffsetsAndPositionsHeldOutPoses) {
     const std::vector<double>& q = p.trajectory.joints_rad[1];
     const Eigen::Vector3d truth = testing::MeasuredPointInBase(
         poses.truth.true_vision_robot, poses.truth.vision_flange_from_sensor, q);
-    worst_calibrated = std::max(worst_calibrated,
-        (testing::MeasuredPointInBase(r.robot, r.flange_from_sensor, q) - truth).norm());
-    worst_nominal = std::max(worst_nominal,
-        (testing::MeasuredPointInBase(poses.truth.nominal_vision_robot,
-                                      poses.truth.vision_flange_from_sensor, q) - truth).norm());
+    worst_calibrated =
+        std::max(worst_calibrated,
+                 (testing::MeasuredPointInBase(r.robot, r.flange_from_sensor, q) - truth).norm());
+    worst_nominal = std::max(
+        worst_nominal, (testing::MeasuredPointInBase(poses.truth.nominal_vision_robot,
+                                                     poses.truth.vision_flange_from_sensor, q) -
+                        truth)
+                           .norm());
   }
   std::printf("  held-out positioning: worst %.4f mm calibrated, %.3f mm nominal\n",
               worst_calibrated, worst_nominal);
@@ -189,9 +189,8 @@ TEST(JointIdentification, ReportedSigmaCoversTheTruth) {
     options.known_centre_sigma_mm = 1e-4;  // centres known (truth): only point noise
     options.seed_gate_mm = 3;
     options.max_iterations = 30;
-    const JointIdentificationResult r = IdentifyRobot(poses.truth.nominal_vision_robot,
-                                                      poses.truth.vision_flange_from_sensor,
-                                                      sweeps, options);
+    const JointIdentificationResult r = IdentifyRobot(
+        poses.truth.nominal_vision_robot, poses.truth.vision_flange_from_sensor, sweeps, options);
     for (int j = 0; j < 6; ++j) {
       const double err = r.robot.joints()[j].joint_offset_rad - poses.truth.joint_offsets_rad[j];
       inside += std::abs(err) <= r.parameter_sigmas[j];
@@ -224,10 +223,11 @@ TEST(JointIdentification, DhDeltasNameTheUnidentifiableAndFixThePositioning) {
     for (const datasets::PoseSweep& p :
          datasets::PlanPoseSweeps(config, poses.truth, held, 999, "held-out")) {
       const std::vector<double>& q = p.trajectory.joints_rad[1];
-      worst = std::max(worst, (testing::MeasuredPointInBase(r.robot, r.flange_from_sensor, q) -
-                               testing::MeasuredPointInBase(poses.truth.true_vision_robot,
-                                                            poses.truth.vision_flange_from_sensor,
-                                                            q)).norm());
+      worst =
+          std::max(worst, (testing::MeasuredPointInBase(r.robot, r.flange_from_sensor, q) -
+                           testing::MeasuredPointInBase(poses.truth.true_vision_robot,
+                                                        poses.truth.vision_flange_from_sensor, q))
+                              .norm());
     }
     return worst;
   };

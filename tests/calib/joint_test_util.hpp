@@ -25,7 +25,7 @@ struct PlannedPoses {
   datasets::SimConfig config;
   datasets::CellTruth truth;
   std::vector<datasets::PoseSweep> plans;
-  std::vector<Eigen::Vector3d> centres_in_base;  ///< True sphere centres, vision_base.
+  std::vector<Eigen::Vector3d> centres_in_base;           ///< True sphere centres, vision_base.
   Eigen::Vector3d up_in_base = Eigen::Vector3d::UnitZ();  ///< Cell +z in vision_base.
 };
 

@@ -28,9 +28,10 @@ inline const Kuka2* LoadKuka2() {
     auto k = std::make_unique<Kuka2>(LoadKuka2Set(dir, options));
     if (k->camera) {
       const std::vector<double>& intr = k->camera->intrinsics();
-      std::printf("kuka2 stand-in intrinsics: calibrateCamera RMS %.3f px, fx %.2f fy %.2f cx "
-                  "%.2f cy %.2f\n",
-                  k->calibration_rms_px, intr[0], intr[1], intr[2], intr[3]);
+      std::printf(
+          "kuka2 stand-in intrinsics: calibrateCamera RMS %.3f px, fx %.2f fy %.2f cx "
+          "%.2f cy %.2f\n",
+          k->calibration_rms_px, intr[0], intr[1], intr[2], intr[3]);
     }
     return k;
   }();

@@ -111,8 +111,8 @@ TEST(LaserHandEye, TwelvePoseSetIsWeakAndSaysSo) {
 
 // The rendered simulator sweeps of the default eye-in-hand set (24 poses at ranges -100 / 0 /
 // +100 mm from the stand-off, 40 profiles, default noise 0.05 px per row) -> the sweep loader
-// (triangulator, exact path) -> hand-eye with the TRUE robot model: within the 0.05 mm / 0.02 deg, the
-// error within 4 reported sigma per component, the residual at the noise level.
+// (triangulator, exact path) -> hand-eye with the TRUE robot model: within the 0.05 mm /
+// 0.02 deg, the error within 4 reported sigma per component, the residual at the noise level.
 TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
   datasets::SimConfig config;
   config.seed = 11;
@@ -130,16 +130,18 @@ TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
   const std::vector<SphereSweep> sweeps = triangulation::LoadSphereSweeps(
       dir + "/records/sphere_sweeps.yaml", "eye_in_hand", camera, plane);
   ASSERT_EQ(static_cast<int>(sweeps.size()), config.eye_in_hand.poses);
-  for (std::size_t i = 0; i < sweeps.size(); ++i) EXPECT_EQ(sweeps[i].sphere, static_cast<int>(i % 4));
+  for (std::size_t i = 0; i < sweeps.size(); ++i)
+    EXPECT_EQ(sweeps[i].sphere, static_cast<int>(i % 4));
   LaserHandEyeOptions options;
   options.solver.max_points_per_sweep = 5000;  // all points: 6 unknowns, every point helps
   const LaserHandEyeResult r = CalibrateLaserHandEye(
       truth.true_vision_robot, Perturbed(truth.vision_flange_from_sensor), sweeps, options);
   ASSERT_TRUE(r.converged) << r.Summary();
   const double t_err = TranslationDistance(r.flange_from_sensor, truth.vision_flange_from_sensor);
-  const double r_err = RotationDistance(r.flange_from_sensor, truth.vision_flange_from_sensor) / kDeg;
-  std::printf("laser hand-eye rendered (24 poses, 3 ranges): %.4f mm, %.5f deg, %s\n", t_err,
-              r_err, r.Summary().c_str());
+  const double r_err =
+      RotationDistance(r.flange_from_sensor, truth.vision_flange_from_sensor) / kDeg;
+  std::printf("laser hand-eye rendered (24 poses, 3 ranges): %.4f mm, %.5f deg, %s\n", t_err, r_err,
+              r.Summary().c_str());
   EXPECT_LT(t_err, 0.05);
   EXPECT_LT(r_err, 0.02);
   const Vector6d xi =

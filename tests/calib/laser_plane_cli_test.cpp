@@ -1,6 +1,6 @@
-// `lasercell calibrate laser` end to end: simulated white-plane sweeps -> JSON (versioned, re-read),
-// HTML report, the `laser` plane in cell.yaml (only that section changes); bad input exits 2
-// with one line naming the problem.
+// `lasercell calibrate laser` end to end: simulated white-plane sweeps -> JSON (versioned,
+// re-read), HTML report, the `laser` plane in cell.yaml (only that section changes); bad input
+// exits 2 with one line naming the problem.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -32,15 +32,18 @@ class CalibrateLaserCli : public ::testing::Test {
   /// Simulates the white-plane sweeps only; returns the plate normal in the sensor frame.
   std::string SimulatePlanes() const {
     const std::string config = (dir_ / "sim.yaml").string();
-    std::ofstream(config) << "captures: {planes: true, spheres: false, seats: false, trajectory: false, "
-                             "chessboard_images: false, laser_line_images: false, meshes: false, "
-                             "touches: false, eye_in_hand: false, joint_poses: false}\n";
+    std::ofstream(config)
+        << "captures: {planes: true, spheres: false, seats: false, trajectory: false, "
+           "chessboard_images: false, laser_line_images: false, meshes: false, "
+           "touches: false, eye_in_hand: false, joint_poses: false}\n";
     const CommandResult sim =
         RunCli("simulate cell --quiet --out " + (dir_ / "sim").string() + " --config " + config);
     EXPECT_EQ(sim.exit_code, 0) << sim.err;
     const datasets::SimConfig defaults;
     const datasets::CellTruth truth = datasets::MakeCellTruth(defaults);
-    const Eigen::Vector3d m = datasets::MakeLinearSweep(defaults, truth.sensor).cell_from_sensor_start.linear().transpose() *
+    const Eigen::Vector3d m = datasets::MakeLinearSweep(defaults, truth.sensor)
+                                  .cell_from_sensor_start.linear()
+                                  .transpose() *
                               Eigen::Vector3d::UnitZ();
     std::ostringstream s;
     s.precision(17);
@@ -70,7 +73,8 @@ TEST_F(CalibrateLaserCli, PlanesWriteJsonReportAndOnlyTheCellsLaserPlane) {
   const datasets::CellTruth truth = datasets::MakeCellTruth(datasets::SimConfig{});
   Eigen::Vector4d c = truth.sensor.laser.Coefficients();
   if (c(3) > 0) c = -c;
-  const Eigen::Vector3d n(j["plane"]["normal"][0], j["plane"]["normal"][1], j["plane"]["normal"][2]);
+  const Eigen::Vector3d n(j["plane"]["normal"][0], j["plane"]["normal"][1],
+                          j["plane"]["normal"][2]);
   EXPECT_LT(std::acos(std::min(1.0, n.dot(c.head<3>()))) * 180 / M_PI, 0.01);
   EXPECT_NEAR(j["plane"]["offset_mm"].get<double>(), c(3), 0.02);
   EXPECT_LT(j["normal_sigma_deg"].get<double>(), 0.01);
@@ -85,7 +89,8 @@ TEST_F(CalibrateLaserCli, PlanesWriteJsonReportAndOnlyTheCellsLaserPlane) {
   const LaserPlaneEntry& plane = graph.laser_planes().at("laser");
   EXPECT_EQ(plane.frame, "sensor");
   EXPECT_EQ(plane.normal, n);
-  EXPECT_NEAR(plane.OffsetMm(), j["plane"]["offset_mm"].get<double>(), 1e-9);  // p0 = -d n, recomputed
+  EXPECT_NEAR(plane.OffsetMm(), j["plane"]["offset_mm"].get<double>(),
+              1e-9);  // p0 = -d n, recomputed
   ASSERT_TRUE(plane.covariance.has_value());
   const std::string html = io::ReadFileBytes((dir_ / "laser.html").string());
   EXPECT_NE(html.find("data-plot='Laser-plane residuals'"), std::string::npos);
@@ -97,8 +102,9 @@ TEST_F(CalibrateLaserCli, PlanesWriteJsonReportAndOnlyTheCellsLaserPlane) {
 TEST_F(CalibrateLaserCli, BadInputExitsTwoWithOneLine) {
   const std::string m = SimulatePlanes();
   const std::string sim = (dir_ / "sim").string();
-  const std::string base = "calibrate laser --camera " + sim + "/truth/camera.cameramodel --planes " + sim +
-                           " --plate-normal=" + m + " --cell " + (dir_ / "cell.yaml").string();
+  const std::string base = "calibrate laser --camera " + sim +
+                           "/truth/camera.cameramodel --planes " + sim + " --plate-normal=" + m +
+                           " --cell " + (dir_ / "cell.yaml").string();
   CommandResult r = RunCli(base + " --heights-mm 250,250,250");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("planes at one height only"), std::string::npos) << r.err;

@@ -11,11 +11,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <string>
-#include <vector>
-
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
+#include <vector>
 
 #include "calib/board.hpp"
 #include "calib/camera_model.hpp"
@@ -34,18 +33,19 @@ const BoardSpec kBoard = BoardSpec::Chessboard(6, 8, 40.0);
 /// gives fy / fx = 1.333 (RMS 0.27 px): the images were evidently resized from 16:9 to 4:3, so the
 /// source's fx = 514.41 with square pixels does not fit them (PnP RMS 4-11 px with it). Corners
 /// from the detector DetectStripe uses, with the same options.
-CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images, const DetectionOptions& detection,
-                                double* rms_px, int* views) {
+CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images,
+                                const DetectionOptions& detection, double* rms_px, int* views) {
   const BoardSpec board = BoardSpec::Chessboard(kBoard.cols, kBoard.rows, kBoard.square_mm);
   std::vector<std::vector<cv::Point3f>> object;
   std::vector<std::vector<cv::Point2f>> image_points;
   for (const auto& image : images) {
-    cv::Mat bgr(image.height_px, image.width_px, CV_8UC3, const_cast<std::uint8_t*>(image.pixels.data()));
+    cv::Mat bgr(image.height_px, image.width_px, CV_8UC3,
+                const_cast<std::uint8_t*>(image.pixels.data()));
     cv::Mat gray;
     cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
-    const TargetDetection found =
-        DetectTarget({gray.cols, gray.rows, std::vector<std::uint8_t>(gray.data, gray.data + gray.total())},
-                     board, detection);
+    const TargetDetection found = DetectTarget(
+        {gray.cols, gray.rows, std::vector<std::uint8_t>(gray.data, gray.data + gray.total())},
+        board, detection);
     if (!found.found()) continue;
     std::vector<cv::Point2f> corners;
     for (const auto& c : found.corners_px) {
@@ -54,7 +54,8 @@ CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images, const De
     std::vector<cv::Point3f> grid;
     for (int j = 0; j < kBoard.rows; ++j) {
       for (int i = 0; i < kBoard.cols; ++i) {
-        grid.emplace_back(static_cast<float>(i * kBoard.square_mm), static_cast<float>(j * kBoard.square_mm), 0.f);
+        grid.emplace_back(static_cast<float>(i * kBoard.square_mm),
+                          static_cast<float>(j * kBoard.square_mm), 0.f);
       }
     }
     object.push_back(grid);
@@ -63,21 +64,24 @@ CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images, const De
   }
   cv::Mat K, dist;
   std::vector<cv::Mat> rvecs, tvecs;
-  *rms_px = cv::calibrateCamera(object, image_points, cv::Size(images[0].width_px, images[0].height_px), K,
-                                dist, rvecs, tvecs, cv::CALIB_FIX_K3);
-  return CameraModel("LENSMODEL_OPENCV4",
-                     {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2),
-                      dist.at<double>(0), dist.at<double>(1), dist.at<double>(2), dist.at<double>(3)},
-                     images[0].width_px, images[0].height_px);
+  *rms_px =
+      cv::calibrateCamera(object, image_points, cv::Size(images[0].width_px, images[0].height_px),
+                          K, dist, rvecs, tvecs, cv::CALIB_FIX_K3);
+  return CameraModel(
+      "LENSMODEL_OPENCV4",
+      {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2),
+       dist.at<double>(0), dist.at<double>(1), dist.at<double>(2), dist.at<double>(3)},
+      images[0].width_px, images[0].height_px);
 }
 
 void ExpectConsistentPlane(const LaserPlaneResult& r) {
   int used = 0;
   for (const auto& item : r.items) {
     used += item.used ? 1 : 0;
-    std::printf("  %s: used %d, %d points, rms %.3f mm, corners %.3f px, LOO %.4f deg %.3f mm; %s\n",
-                item.name.c_str(), item.used, item.points, item.rms_mm, item.reprojection_rms_px,
-                item.loo_normal_change_deg, item.loo_offset_change_mm, item.note.c_str());
+    std::printf(
+        "  %s: used %d, %d points, rms %.3f mm, corners %.3f px, LOO %.4f deg %.3f mm; %s\n",
+        item.name.c_str(), item.used, item.points, item.rms_mm, item.reprojection_rms_px,
+        item.loo_normal_change_deg, item.loo_offset_change_mm, item.note.c_str());
   }
   EXPECT_EQ(used, 6) << r.Summary();
   EXPECT_TRUE(r.converged);
@@ -109,16 +113,19 @@ TEST(LaserPlaneReal, ImagesGiveAConsistentPlane) {
   int views = 0;
   const StripeOptions options;
   const CameraModel camera = CalibrateIntrinsics(images, options.board_detection, &rms_px, &views);
-  std::printf("intrinsics from the 6 views: fx %.2f fy %.2f cx %.2f cy %.2f k1 %.4f k2 %.4f, RMS %.3f px\n",
-              camera.intrinsics()[0], camera.intrinsics()[1], camera.intrinsics()[2], camera.intrinsics()[3],
-              camera.intrinsics()[4], camera.intrinsics()[5], rms_px);
+  std::printf(
+      "intrinsics from the 6 views: fx %.2f fy %.2f cx %.2f cy %.2f k1 %.4f k2 %.4f, RMS %.3f px\n",
+      camera.intrinsics()[0], camera.intrinsics()[1], camera.intrinsics()[2],
+      camera.intrinsics()[3], camera.intrinsics()[4], camera.intrinsics()[5], rms_px);
   // The stand-in must be a good fit before the plane is judged on it: all six boards found and
   // sub-pixel calibration residuals (measured 0.270 px; 0.5 px leaves ~2x margin).
   ASSERT_EQ(views, 6);
   ASSERT_LT(rms_px, 0.5);
   std::vector<StripeObservation> observations;
-  for (const auto& image : images) observations.push_back(DetectStripe(camera, image, kBoard, options));
-  ExpectConsistentPlane(CalibrateLaserPlaneFromStripeObservations(camera, observations, kBoard, options));
+  for (const auto& image : images)
+    observations.push_back(DetectStripe(camera, image, kBoard, options));
+  ExpectConsistentPlane(
+      CalibrateLaserPlaneFromStripeObservations(camera, observations, kBoard, options));
 }
 
 }  // namespace

@@ -1,10 +1,11 @@
 // Laser-plane calibration (calib/laser_plane.hpp) on synthetic ground truth: the simulator's
 // white-plane sweeps, a seeded column-peak generator (Monte-Carlo coverage), rendered chessboard
 // images with a laser stripe; bad input; the cost functors against numeric differences.
-#include <gtest/gtest.h>
+#include "calib/laser_plane.hpp"
 
 #include <ceres/ceres.h>
 #include <ceres/gradient_checker.h>
+#include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -16,7 +17,6 @@
 #include "calib/camera_model.hpp"
 #include "calib/cost_functions/plane_board_joint.hpp"
 #include "calib/cost_functions/plane_point_distance.hpp"
-#include "calib/laser_plane.hpp"
 #include "core/error.hpp"
 #include "datasets/camera_images.hpp"
 #include "datasets/simulate.hpp"
@@ -83,8 +83,9 @@ TEST(LaserPlaneCost, HeightPlaneRayMatchesNumericDifferences) {
 }
 
 TEST(LaserPlaneCost, BoardCornerMatchesNumericDifferences) {
-  std::unique_ptr<ceres::CostFunction> cost(BoardCornerCost::Create(
-      Eigen::Vector3d(80, 120, 0), Eigen::Vector2d(0.05, -0.02), Eigen::Vector2d(1132 / 0.1, 1130 / 0.1)));
+  std::unique_ptr<ceres::CostFunction> cost(
+      BoardCornerCost::Create(Eigen::Vector3d(80, 120, 0), Eigen::Vector2d(0.05, -0.02),
+                              Eigen::Vector2d(1132 / 0.1, 1130 / 0.1)));
   double pose[6] = {0.2, -0.3, 0.1, 20, -40, 700};
   ceres::NumericDiffOptions numeric;
   const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
@@ -130,21 +131,25 @@ TEST(LaserPlaneHeights, SimulatedSweepsGiveTheTruePlaneAndSensorDistance) {
   // What the cell knows: the plate normal in the sensor frame (the sweep's orientation over the
   // levelled plate) and the heights; the sensor's distance to the plate is estimated.
   HeightPlaneOptions options;
-  options.plate_normal_in_sensor = sweep.cell_from_sensor_start.linear().transpose() * Eigen::Vector3d::UnitZ();
+  options.plate_normal_in_sensor =
+      sweep.cell_from_sensor_start.linear().transpose() * Eigen::Vector3d::UnitZ();
   std::vector<HeightCapture> captures;
   for (std::size_t i = 0; i < config.plane_heights_mm.size(); ++i) {
-    const auto set = triangulation::ReadProfiles(dir + "/profiles/plane_" + std::to_string(i) + ".lcp");
+    const auto set =
+        triangulation::ReadProfiles(dir + "/profiles/plane_" + std::to_string(i) + ".lcp");
     HeightCapture c;
     c.name = "plane_" + std::to_string(i);
     c.height_mm = config.plane_heights_mm[i];
     for (const auto& p : set.profiles) {
       for (std::size_t j = 0; j < p.row_px.size(); ++j) {
-        if (std::isfinite(p.row_px[j])) c.peaks_px.emplace_back(set.header.first_column + j, p.row_px[j]);
+        if (std::isfinite(p.row_px[j]))
+          c.peaks_px.emplace_back(set.header.first_column + j, p.row_px[j]);
       }
     }
     captures.push_back(std::move(c));
   }
-  const LaserPlaneResult r = CalibrateLaserPlaneFromHeights(SimCamera(config.sensor.camera), captures, options);
+  const LaserPlaneResult r =
+      CalibrateLaserPlaneFromHeights(SimCamera(config.sensor.camera), captures, options);
   Eigen::Vector3d n_true;
   double d_true = 0;
   TruthPlane(truth.sensor.laser, &n_true, &d_true);
@@ -176,20 +181,25 @@ std::map<int, double> ExactLinePixels(const CameraModel& camera, const Eigen::Ve
   double s_prev = 0, u_prev = 0;
   for (double s = -reach; s <= reach; s += 0.5) {
     const Eigen::Vector3d p = p0 + s * dir;
-    const bool in_field = p.z() > 1.0 && std::abs(p.x() / p.z()) < 0.9 && std::abs(p.y() / p.z()) < 0.9;
+    const bool in_field =
+        p.z() > 1.0 && std::abs(p.x() / p.z()) < 0.9 && std::abs(p.y() / p.z()) < 0.9;
     if (!in_field) {
       have_previous = false;
       continue;
     }
     const double u = camera.Project(p).x();
     if (have_previous) {
-      for (int col = static_cast<int>(std::ceil(std::min(u, u_prev))); col <= std::floor(std::max(u, u_prev)); ++col) {
+      for (int col = static_cast<int>(std::ceil(std::min(u, u_prev)));
+           col <= std::floor(std::max(u, u_prev)); ++col) {
         if (rows.count(col) > 0 || col < 0 || col >= camera.width_px()) continue;
         double lo = s_prev, hi = s;
         const double sign = u > u_prev ? 1 : -1;
         for (int it = 0; it < 60; ++it) {
           const double mid = 0.5 * (lo + hi);
-          if (sign * (camera.Project(p0 + mid * dir).x() - col) > 0) hi = mid; else lo = mid;
+          if (sign * (camera.Project(p0 + mid * dir).x() - col) > 0)
+            hi = mid;
+          else
+            lo = mid;
         }
         rows[col] = camera.Project(p0 + 0.5 * (lo + hi) * dir).y();
       }
@@ -258,7 +268,8 @@ TEST(LaserPlaneHeights, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
   for (int draw = 0; draw < draws; ++draw) {
     std::mt19937_64 rng(1000 + draw);
     std::vector<HeightCapture> captures;
-    for (std::size_t i = 0; i < heights.size(); ++i) captures.push_back(NoisyCapture(exact[i], heights[i], 1, 0.01, rng));
+    for (std::size_t i = 0; i < heights.size(); ++i)
+      captures.push_back(NoisyCapture(exact[i], heights[i], 1, 0.01, rng));
     const LaserPlaneResult r = CalibrateLaserPlaneFromHeights(rig.camera, captures, options);
     ASSERT_TRUE(r.converged);
     if (std::abs(r.offset_mm - rig.laser_d) <= r.offset_sigma_mm) ++inside_d;
@@ -286,19 +297,20 @@ TEST(LaserPlaneHeights, PlateTiltTowardsTheLineIsEstimated) {
   std::mt19937_64 rng(11);
   std::vector<HeightCapture> captures;
   // 30 peaks of 0.05 px per column: ~0.01 px per column mean, as a sweep gives.
-  for (const double h : {150.0, 250.0, 350.0}) captures.push_back(SyntheticCapture(rig, h, 30, 0.05, rng));
+  for (const double h : {150.0, 250.0, 350.0})
+    captures.push_back(SyntheticCapture(rig, h, 30, 0.05, rng));
   HeightPlaneOptions options;
   options.plate_normal_in_sensor = m_given;
   const LaserPlaneResult r = CalibrateLaserPlaneFromHeights(rig.camera, captures, options);
-  std::printf("tilt %.5f +- %.5f deg; normal %.5f deg, d %.4f mm\n", r.plate_tilt_deg, r.plate_tilt_sigma_deg,
-              AngleDeg(r.normal, rig.laser_n), r.offset_mm - rig.laser_d);
+  std::printf("tilt %.5f +- %.5f deg; normal %.5f deg, d %.4f mm\n", r.plate_tilt_deg,
+              r.plate_tilt_sigma_deg, AngleDeg(r.normal, rig.laser_n), r.offset_mm - rig.laser_d);
   EXPECT_NEAR(std::abs(r.plate_tilt_deg), 0.2, 4 * r.plate_tilt_sigma_deg + 1e-4);
   EXPECT_LT(AngleDeg(r.normal, rig.laser_n), 0.01);
   EXPECT_LT(std::abs(r.offset_mm - rig.laser_d), std::max(0.02, 3 * r.offset_sigma_mm));
   options.estimate_plate_tilt = false;
   const LaserPlaneResult fixed = CalibrateLaserPlaneFromHeights(rig.camera, captures, options);
-  std::printf("tilt fixed: normal %.5f deg, d %.4f mm, rms %.4f px\n", AngleDeg(fixed.normal, rig.laser_n),
-              fixed.offset_mm - rig.laser_d, fixed.rms_px);
+  std::printf("tilt fixed: normal %.5f deg, d %.4f mm, rms %.4f px\n",
+              AngleDeg(fixed.normal, rig.laser_n), fixed.offset_mm - rig.laser_d, fixed.rms_px);
   // Keeping the wrong m: the residuals hardly show it (the other parameters absorb most of it),
   // but the plane tilts by a third of the plate's error.
   EXPECT_GT(AngleDeg(fixed.normal, rig.laser_n), 0.03);
@@ -336,7 +348,8 @@ TEST(LaserPlaneHeights, PlanesAtOneHeightOnlyAreRejected) {
     CalibrateLaserPlaneFromHeights(rig.camera, captures, options);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("planes at one height only"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("planes at one height only"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -346,14 +359,16 @@ TEST(LaserPlaneHeights, LaserPlaneThroughTheCameraIsIllConditioned) {
   rig.laser_n = Eigen::Vector3d(0, -1, 0.05).normalized();
   std::mt19937_64 rng(9);
   std::vector<HeightCapture> captures;
-  for (const double h : {150.0, 250.0, 350.0}) captures.push_back(SyntheticCapture(rig, h, 3, 0.05, rng));
+  for (const double h : {150.0, 250.0, 350.0})
+    captures.push_back(SyntheticCapture(rig, h, 3, 0.05, rng));
   HeightPlaneOptions options;
   options.plate_normal_in_sensor = rig.m;
   try {
     CalibrateLaserPlaneFromHeights(rig.camera, captures, options);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("parallel to the camera rays"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("parallel to the camera rays"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -372,10 +387,12 @@ TEST(LaserPlaneHeights, OptionsAreChecked) {
 /// saturation on the light squares) to the green channel at
 /// the exact projection of laser ∩ board, per image column.
 StripeImage RenderStripeImage(const datasets::ImageRenderer& renderer, const CameraModel& camera,
-                              const datasets::ChessboardTarget& board, const Eigen::Isometry3d& camera_from_board,
+                              const datasets::ChessboardTarget& board,
+                              const Eigen::Isometry3d& camera_from_board,
                               const Eigen::Vector3d& laser_n, double laser_d, std::uint64_t seed) {
   datasets::ImageRenderOptions options;
-  const datasets::GrayImage gray = renderer.RenderChessboard(board, camera_from_board, options, seed);
+  const datasets::GrayImage gray =
+      renderer.RenderChessboard(board, camera_from_board, options, seed);
   StripeImage image;
   image.name = "render_" + std::to_string(seed);
   image.width_px = gray.width;
@@ -391,13 +408,15 @@ StripeImage RenderStripeImage(const datasets::ImageRenderer& renderer, const Cam
   Eigen::Matrix<double, 2, 3> A;
   A.row(0) = laser_n.transpose();
   A.row(1) = m.transpose();
-  const Eigen::Vector3d p0 = A.transpose() * (A * A.transpose()).inverse() * Eigen::Vector2d(-laser_d, -md);
+  const Eigen::Vector3d p0 =
+      A.transpose() * (A * A.transpose()).inverse() * Eigen::Vector2d(-laser_d, -md);
   const double sigma = 3.0 / 2.3548;
   for (const auto& [u, row] : ExactLinePixels(camera, p0, dir)) {
     for (int v = static_cast<int>(row) - 6; v <= static_cast<int>(row) + 6; ++v) {
       if (v < 0 || v >= image.height_px) continue;
       const double g = 40.0 * std::exp(-0.5 * (v - row) * (v - row) / (sigma * sigma));
-      std::uint8_t& green = image.pixels[(static_cast<std::size_t>(v) * image.width_px + u) * 3 + 1];
+      std::uint8_t& green =
+          image.pixels[(static_cast<std::size_t>(v) * image.width_px + u) * 3 + 1];
       green = static_cast<std::uint8_t>(std::min(255.0, green + g));
     }
   }
@@ -421,8 +440,9 @@ StripeScene MakeStripeScene(int count, std::uint64_t seed) {
   const datasets::ImageRenderer renderer(sim_camera);
   const auto poses = datasets::DrawChessboardPoses(scene.board, sim_camera, count, seed);
   for (int i = 0; i < count; ++i) {
-    scene.images.push_back(RenderStripeImage(renderer, scene.camera, scene.board, poses[static_cast<std::size_t>(i)],
-                                             scene.laser_n, scene.laser_d, seed + static_cast<std::uint64_t>(i)));
+    scene.images.push_back(RenderStripeImage(renderer, scene.camera, scene.board,
+                                             poses[static_cast<std::size_t>(i)], scene.laser_n,
+                                             scene.laser_d, seed + static_cast<std::uint64_t>(i)));
   }
   return scene;
 }
@@ -439,11 +459,13 @@ BoardSpec SpecOf(const datasets::ChessboardTarget& board) {
 
 TEST(LaserPlaneStripes, RenderedBoardsGiveTheTruePlane) {
   const StripeScene& scene = SharedScene();
-  const LaserPlaneResult r = CalibrateLaserPlaneFromStripes(scene.camera, scene.images, SpecOf(scene.board));
+  const LaserPlaneResult r =
+      CalibrateLaserPlaneFromStripes(scene.camera, scene.images, SpecOf(scene.board));
   ASSERT_TRUE(r.converged) << r.Summary();
-  std::printf("detected corners: normal %.5f deg, d %.4f mm, rms %.4f mm, 1-sigma %.5f deg / %.4f mm\n",
-              AngleDeg(r.normal, scene.laser_n), r.offset_mm - scene.laser_d, r.rms_mm, r.normal_sigma_deg,
-              r.offset_sigma_mm);
+  std::printf(
+      "detected corners: normal %.5f deg, d %.4f mm, rms %.4f mm, 1-sigma %.5f deg / %.4f mm\n",
+      AngleDeg(r.normal, scene.laser_n), r.offset_mm - scene.laser_d, r.rms_mm, r.normal_sigma_deg,
+      r.offset_sigma_mm);
   int used = 0;
   for (const auto& item : r.items) used += item.used ? 1 : 0;
   EXPECT_GE(used, 3);
@@ -477,9 +499,10 @@ TEST(LaserPlaneStripes, WithExactCornersOnlyTheStripePeaksLimitThePlane) {
     for (const auto& c : corners_board) o.corners_px.push_back(scene.camera.Project(poses[i] * c));
     observations.push_back(o);
   }
-  const LaserPlaneResult r = CalibrateLaserPlaneFromStripeObservations(scene.camera, observations, SpecOf(scene.board));
-  std::printf("exact corners: normal %.5f deg, d %.4f mm, rms %.4f mm\n", AngleDeg(r.normal, scene.laser_n),
-              r.offset_mm - scene.laser_d, r.rms_mm);
+  const LaserPlaneResult r =
+      CalibrateLaserPlaneFromStripeObservations(scene.camera, observations, SpecOf(scene.board));
+  std::printf("exact corners: normal %.5f deg, d %.4f mm, rms %.4f mm\n",
+              AngleDeg(r.normal, scene.laser_n), r.offset_mm - scene.laser_d, r.rms_mm);
   EXPECT_LT(AngleDeg(r.normal, scene.laser_n), 0.005) << r.Summary();
   EXPECT_LT(std::abs(r.offset_mm - scene.laser_d), 0.02) << r.Summary();
 }
@@ -513,7 +536,8 @@ TEST(LaserPlaneStripes, OneUsableImageIsRejected) {
     CalibrateLaserPlaneFromStripeObservations(scene.camera, {good, no_stripe}, SpecOf(scene.board));
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("fewer than 2 usable stripe images (1 of 2)"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("fewer than 2 usable stripe images (1 of 2)"),
+              std::string::npos)
         << e.what();
   }
 }
@@ -523,7 +547,8 @@ TEST(LaserPlaneStripes, UnreadableImageNamesTheFile) {
     DecodeStripeImage("this is not an image", "broken.jpg");
     FAIL() << "expected FileError";
   } catch (const FileError& e) {
-    EXPECT_NE(std::string(e.what()).find("broken.jpg: cannot decode the image"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("broken.jpg: cannot decode the image"), std::string::npos)
+        << e.what();
   }
   EXPECT_THROW(DecodeStripeImage("", "empty.png"), FileError);
 }
@@ -541,7 +566,8 @@ TEST(LaserPlaneStripes, ImageOfAnotherCameraSizeIsRejected) {
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("small.png' is 64x48 but the camera model is 1024x1024"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -565,18 +591,21 @@ TEST(LaserPlaneStripes, PlaneThroughTheCameraCentreIsFlagged) {
     Eigen::Matrix<double, 2, 3> A;
     A.row(0) = n.transpose();
     A.row(1) = m.transpose();
-    const Eigen::Vector3d p0 = A.transpose() * (A * A.transpose()).inverse() * Eigen::Vector2d(0.0, -md);
+    const Eigen::Vector3d p0 =
+        A.transpose() * (A * A.transpose()).inverse() * Eigen::Vector2d(0.0, -md);
     for (int k = -100; k <= 100; ++k) {
       const Eigen::Vector3d p = p0 + 2.0 * k * dir;
       if (p.z() > 0) o.stripe_px.push_back(camera.Project(p));
     }
     observations.push_back(o);
   }
-  const LaserPlaneResult r = CalibrateLaserPlaneFromStripeObservations(camera, observations, SpecOf(board));
+  const LaserPlaneResult r =
+      CalibrateLaserPlaneFromStripeObservations(camera, observations, SpecOf(board));
   EXPECT_TRUE(r.ill_conditioned);
   ASSERT_FALSE(r.warnings.empty());
   bool found = false;
-  for (const auto& w : r.warnings) found = found || w.find("parallel to the camera rays") != std::string::npos;
+  for (const auto& w : r.warnings)
+    found = found || w.find("parallel to the camera rays") != std::string::npos;
   EXPECT_TRUE(found);
 }
 
@@ -594,9 +623,11 @@ TEST(LaserPlaneStripes, BoardSpecIsParsedAndChecked) {
     DetectStripe(scene.camera, scene.images[0], ParseBoardSpec("charuco:6x8:40:30"));
     FAIL() << "expected OptionError";
   } catch (const OptionError& e) {
-    EXPECT_NE(std::string(e.what()).find("the stripe method needs a chessboard"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("the stripe method needs a chessboard"), std::string::npos)
+        << e.what();
   }
-  EXPECT_THROW(CalibrateLaserPlaneFromStripeObservations(scene.camera, {}, ParseBoardSpec("charuco:6x8:40:30")),
+  EXPECT_THROW(CalibrateLaserPlaneFromStripeObservations(scene.camera, {},
+                                                         ParseBoardSpec("charuco:6x8:40:30")),
                OptionError);
 }
 
@@ -627,7 +658,8 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
     Eigen::Matrix<double, 2, 3> A;
     A.row(0) = n.transpose();
     A.row(1) = m.transpose();
-    const Eigen::Vector3d p0 = A.transpose() * (A * A.transpose()).inverse() * Eigen::Vector2d(-d, -md);
+    const Eigen::Vector3d p0 =
+        A.transpose() * (A * A.transpose()).inverse() * Eigen::Vector2d(-d, -md);
     const Eigen::Isometry3d board_from_camera = poses[i].inverse();
     for (const auto& [u, row] : ExactLinePixels(camera, p0, n.cross(m).normalized())) {
       if (u % 3 != 0) continue;  // every third column: keeps the 100 draws fast
@@ -650,11 +682,14 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
     for (std::size_t i = 0; i < poses.size(); ++i) {
       StripeObservation o;
       o.name = "view" + std::to_string(i);
-      for (const auto& c : corners[i]) o.corners_px.push_back(c + Eigen::Vector2d(corner_noise(rng), corner_noise(rng)));
-      for (const auto& q : stripes[i]) o.stripe_px.push_back(q + Eigen::Vector2d(0, row_noise(rng)));
+      for (const auto& c : corners[i])
+        o.corners_px.push_back(c + Eigen::Vector2d(corner_noise(rng), corner_noise(rng)));
+      for (const auto& q : stripes[i])
+        o.stripe_px.push_back(q + Eigen::Vector2d(0, row_noise(rng)));
       observations.push_back(o);
     }
-    const LaserPlaneResult r = CalibrateLaserPlaneFromStripeObservations(camera, observations, SpecOf(board));
+    const LaserPlaneResult r =
+        CalibrateLaserPlaneFromStripeObservations(camera, observations, SpecOf(board));
     if (std::abs(r.offset_mm - d) <= r.offset_sigma_mm) ++inside_d;
     if (AngleDeg(r.normal, n) <= r.normal_sigma_deg) ++inside_n;
   }

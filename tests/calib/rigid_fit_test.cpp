@@ -105,8 +105,8 @@ TEST(FitRigidTransform, FewerThanThreePointsNameTheDegeneracy) {
 }
 
 TEST(FitRigidTransform, CollinearPointsNameTheDegeneracy) {
-  const std::vector<Eigen::Vector3d> line = {{0, 0, 0}, {100, 0, 0.2}, {250, 0, -0.1},
-                                             {400, 0.1, 0}};
+  const std::vector<Eigen::Vector3d> line = {
+      {0, 0, 0}, {100, 0, 0.2}, {250, 0, -0.1}, {400, 0.1, 0}};
   try {
     FitRigidTransform(line, line);
     FAIL();
@@ -145,7 +145,8 @@ TEST(FitRigidTransform, MismatchedCountsAndBadCovariancesThrow) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("source covariance of point 2 is not positive definite"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -61,8 +61,10 @@ TEST(FitSphere, HalfSphereCentreWithinTwentyMicrometres) {
   }
   EXPECT_LE(worst_fixed, 0.02);
   EXPECT_LE(worst_free, 0.02);
-  std::printf("[ measured ] half sphere r=25, sigma 0.05: worst centre error over 20 draws "
-              "%.4f mm (radius given), %.4f mm (free)\n", worst_fixed, worst_free);
+  std::printf(
+      "[ measured ] half sphere r=25, sigma 0.05: worst centre error over 20 draws "
+      "%.4f mm (radius given), %.4f mm (free)\n",
+      worst_fixed, worst_free);
 }
 
 // Calibrated uncertainty: truth within the reported 1-sigma 60-76 % of the time (per

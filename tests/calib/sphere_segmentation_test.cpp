@@ -41,10 +41,11 @@ TEST(SegmentSpheres, FindsTheFourSimulatedSpheresAndNothingElse) {
     ++matched[static_cast<std::size_t>(best)];
     const Eigen::Vector3d err = s.fit.center - sim.centers_in_sweep[static_cast<std::size_t>(best)];
     const double mahalanobis = std::sqrt(err.dot(s.fit.CenterCovariance().inverse() * err));
-    std::printf("[ measured ] sphere %d: %zu points, centre error %.4f mm (%.2f sigma), rms "
-                "%.4f mm of +-%.3f mm, shell %.3f, cap %.1f deg, correlation factor %.2f\n", best,
-                s.indices.size(), err.norm(), mahalanobis, s.fit.rms_mm, s.inlier_distance_mm,
-                s.shell_fraction, s.fit.cap_half_angle_deg, s.correlation_factor);
+    std::printf(
+        "[ measured ] sphere %d: %zu points, centre error %.4f mm (%.2f sigma), rms "
+        "%.4f mm of +-%.3f mm, shell %.3f, cap %.1f deg, correlation factor %.2f\n",
+        best, s.indices.size(), err.norm(), mahalanobis, s.fit.rms_mm, s.inlier_distance_mm,
+        s.shell_fraction, s.fit.cap_half_angle_deg, s.correlation_factor);
     EXPECT_LT(err.norm(), 0.03);
     EXPECT_LT(mahalanobis, 5.0);
     EXPECT_GT(s.indices.size(), 500u);
@@ -72,9 +73,8 @@ TEST(SegmentSpheres, CylindersAndPlanesAreNotSpheres) {
     for (const auto& c : sim.centers_in_sweep) {
       // Remove everything of the sphere above its equator; the stand below stays.
       const Eigen::Vector3d d = sim.cloud.positions[i] - c;
-      on_sphere_cap = on_sphere_cap || (d.norm() < 27.0 && sim.handling_base_from_sweep.linear()
-                                                                   .row(2)
-                                                                   .dot(d) > -0.5);
+      on_sphere_cap = on_sphere_cap || (d.norm() < 27.0 &&
+                                        sim.handling_base_from_sweep.linear().row(2).dot(d) > -0.5);
     }
     if (!on_sphere_cap) without.positions.push_back(sim.cloud.positions[i]);
   }
@@ -87,14 +87,15 @@ TEST(SegmentSpheres, CylindersAndPlanesAreNotSpheres) {
 // Real data: the UWA rs1 cluttered range scan (mm, ~114k points; toy figures, no calibration
 // spheres). No 25 mm sphere is found, and the result says why each candidate was rejected.
 TEST(SegmentSpheres, RealScanWithoutSpheresGivesAClearEmptyResult) {
-  const PointCloud scan =
-      io::ReadPointCloud(std::string(LASERCELL_SOURCE_DIR) + "/datasets/real/uwa/rs1_normals.bin.ply");
+  const PointCloud scan = io::ReadPointCloud(std::string(LASERCELL_SOURCE_DIR) +
+                                             "/datasets/real/uwa/rs1_normals.bin.ply");
   ASSERT_GT(scan.size(), 100000u);
   SphereSegmentationOptions options;
   options.towards_sensor = Eigen::Vector3d::Zero();  // unknown viewpoint: no facing check
   const SphereSegmentationResult seg = SegmentSpheres(scan, options);
   std::printf("[ measured ] rs1: %s\n", seg.Summary().c_str());
-  for (const auto& r : seg.rejected) std::printf("    rejected (%d votes): %s\n", r.votes, r.reason.c_str());
+  for (const auto& r : seg.rejected)
+    std::printf("    rejected (%d votes): %s\n", r.votes, r.reason.c_str());
   for (const auto& s : seg.spheres) std::printf("    accepted: %s\n", s.fit.Summary().c_str());
   EXPECT_TRUE(seg.spheres.empty()) << seg.Summary();
   EXPECT_NE(seg.Summary().find("0 spheres"), std::string::npos);
@@ -138,12 +139,14 @@ TEST(SegmentSpheres, SpeckleAndReflectionGhostsDoNotBreakIt) {
     double best = 1e9;
     Eigen::Vector3d err = Eigen::Vector3d::Zero();
     for (const auto& c : sim.centers_in_sweep) {
-      if ((s.fit.center - c).norm() < best) best = (s.fit.center - c).norm(), err = s.fit.center - c;
+      if ((s.fit.center - c).norm() < best)
+        best = (s.fit.center - c).norm(), err = s.fit.center - c;
     }
     const double mahalanobis = std::sqrt(err.dot(s.fit.CenterCovariance().inverse() * err));
-    std::printf("[ measured ]   centre error %.4f mm (%.2f sigma), rms %.4f mm, %zu outliers, "
-                "correlation factor %.2f\n", best, mahalanobis, s.fit.rms_mm, s.fit.num_outliers,
-                s.correlation_factor);
+    std::printf(
+        "[ measured ]   centre error %.4f mm (%.2f sigma), rms %.4f mm, %zu outliers, "
+        "correlation factor %.2f\n",
+        best, mahalanobis, s.fit.rms_mm, s.fit.num_outliers, s.correlation_factor);
     EXPECT_LT(mahalanobis, 4.0);
     EXPECT_GT(s.correlation_factor, 3.0);
   }
@@ -239,8 +242,10 @@ TEST(LineCorrelationFactor, MakesTheCentreCovarianceCalibratedUnderCorrelatedNoi
     }
   }
   const double fraction = static_cast<double>(inside) / total;
-  std::printf("[ measured ] correlated noise: 1-sigma coverage %.3f with the factor, %.3f without "
-              "(%d)\n", fraction, static_cast<double>(inside_raw) / total, total);
+  std::printf(
+      "[ measured ] correlated noise: 1-sigma coverage %.3f with the factor, %.3f without "
+      "(%d)\n",
+      fraction, static_cast<double>(inside_raw) / total, total);
   EXPECT_GE(fraction, 0.60);
   EXPECT_LE(fraction, 0.76);
 }

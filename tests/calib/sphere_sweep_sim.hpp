@@ -26,9 +26,9 @@ namespace lasercell::calib::testing {
 struct SimulatedSphereSweep {
   PointCloud cloud;  ///< In the sweep frame, with profile/column/timestamp.
   Eigen::Isometry3d handling_base_from_sweep = Eigen::Isometry3d::Identity();  ///< Truth.
-  std::vector<Eigen::Vector3d> centers_in_sweep;          ///< Truth.
-  std::vector<Eigen::Vector3d> centers_in_handling_base;  ///< Truth.
-  std::vector<datasets::Touch> touches;                   ///< Simulated touches (noisy).
+  std::vector<Eigen::Vector3d> centers_in_sweep;                               ///< Truth.
+  std::vector<Eigen::Vector3d> centers_in_handling_base;                       ///< Truth.
+  std::vector<datasets::Touch> touches;  ///< Simulated touches (noisy).
   double radius_mm = 0;
 };
 
@@ -41,8 +41,11 @@ inline SimulatedSphereSweep SimulateSphereSweep(const datasets::SimConfig& confi
   const LaserRenderer renderer(scene, truth.sensor, config.render);
   const LinearSweep sweep = MakeLinearSweep(config, truth.sensor);
   const SweepResult rendered = RenderSweep(
-      renderer, [&](double t) { return SensorState{sweep.At(t), {}}; }, config.timing, seed, 0,
-      "", 1);
+      renderer,
+      [&](double t) {
+        return SensorState{sweep.At(t), {}};
+      },
+      config.timing, seed, 0, "", 1);
   SimulatedSphereSweep out;
   out.radius_mm = config.spheres.radius_mm;
   const Eigen::Isometry3d hb_from_cell = truth.layout.cell_from_handling_base.inverse();

@@ -15,8 +15,8 @@ namespace lasercell::calib {
 namespace {
 
 std::string OpenCvImage(const std::string& name) {
-  return io::ReadFileBytes(std::string(LASERCELL_SOURCE_DIR) +
-                           "/datasets/real/opencv_chessboard/" + name);
+  return io::ReadFileBytes(std::string(LASERCELL_SOURCE_DIR) + "/datasets/real/opencv_chessboard/" +
+                           name);
 }
 
 GrayImage FromDatasets(const datasets::GrayImage& in) {
@@ -66,7 +66,8 @@ TEST(TargetDetection, FindsTheOpenCvSampleBoardAgreeingWithOpenCvsPipeline) {
   // OpenCV's sample pipeline: findChessboardCorners + cornerSubPix(11x11).
   const std::optional<GrayImage> image = DecodeGrayImage(bytes);
   ASSERT_TRUE(image);
-  const cv::Mat mat(image->height, image->width, CV_8UC1, const_cast<std::uint8_t*>(image->pixels.data()));
+  const cv::Mat mat(image->height, image->width, CV_8UC1,
+                    const_cast<std::uint8_t*>(image->pixels.data()));
   std::vector<cv::Point2f> ref;
   ASSERT_TRUE(cv::findChessboardCorners(mat, cv::Size(9, 6), ref));
   cv::cornerSubPix(mat, ref, cv::Size(11, 11), cv::Size(-1, -1),
@@ -123,7 +124,8 @@ double RmsToTruth(const TargetDetection& d, const CameraModel& camera,
     for (int r = 0; r < ny; ++r) {
       for (int c = 0; c < nx; ++c) {
         const int rr = (flip & 1) ? ny - 1 - r : r, cc = (flip & 2) ? nx - 1 - c : c;
-        const Eigen::Vector2d truth = *datasets::ProjectInView(camera, camera_from_board * corners[r * nx + c]);
+        const Eigen::Vector2d truth =
+            *datasets::ProjectInView(camera, camera_from_board * corners[r * nx + c]);
         ss += (d.corners_px[rr * nx + cc] - truth).squaredNorm();
       }
     }

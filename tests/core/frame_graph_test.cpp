@@ -290,7 +290,8 @@ TEST(FrameGraphTest, QuaternionsGivenDirectlyMustBeUnitAndFiniteAndAreKeptAsGive
     }
   }
   EXPECT_TRUE(graph.Frames().empty());  // nothing added by a rejected edge
-  // Within kUnitQuaternionTolerance (1e-6) of unit norm, any sign: stored bit for bit, normalized only for the matrix.
+  // Within kUnitQuaternionTolerance (1e-6) of unit norm, any sign: stored bit for bit, normalized
+  // only for the matrix.
   const Eigen::Quaterniond q(-(0.6 + 5e-10), 0.0, -0.0, 0.8);
   graph.SetStaticEdge(edge_with(q, t));
   const StaticEdge& stored = graph.static_edges()[0];
@@ -316,7 +317,8 @@ TEST(FrameGraphTest, SetParentFromChildStoresTheCanonicalQuaternionOnce) {
                            100.0 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
     StaticEdge edge;
     edge.SetParentFromChild(pose);
-    ASSERT_EQ(edge.parent_from_child.rotation.coeffs(), CanonicalQuaternion(pose.linear()).coeffs());
+    ASSERT_EQ(edge.parent_from_child.rotation.coeffs(),
+              CanonicalQuaternion(pose.linear()).coeffs());
     ASSERT_EQ(edge.parent_from_child.translation_mm, pose.translation());
     EXPECT_LT((edge.ParentFromChild().matrix() - pose.matrix()).cwiseAbs().maxCoeff(), 1e-12);
   }

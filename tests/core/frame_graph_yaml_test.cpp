@@ -513,15 +513,18 @@ TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {
   } cases[] = {
       {"- a\n- b\n", "is not a mapping at the top level"},
       {"", "is empty"},
-      {Replace(v, "format: lasercell.cell\n", ""), "line 1: field 'format' is required; a lasercell cell file starts with 'format: "
+      {Replace(v, "format: lasercell.cell\n", ""),
+       "line 1: field 'format' is required; a lasercell cell file starts with 'format: "
        "lasercell.cell'"},
       {Replace(v, "lasercell.cell", "lasercell.job"),
        "line 1: field 'format' is 'lasercell.job'; expected 'lasercell.cell'"},
       {Replace(v, "version: 1\n", ""), "field 'version' is required"},
       {Replace(v, "version: 1", "version: 7"),
        "line 2: field 'version': unsupported version 7; this lasercell reads version 1"},
-      {Replace(v, "version: 1", "version: one"), "line 2: field 'version' must be an integer (got 'one')"},
-      {Replace(v, "frames: [a, b, c, d]", "frames: a"), "line 3: field 'frames' must be a list of names"},
+      {Replace(v, "version: 1", "version: one"),
+       "line 2: field 'version' must be an integer (got 'one')"},
+      {Replace(v, "frames: [a, b, c, d]", "frames: a"),
+       "line 3: field 'frames' must be a list of names"},
       {Replace(v, "[a, b, c, d]", "[a, b, c, d, B]"), "'B' is not lower snake case"},
       {Replace(v, "[a, b, c, d]", "[a, b, c, d, a]"), "frame 'a' is listed twice"},
       {Replace(v, "child: b", "child: nowhere"),
@@ -535,23 +538,28 @@ TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {
       {Replace(v, "[1, 2, 3]", "[1, 2]"),
        "line 14: field 'edges[0].parent_from_child.translation_mm' must list exactly 3 numbers "
        "(got 2)"},
-      {Replace(v, "[1, 2, 3]", "[1, .nan, 3]"), "translation_mm[1]' must be a finite number (got '.nan')"},
+      {Replace(v, "[1, 2, 3]", "[1, .nan, 3]"),
+       "translation_mm[1]' must be a finite number (got '.nan')"},
       {Replace(v, "[1, 2, 3]", "[1, 2, 1e999]"), "must be a finite number (got '1e999')"},
       {Replace(v, "[1, 2, 3]", "[1, 2, inf]"), "must be a finite number (got 'inf')"},
       {Replace(v, "[1, 2, 3]", "[1, 2, 3mm]"), "must be a finite number (got '3mm')"},
-      {Replace(v, cov36, cov35), "line 19: field 'edges[1].covariance' must list exactly 36 numbers (got 35)"},
+      {Replace(v, cov36, cov35),
+       "line 19: field 'edges[1].covariance' must list exactly 36 numbers (got 35)"},
       {Replace(v, cov36, cov_asym), "covariance is not symmetric"},
       {Replace(v, "type: static", "type: stat"),
        "line 13: field 'edges[0].type': unknown type 'stat'; expected static or dynamic"},
       {Replace(v, "robot: arm", "robot: ghost"),
        "line 24: field 'edges[2].robot': robot 'ghost' is not declared under robots"},
-      {Replace(v, "model: dh", "model: urdf"), "line 6: field 'robots.arm.model': unknown model 'urdf'"},
-      {Replace(v, "convention: standard", "convention: craig"), "field 'robots.arm.convention': unknown convention 'craig'"},
+      {Replace(v, "model: dh", "model: urdf"),
+       "line 6: field 'robots.arm.model': unknown model 'urdf'"},
+      {Replace(v, "convention: standard", "convention: craig"),
+       "field 'robots.arm.convention': unknown convention 'craig'"},
       {Replace(v, "    joints:\n", "    convention: modified\n    joints:\n"),
        "line 8: field 'robots.arm.convention' appears twice"},
       {Replace(v, "  - parent: b", "  - parnet: b"),
        "line 15: unknown field 'edges[1].parnet' (known fields here: parent, child, type"},
-      {Replace(v, "edges:", "edgez:"), "line 10: unknown field 'edgez' (known fields here: format, version, frames"},
+      {Replace(v, "edges:", "edgez:"),
+       "line 10: unknown field 'edgez' (known fields here: format, version, frames"},
       {Replace(v, "d_mm: 100", "d_mmm: 100"), "line 9: unknown field 'robots.arm.joints[0].d_mmm'"},
       {Replace(v, "{tool:", "{tol:"), "line 20: unknown field 'edges[1].provenance.tol'"},
       {Replace(v, "rotation_wxyz: [1, 0, 0, 0]}\n  - parent: b",
@@ -677,7 +685,8 @@ FrameGraph CellWithLaserPlane(std::mt19937& rng) {
   StaticEdge edge;
   edge.parent = "vision_flange";
   edge.child = "sensor";
-  edge.SetParentFromChild(Eigen::Translation3d(12, -95, 160) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
+  edge.SetParentFromChild(Eigen::Translation3d(12, -95, 160) *
+                          Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
   graph.SetStaticEdge(edge);
   LaserPlaneEntry plane;
   plane.normal = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
@@ -710,7 +719,8 @@ TEST(FrameGraphYamlLaserPlanes, RoundTripIsBitExact) {
 TEST(FrameGraphYamlLaserPlanes, SectionIsVersionedAndOmittedWhenEmpty) {
   std::mt19937 rng(6);
   const std::string text = FrameGraphToYaml(CellWithLaserPlane(rng));
-  EXPECT_THAT(text, HasSubstr("laser_planes:\n  version: 1\n  planes:\n    laser:\n      frame: sensor\n"));
+  EXPECT_THAT(
+      text, HasSubstr("laser_planes:\n  version: 1\n  planes:\n    laser:\n      frame: sensor\n"));
   FrameGraph empty;
   empty.AddFrame("sensor");
   EXPECT_THAT(FrameGraphToYaml(empty), Not(HasSubstr("laser_planes")));
@@ -739,12 +749,16 @@ TEST(FrameGraphYamlLaserPlanes, BadSectionsNameTheProblem) {
     std::string text;
     std::string problem;
   } cases[] = {
-      {replace("  version: 1\n  planes:", "  version: 2\n  planes:"), "line 12: field 'laser_planes.version': unsupported version 2"},
+      {replace("  version: 1\n  planes:", "  version: 2\n  planes:"),
+       "line 12: field 'laser_planes.version': unsupported version 2"},
       {replace("      frame: sensor\n", "      frame: sensor\n      colour: green\n"),
        "line 16: unknown field 'laser_planes.planes.laser.colour'"},
-      {replace("      frame: sensor\n", "      frame: nowhere\n"), "frame 'nowhere' is not listed in frames"},
-      {replace("      normal: [", "      normal: [2, "), "field 'laser_planes.planes.laser.normal' must list exactly 3 numbers"},
-      {replace("  planes:\n", "  extra: 1\n  planes:\n"), "line 13: unknown field 'laser_planes.extra'"},
+      {replace("      frame: sensor\n", "      frame: nowhere\n"),
+       "frame 'nowhere' is not listed in frames"},
+      {replace("      normal: [", "      normal: [2, "),
+       "field 'laser_planes.planes.laser.normal' must list exactly 3 numbers"},
+      {replace("  planes:\n", "  extra: 1\n  planes:\n"),
+       "line 13: unknown field 'laser_planes.extra'"},
   };
   for (const auto& c : cases) {
     try {

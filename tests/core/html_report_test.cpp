@@ -20,7 +20,8 @@ HtmlReport FullReport() {
   report.AddTable({"image", "rms (px)"}, {{"a.png", "0.1"}, {"b.png", "0.2"}});
   report.AddHistogram("Residuals", {0.1, -0.2, 0.05, 0.3, -0.1}, "residual (px)", 10);
   report.AddBars("Per-image RMS", {"a", "b", "c"}, {0.1, 0.2, 0.15}, "RMS (px)");
-  report.AddScatter("Line", {{"fit", {0, 1, 2}, {0, 1, 4}, true}, {"data", {0, 1, 2}, {0.1, 0.9, 4.1}}},
+  report.AddScatter("Line",
+                    {{"fit", {0, 1, 2}, {0, 1, 4}, true}, {"data", {0, 1, 2}, {0.1, 0.9, 4.1}}},
                     {"x (mm)", "y (mm)"});
   report.AddVectorField("Residual vectors", {{10, 10}, {500, 300}}, {{0.1, 0.2}, {-0.3, 0.1}},
                         100.0, 640, 480, "x100");

@@ -26,10 +26,10 @@ inline std::string RealDataFile(const std::string& set, const std::string& file)
 
 /// Declares `var` as the path of a bundled real data file; a missing file fails the test (the
 /// data ships with the repository, so its absence is a packaging bug, not a reason to skip).
-#define LASERCELL_REAL_FILE(var, set, file)                                  \
-  const std::string var = ::lasercell::io::test::RealDataFile(set, file);    \
-  if (!std::filesystem::is_regular_file(var)) {                              \
-    FAIL() << "bundled real data file " << var << " is missing";             \
+#define LASERCELL_REAL_FILE(var, set, file)                               \
+  const std::string var = ::lasercell::io::test::RealDataFile(set, file); \
+  if (!std::filesystem::is_regular_file(var)) {                           \
+    FAIL() << "bundled real data file " << var << " is missing";          \
   }
 
 /// A cloud of n points with every attribute, coordinates that are not float-representable

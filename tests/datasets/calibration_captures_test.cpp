@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <numbers>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 
@@ -15,9 +17,6 @@
 #include "datasets/rng.hpp"
 #include "tests/cli_util.hpp"
 #include "triangulation/profile_io.hpp"
-
-#include <opencv2/calib3d.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 namespace lasercell::datasets {
 namespace {
@@ -103,11 +102,11 @@ TEST(PoseSweeps, EyeInHandPosesAreDistinctAndRotateAboutSeveralAxes) {
     EXPECT_EQ(p.range_offset_mm, offsets[i % offsets.size()]);
     const Eigen::Isometry3d& cell_from_sensor = p.commanded_cell_from_sensor[1];
     const Eigen::Vector3d c_in_sensor = cell_from_sensor.inverse() * centers[p.sphere];
-    const double along_ray =
-        (c_in_sensor - truth.sensor.laser.origin_in_sensor).dot(truth.sensor.laser.center_in_sensor);
+    const double along_ray = (c_in_sensor - truth.sensor.laser.origin_in_sensor)
+                                 .dot(truth.sensor.laser.center_in_sensor);
     const Eigen::Vector3d crossing_in_sensor(0, 0, config.sensor.standoff_mm);
-    const double nominal =
-        (crossing_in_sensor - truth.sensor.laser.origin_in_sensor).dot(truth.sensor.laser.center_in_sensor);
+    const double nominal = (crossing_in_sensor - truth.sensor.laser.origin_in_sensor)
+                               .dot(truth.sensor.laser.center_in_sensor);
     EXPECT_NEAR(along_ray - nominal, p.range_offset_mm, 0.5 * config.spheres.radius_mm + 1.0) << i;
   }
   for (int n : per_sphere) {
@@ -273,7 +272,8 @@ TEST(HandEyeImages, TruthIsTheTrueChainAndPosesRotateAboutSeveralAxes) {
   double worst_px = 0, worst_commanded_mm = 0, largest_offset_effect_px = 0;
   for (const HandEyeImage& im : set.images) {
     ASSERT_EQ(im.joints_rad.size(), 6u);
-    const Eigen::Isometry3d base_from_flange = truth.true_vision_robot.BaseFromFlange(im.joints_rad);
+    const Eigen::Isometry3d base_from_flange =
+        truth.true_vision_robot.BaseFromFlange(im.joints_rad);
     flanges.push_back(base_from_flange);
     const Eigen::Isometry3d cell_from_camera =
         truth.layout.cell_from_vision_base * base_from_flange * truth.vision_flange_from_sensor;
@@ -341,9 +341,9 @@ TEST(HandEyeImages, CaptureWritesRecordsAndTruth) {
   EXPECT_NE(truth.find("camera_from_board"), std::string::npos);
   EXPECT_NE(truth.find("corners_px"), std::string::npos);
   const std::string png = io::ReadFileBytes(dir + "/images/hand_eye_000.png");
-  const cv::Mat image = cv::imdecode(cv::Mat(1, static_cast<int>(png.size()), CV_8UC1,
-                                             const_cast<char*>(png.data())),
-                                     cv::IMREAD_GRAYSCALE);
+  const cv::Mat image =
+      cv::imdecode(cv::Mat(1, static_cast<int>(png.size()), CV_8UC1, const_cast<char*>(png.data())),
+                   cv::IMREAD_GRAYSCALE);
   ASSERT_FALSE(image.empty());
   std::vector<cv::Point2f> found;
   EXPECT_TRUE(cv::findChessboardCornersSB(

@@ -19,12 +19,12 @@ namespace lasercell::datasets {
 namespace {
 
 cv::Mat ToMat(const GrayImage& image) {
-  return cv::Mat(image.height, image.width, CV_8UC1,
-                 const_cast<std::uint8_t*>(image.pixels.data()))
+  return cv::Mat(image.height, image.width, CV_8UC1, const_cast<std::uint8_t*>(image.pixels.data()))
       .clone();
 }
 
-std::vector<cv::Point2f> TrueCorners(const ChessboardTarget& board, const calib::CameraModel& camera,
+std::vector<cv::Point2f> TrueCorners(const ChessboardTarget& board,
+                                     const calib::CameraModel& camera,
                                      const Eigen::Isometry3d& camera_from_board) {
   std::vector<cv::Point2f> out;
   for (const Eigen::Vector3d& p : board.InnerCorners()) {
@@ -146,8 +146,8 @@ TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
     }
     EXPECT_EQ(edges, 9 * 7 + 6 * 10);
     EXPECT_LT(worst, bound) << samples << " samples";
-    std::printf("edge samples %d: worst edge-position error %.4f px (bound %.4f)\n", samples,
-                worst, bound);
+    std::printf("edge samples %d: worst edge-position error %.4f px (bound %.4f)\n", samples, worst,
+                bound);
   }
 }
 
@@ -222,8 +222,9 @@ cv::Mat RenderPinholeBySupersampling(const ChessboardTarget& board, const Camera
                                      const ImageRenderOptions& options, int s,
                                      const std::vector<cv::Point2f>& corners) {
   cv::Rect box = cv::boundingRect(corners);
-  const int pad = 2 * static_cast<int>(std::ceil(board.square_mm * k.fx_px /
-                                                 camera_from_board.translation().z()));
+  const int pad =
+      2 *
+      static_cast<int>(std::ceil(board.square_mm * k.fx_px / camera_from_board.translation().z()));
   box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) &
         cv::Rect(0, 0, k.width_px, k.height_px);
   cv::Mat image(k.height_px, k.width_px, CV_8UC1,
@@ -277,8 +278,7 @@ TEST(CameraImages, AnIndependentRendererGivesFindChessboardCornersSbTheSameCorne
   const ImageRenderer& renderer = exact.renderer;
   const ChessboardTarget& board = exact.board;
   const ImageRenderOptions& options = exact.options;
-  const std::vector<Eigen::Isometry3d> poses =
-      DrawChessboardPoses(board, MakeCameraModel(), 8, 17);
+  const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(board, MakeCameraModel(), 8, 17);
   const cv::Size pattern(board.squares_x - 1, board.squares_y - 1);
   for (const std::size_t k : {std::size_t{3}, std::size_t{7}, std::size_t{2}}) {
     const auto truth = TrueCorners(board, camera, poses[k]);
@@ -287,8 +287,8 @@ TEST(CameraImages, AnIndependentRendererGivesFindChessboardCornersSbTheSameCorne
         RenderPinholeBySupersampling(board, intrinsics, poses[k], options, 8, truth);
     std::vector<cv::Point2f> in_ours, in_independent;
     ASSERT_TRUE(cv::findChessboardCornersSB(ours, pattern, in_ours, cv::CALIB_CB_ACCURACY));
-    ASSERT_TRUE(cv::findChessboardCornersSB(independent, pattern, in_independent,
-                                            cv::CALIB_CB_ACCURACY));
+    ASSERT_TRUE(
+        cv::findChessboardCornersSB(independent, pattern, in_independent, cv::CALIB_CB_ACCURACY));
     in_ours = AlignToTruth(in_ours, truth, pattern.width, pattern.height);
     in_independent = AlignToTruth(in_independent, truth, pattern.width, pattern.height);
     double rms_ours = 0, rms_independent = 0, rms_between = 0;
@@ -308,10 +308,11 @@ TEST(CameraImages, AnIndependentRendererGivesFindChessboardCornersSbTheSameCorne
     // to a few gray levels on edge pixels, so corner-by-corner equality is not a fair check.
     EXPECT_NEAR(rms_ours, rms_independent, 0.005) << "view " << k;
     EXPECT_LT(cv::norm(bias_ours - bias_independent), 0.005) << "view " << k;
-    std::printf("view %zu tilt %.1f deg: SB rms vs truth %.4f (ours) %.4f (independent); mean "
-                "error (%.4f, %.4f) vs (%.4f, %.4f); corners between renders %.4f px rms\n",
-                k, TiltDeg(poses[k]), rms_ours, rms_independent, bias_ours.x, bias_ours.y,
-                bias_independent.x, bias_independent.y, rms_between);
+    std::printf(
+        "view %zu tilt %.1f deg: SB rms vs truth %.4f (ours) %.4f (independent); mean "
+        "error (%.4f, %.4f) vs (%.4f, %.4f); corners between renders %.4f px rms\n",
+        k, TiltDeg(poses[k]), rms_ours, rms_independent, bias_ours.x, bias_ours.y,
+        bias_independent.x, bias_independent.y, rms_between);
   }
 }
 
@@ -327,8 +328,9 @@ TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const GrayImage image = renderer.RenderChessboard(board, poses[k], options, 100 + k);
     std::vector<cv::Point2f> found;
-    if (!cv::findChessboardCornersSB(ToMat(image), cv::Size(board.squares_x - 1, board.squares_y - 1),
-                                     found, cv::CALIB_CB_ACCURACY)) {
+    if (!cv::findChessboardCornersSB(ToMat(image),
+                                     cv::Size(board.squares_x - 1, board.squares_y - 1), found,
+                                     cv::CALIB_CB_ACCURACY)) {
       continue;
     }
     std::vector<cv::Point3f> obj;
@@ -343,8 +345,8 @@ TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
   ASSERT_GE(image_points.size(), 14u);
   cv::Mat k, dist;
   std::vector<cv::Mat> rvecs, tvecs;
-  const double rms = cv::calibrateCamera(object_points, image_points, cv::Size(1024, 1024), k,
-                                         dist, rvecs, tvecs, cv::CALIB_RATIONAL_MODEL);
+  const double rms = cv::calibrateCamera(object_points, image_points, cv::Size(1024, 1024), k, dist,
+                                         rvecs, tvecs, cv::CALIB_RATIONAL_MODEL);
   EXPECT_LT(rms, 0.3);
   EXPECT_NEAR(k.at<double>(0, 0) / intrinsics.fx_px, 1.0, 0.002);
   EXPECT_NEAR(k.at<double>(1, 1) / intrinsics.fy_px, 1.0, 0.002);
@@ -362,8 +364,8 @@ TEST(CameraImages, PngsAreDeterministicAndDecodable) {
   const std::string c = EncodePng(renderer.RenderChessboard(board, pose, {}, 10));
   EXPECT_EQ(a, b);
   EXPECT_NE(a, c);
-  const cv::Mat decoded = cv::imdecode(std::vector<unsigned char>(a.begin(), a.end()),
-                                       cv::IMREAD_UNCHANGED);
+  const cv::Mat decoded =
+      cv::imdecode(std::vector<unsigned char>(a.begin(), a.end()), cv::IMREAD_UNCHANGED);
   EXPECT_EQ(decoded.rows, 1024);
   EXPECT_EQ(decoded.type(), CV_8UC1);
 }

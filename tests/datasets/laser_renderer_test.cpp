@@ -2,10 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
-
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -137,10 +136,11 @@ TEST(LaserRenderer, OccludedPointsGiveNoPeak) {
   Scene walled;
   Material white;
   white.albedo = 0.9;
-  walled.Add({"plane", MakeBox(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 145)), {1500, 1500, 10}),
+  walled.Add({"plane",
+              MakeBox(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 145)), {1500, 1500, 10}),
               white});
-  walled.Add({"wall", MakeBox(Eigen::Isometry3d(Eigen::Translation3d(100, 400, 400)),
-                              {10, 800, 500}),
+  walled.Add({"wall",
+              MakeBox(Eigen::Isometry3d(Eigen::Translation3d(100, 400, 400)), {10, 800, 500}),
               white});
   walled.Commit();
   const ExposureTruth blocked = LaserRenderer(walled, f.sensor, f.render).RenderExact(pose);
@@ -324,7 +324,8 @@ TEST(LaserRenderer, SpeckleHasTheConfiguredSigmaAndGrain) {
 TEST(LaserRenderer, EncoderNoiseChangesOnlyTheRecordedJoints) {
   Fixture f;
   const ChairSeat seat = MakeChairSeat();
-  const Scene scene = MakeSeatScene(f.layout, seat, DrawSeatPlacement({}, seat, 9, 0).cell_from_part);
+  const Scene scene =
+      MakeSeatScene(f.layout, seat, DrawSeatPlacement({}, seat, 9, 0).cell_from_part);
   const LaserRenderer renderer(scene, f.sensor, f.render);
   SweepTiming timing;
   timing.profiles = 400;
@@ -364,7 +365,8 @@ TEST(LaserRenderer, EncoderNoiseChangesOnlyTheRecordedJoints) {
 TEST(LaserRenderer, SweepsAreIdenticalForAnyThreadCount) {
   Fixture f;
   const ChairSeat seat = MakeChairSeat();
-  const Scene scene = MakeSeatScene(f.layout, seat, DrawSeatPlacement({}, seat, 9, 0).cell_from_part);
+  const Scene scene =
+      MakeSeatScene(f.layout, seat, DrawSeatPlacement({}, seat, 9, 0).cell_from_part);
   const LaserRenderer renderer(scene, f.sensor, f.render);
   SweepTiming timing;
   timing.profiles = 24;
@@ -379,7 +381,8 @@ TEST(LaserRenderer, SweepsAreIdenticalForAnyThreadCount) {
   const SweepResult two = RenderSweep(renderer, state_at, timing, 42, 0, "", 2);
   const SweepResult other = RenderSweep(renderer, state_at, timing, 43, 0, "", 2);
   EXPECT_GT(one.valid_peaks, 24u * 300u);
-  EXPECT_EQ(triangulation::EncodeProfiles(one.profiles), triangulation::EncodeProfiles(two.profiles));
+  EXPECT_EQ(triangulation::EncodeProfiles(one.profiles),
+            triangulation::EncodeProfiles(two.profiles));
   EXPECT_NE(triangulation::EncodeProfiles(one.profiles),
             triangulation::EncodeProfiles(other.profiles));
   // Timestamps: nominal grid plus jitter, in ns.
@@ -420,7 +423,8 @@ TEST(LaserRenderer, SpecularReflectionsGiveWeakerGhostPeaksOnlyWhenEnabled) {
       EXPECT_TRUE(a.reflection_row_px.empty());
       // The true peaks are the same with or without ghosts.
       for (int c = 0; c < 1024; ++c) {
-        EXPECT_TRUE(a.row_px[c] == b.row_px[c] || (std::isnan(a.row_px[c]) && std::isnan(b.row_px[c])));
+        EXPECT_TRUE(a.row_px[c] == b.row_px[c] ||
+                    (std::isnan(a.row_px[c]) && std::isnan(b.row_px[c])));
       }
       for (int c = 0; c < 1024; ++c) {
         if (std::isnan(b.reflection_row_px[c])) continue;
@@ -434,11 +438,13 @@ TEST(LaserRenderer, SpecularReflectionsGiveWeakerGhostPeaksOnlyWhenEnabled) {
         EXPECT_EQ(seen->object, b.reflection_object[c]);
         if (std::abs(laser_plane.head<3>().dot(q) + laser_plane[3]) > 0.5) ++off_plane;
         const Eigen::Vector2d px = *ProjectInView(f.sensor.camera, q);
-        worst_projection_px = std::max(
-            {worst_projection_px, std::abs(px.y() - b.reflection_row_px[c]), std::abs(px.x() - c) - 0.5});
+        worst_projection_px =
+            std::max({worst_projection_px, std::abs(px.y() - b.reflection_row_px[c]),
+                      std::abs(px.x() - c) - 0.5});
         // Weaker than a direct hit of that surface: at most reflection_intensity * gain * albedo.
         const double albedo = scene.AlbedoAt(b.reflection_object[c], pose * q);
-        EXPECT_LE(b.reflection_intensity[c], with.reflection_intensity * with.intensity_gain * albedo);
+        EXPECT_LE(b.reflection_intensity[c],
+                  with.reflection_intensity * with.intensity_gain * albedo);
       }
       // The detector reports a ghost only where it outshines the true peak.
       const triangulation::Profile p = on.ApplyNoise(b, 99);
@@ -457,8 +463,10 @@ TEST(LaserRenderer, SpecularReflectionsGiveWeakerGhostPeaksOnlyWhenEnabled) {
   EXPECT_GT(ghosts, 20u);
   EXPECT_GT(ghosts_reported, 0u);
   EXPECT_LE(worst_projection_px, 1e-6);
-  std::printf("reflections: %zu ghost columns (%zu off the laser plane), %zu reported as the "
-              "column's peak\n", ghosts, off_plane, ghosts_reported);
+  std::printf(
+      "reflections: %zu ghost columns (%zu off the laser plane), %zu reported as the "
+      "column's peak\n",
+      ghosts, off_plane, ghosts_reported);
   // Probability 0 means off, and the option is checked.
   with.reflection_probability = 1.5;
   EXPECT_THROW(LaserRenderer(scene, f.sensor, with), OptionError);

@@ -24,10 +24,10 @@ Eigen::Isometry3d Pose(double rx, double ry, double rz, double x, double y, doub
 // Random ray from around `from` aimed at a random point near `at`.
 std::pair<Eigen::Vector3d, Eigen::Vector3d> RandomRay(Rng& rng, const Eigen::Vector3d& from,
                                                       const Eigen::Vector3d& at, double spread) {
-  const Eigen::Vector3d o = from + Eigen::Vector3d(rng.Uniform(-50, 50), rng.Uniform(-50, 50),
-                                                   rng.Uniform(-50, 50));
-  const Eigen::Vector3d t = at + spread * Eigen::Vector3d(rng.Uniform(-1, 1), rng.Uniform(-1, 1),
-                                                          rng.Uniform(-1, 1));
+  const Eigen::Vector3d o =
+      from + Eigen::Vector3d(rng.Uniform(-50, 50), rng.Uniform(-50, 50), rng.Uniform(-50, 50));
+  const Eigen::Vector3d t =
+      at + spread * Eigen::Vector3d(rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1));
   return {o, (t - o).normalized()};
 }
 
@@ -69,9 +69,8 @@ TEST(Scene, SphereHitsAreExactAlthoughTheMeshIsCoarse) {
   int hits = 0;
   double worst = 0, worst_triangle = 0;
   for (int i = 0; i < 3000; ++i) {
-    const auto [o, d] =
-        RandomRay(rng, cell_from_sphere * Eigen::Vector3d(100, 600, 500),
-                  cell_from_sphere.translation(), radius * 0.9);
+    const auto [o, d] = RandomRay(rng, cell_from_sphere * Eigen::Vector3d(100, 600, 500),
+                                  cell_from_sphere.translation(), radius * 0.9);
     const auto hit = scene.Intersect(o, d);
     if (!hit) continue;
     ++hits;
@@ -80,10 +79,10 @@ TEST(Scene, SphereHitsAreExactAlthoughTheMeshIsCoarse) {
     EXPECT_LT(hit->normal.dot(d), 0.0);
     const auto& g = scene.objects()[0].geometry;
     const auto& f = g.mesh.faces[hit->face];
-    const Eigen::Vector3d n = (g.mesh.vertices.positions[f[1]] - g.mesh.vertices.positions[f[0]])
-                                  .cross(g.mesh.vertices.positions[f[2]] -
-                                         g.mesh.vertices.positions[f[0]])
-                                  .normalized();
+    const Eigen::Vector3d n =
+        (g.mesh.vertices.positions[f[1]] - g.mesh.vertices.positions[f[0]])
+            .cross(g.mesh.vertices.positions[f[2]] - g.mesh.vertices.positions[f[0]])
+            .normalized();
     const double t_tri = (g.mesh.vertices.positions[f[0]] - o).dot(n) / d.dot(n);
     worst_triangle = std::max(worst_triangle, std::abs(surface.SignedDistance(o + t_tri * d)));
   }
@@ -115,8 +114,8 @@ TEST(Scene, CylinderHitsAreExact) {
 TEST(Scene, OcclusionAndMisses) {
   Scene scene;
   scene.Add({"floor", MakeRectangle(Eigen::Isometry3d::Identity(), 1000, 1000), {}});
-  scene.Add({"block", MakeBox(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 50)), {100, 100, 100}),
-             {}});
+  scene.Add(
+      {"block", MakeBox(Eigen::Isometry3d(Eigen::Translation3d(0, 0, 50)), {100, 100, 100}), {}});
   scene.Commit();
   const Eigen::Vector3d floor_point(300, 0, 0);
   // Seen from straight above: free. Seen from across the block: occluded.

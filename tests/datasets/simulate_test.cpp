@@ -215,10 +215,10 @@ TEST(SeatPlacement, DrawsCoverTableOneRangesAndRestOnThePallet) {
   EXPECT_GT(max_tilt, 24.0 * kDeg);
   EXPECT_GT(max_yaw, 175.0 * kDeg);
   // Same seed and index -> same placement; other index or seed -> another.
-  EXPECT_TRUE(DrawSeatPlacement(o, seat, 77, 3).cell_from_part.isApprox(
-      DrawSeatPlacement(o, seat, 77, 3).cell_from_part, 0));
-  EXPECT_FALSE(DrawSeatPlacement(o, seat, 77, 3).cell_from_part.isApprox(
-      DrawSeatPlacement(o, seat, 78, 3).cell_from_part));
+  EXPECT_TRUE(DrawSeatPlacement(o, seat, 77, 3)
+                  .cell_from_part.isApprox(DrawSeatPlacement(o, seat, 77, 3).cell_from_part, 0));
+  EXPECT_FALSE(DrawSeatPlacement(o, seat, 77, 3)
+                   .cell_from_part.isApprox(DrawSeatPlacement(o, seat, 78, 3).cell_from_part));
 }
 
 TEST(CellTruth, RobotTrajectoryIsReachableAndTheTrueRobotMissesIt) {
@@ -236,7 +236,8 @@ TEST(CellTruth, RobotTrajectoryIsReachableAndTheTrueRobotMissesIt) {
   double worst_true_miss = 0;
   for (std::size_t k = 0; k < traj.joints_rad.size(); ++k) {
     const auto& q = traj.joints_rad[k];
-    const Eigen::Isometry3d nominal = cell_from_base * truth.nominal_vision_robot.BaseFromFlange(q) *
+    const Eigen::Isometry3d nominal = cell_from_base *
+                                      truth.nominal_vision_robot.BaseFromFlange(q) *
                                       truth.vision_flange_from_sensor;
     const Eigen::Isometry3d actual = cell_from_base * truth.true_vision_robot.BaseFromFlange(q) *
                                      truth.vision_flange_from_sensor;
@@ -245,8 +246,10 @@ TEST(CellTruth, RobotTrajectoryIsReachableAndTheTrueRobotMissesIt) {
     EXPECT_NEAR(central.z(), -1.0, 1e-9);
     const Eigen::Vector3d crossing = nominal * Eigen::Vector3d(0, 0, config.sensor.standoff_mm);
     EXPECT_NEAR(crossing.z(), config.measuring_height_mm, 1e-6);
-    EXPECT_NEAR((crossing.head<2>() - config.sweep_center_xy_mm).norm(), config.arc_radius_mm, 1e-6);
-    worst_true_miss = std::max(worst_true_miss, (actual.translation() - nominal.translation()).norm());
+    EXPECT_NEAR((crossing.head<2>() - config.sweep_center_xy_mm).norm(), config.arc_radius_mm,
+                1e-6);
+    worst_true_miss =
+        std::max(worst_true_miss, (actual.translation() - nominal.translation()).norm());
   }
   EXPECT_GT(worst_true_miss, 0.1);  // joint offsets of ~0.1 deg move the sensor by ~mm
   // Every joint stays inside the UR5's +-2 pi range.
@@ -284,11 +287,11 @@ TEST(CellTruth, DhLengthErrorsAreAppliedAndLeaveTheJointOffsetDrawsUnchanged) {
   EXPECT_EQ(explicit_truth.dh_a_errors_mm, *config.dh_a_errors_mm);
   EXPECT_EQ(SimConfigToYaml(SimConfigFromYaml(SimConfigToYaml(config), "x.yaml")),
             SimConfigToYaml(config));
-  EXPECT_NE(ConfigError("vision_robot: {dh_d_errors_mm: [1, 2]}\n").find(
-                "SimConfig.vision_robot.dh_d_errors_mm must list 6 values"),
+  EXPECT_NE(ConfigError("vision_robot: {dh_d_errors_mm: [1, 2]}\n")
+                .find("SimConfig.vision_robot.dh_d_errors_mm must list 6 values"),
             std::string::npos);
-  EXPECT_NE(ConfigError("vision_robot: {dh_length_sigma_mm: -1}\n").find(
-                "SimConfig.vision_robot.dh_length_sigma_mm"),
+  EXPECT_NE(ConfigError("vision_robot: {dh_length_sigma_mm: -1}\n")
+                .find("SimConfig.vision_robot.dh_length_sigma_mm"),
             std::string::npos);
 }
 
@@ -303,9 +306,9 @@ TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   const SimulationReport rb = SimulateCell(config, b, {}, 2);
   ASSERT_EQ(ra.files, rb.files);
   // The robot-side calibration captures are part of the comparison.
-  for (const char* f : {"records/touches.yaml", "records/sphere_sweeps.yaml", "truth/touches.yaml",
-                        "profiles/eye_in_hand_02.lcp", "profiles/joint_pose_003.lcp",
-                        "models/seat.stl"}) {
+  for (const char* f :
+       {"records/touches.yaml", "records/sphere_sweeps.yaml", "truth/touches.yaml",
+        "profiles/eye_in_hand_02.lcp", "profiles/joint_pose_003.lcp", "models/seat.stl"}) {
     EXPECT_NE(std::find(ra.files.begin(), ra.files.end(), f), ra.files.end()) << f;
   }
   for (const std::string& f : ra.files) {
@@ -332,7 +335,8 @@ TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
       triangulation::ReadLinearSweepRecord(dir + "/records/linear_sweep.yaml");
   EXPECT_EQ(linear.t0_ns, config.timing.start_ns);
   // The sensor-frame velocity moves the sensor like the true sweep does.
-  const Eigen::Vector3d v_cell = sweep.cell_from_sensor_start.linear() * linear.velocity_mm_s_in_sensor;
+  const Eigen::Vector3d v_cell =
+      sweep.cell_from_sensor_start.linear() * linear.velocity_mm_s_in_sensor;
   EXPECT_LT((v_cell - sweep.velocity_mm_s).norm(), 1e-9);
   EXPECT_NEAR(linear.speed_mm_s, sweep.velocity_mm_s.norm(), 1e-9);
   EXPECT_EQ(linear.Options().velocity_mm_s, linear.velocity_mm_s_in_sensor);
@@ -359,8 +363,8 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   const test::TestDir scratch("sim_set");
   const std::string dir = scratch.path().string();
   std::vector<std::string> stages;
-  const SimulationReport report =
-      SimulateCell(config, dir, [&](std::string_view stage, double) { stages.emplace_back(stage); });
+  const SimulationReport report = SimulateCell(
+      config, dir, [&](std::string_view stage, double) { stages.emplace_back(stage); });
   // 2 planes, spheres, 2 seats, 1 trajectory sweep, 3 eye-in-hand and 4 joint-pose sweeps.
   ASSERT_EQ(report.captures.size(), 13u);
   EXPECT_FALSE(stages.empty());
@@ -405,13 +409,14 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   }
   EXPECT_NE(captures.find("hole_center_in_handling_base"), std::string::npos);
   // Images and their truth.
-  for (const char* f : {"records/touches.yaml", "records/sphere_sweeps.yaml",
-                        "truth/touches.yaml", "images/chessboard_000.png", "images/chessboard_001.png",
-                        "images/laser_line_plane.png", "images/laser_line_chessboard.png",
-                        "truth/chessboard.yaml", "truth/laser_lines.yaml"}) {
+  for (const char* f :
+       {"records/touches.yaml", "records/sphere_sweeps.yaml", "truth/touches.yaml",
+        "images/chessboard_000.png", "images/chessboard_001.png", "images/laser_line_plane.png",
+        "images/laser_line_chessboard.png", "truth/chessboard.yaml", "truth/laser_lines.yaml"}) {
     EXPECT_TRUE(fs::exists(dir + "/" + f)) << f;
   }
-  EXPECT_NE(io::ReadFileBytes(dir + "/truth/chessboard.yaml").find("corners_px"), std::string::npos);
+  EXPECT_NE(io::ReadFileBytes(dir + "/truth/chessboard.yaml").find("corners_px"),
+            std::string::npos);
   // The seat model is a readable PLY mesh with the seat's triangles.
   const TriangleMesh seat = io::ReadPlyMesh(dir + "/models/seat.ply");
   EXPECT_EQ(seat.faces.size(), truth.seat.part.mesh.faces.size());
@@ -452,7 +457,6 @@ TEST(Simulate, SeatScenesMatchTheCellSetForTheSameSeed) {
             io::ReadFileBytes(seats + "/profiles/seat_001.lcp"));
   EXPECT_THROW(SimulateSeats(config, 0, seats), OptionError);
 }
-
 
 TEST(Simulate, NoiseFreeProfilesTriangulateOntoTheTruth) {
   // The whole chain: profile file rows -> true camera ray -> true laser plane -> true sweep pose

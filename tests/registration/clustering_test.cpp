@@ -15,12 +15,13 @@ namespace {
 using ::testing::HasSubstr;
 
 // `count` hypotheses scattered around `centre` by `trans_mm` and `angle_rad`.
-void AddGroup(const Eigen::Isometry3d& centre, int count, double votes, double trans_mm, double angle_rad,
-              std::mt19937_64& rng, std::vector<PoseHypothesis>* out) {
+void AddGroup(const Eigen::Isometry3d& centre, int count, double votes, double trans_mm,
+              double angle_rad, std::mt19937_64& rng, std::vector<PoseHypothesis>* out) {
   std::uniform_real_distribution<double> u(0.2, 1.0);
   for (int i = 0; i < count; ++i) {
     PoseHypothesis h;
-    h.scene_from_centered = centre * test::RandomPerturbation(rng, angle_rad * u(rng), trans_mm * u(rng));
+    h.scene_from_centered =
+        centre * test::RandomPerturbation(rng, angle_rad * u(rng), trans_mm * u(rng));
     h.votes = votes;
     out->push_back(h);
   }
@@ -29,7 +30,8 @@ void AddGroup(const Eigen::Isometry3d& centre, int count, double votes, double t
 TEST(ClusteringTest, QuaternionDistanceIsTheSeedFormula) {
   std::mt19937_64 rng(41);
   for (int i = 0; i < 100; ++i) {
-    const Eigen::Quaterniond a(test::RandomPose(rng, 1.0).linear()), b(test::RandomPose(rng, 1.0).linear());
+    const Eigen::Quaterniond a(test::RandomPose(rng, 1.0).linear()),
+        b(test::RandomPose(rng, 1.0).linear());
     EXPECT_NEAR(QuaternionDistance(a, b), RotationDistance(a, b), 1e-7);
     Eigen::Quaterniond minus_b(-b.w(), -b.x(), -b.y(), -b.z());
     EXPECT_NEAR(QuaternionDistance(a, minus_b), QuaternionDistance(a, b), 1e-12);
@@ -40,7 +42,8 @@ TEST(ClusteringTest, GroupsByTranslationAndRotationAndSuppressesOrientationsAtOn
   std::mt19937_64 rng(42);
   const Eigen::Isometry3d a = PoseFromRotationVector({0.1, 0.2, 0.3}, {0, 0, -500});
   const Eigen::Isometry3d b = PoseFromRotationVector({-0.5, 0.1, 1.0}, {150, 0, -500});
-  const Eigen::Isometry3d a_turned = a * PoseFromRotationVector({0, 0, std::numbers::pi / 2}, Eigen::Vector3d::Zero());
+  const Eigen::Isometry3d a_turned =
+      a * PoseFromRotationVector({0, 0, std::numbers::pi / 2}, Eigen::Vector3d::Zero());
   std::vector<PoseHypothesis> hypotheses;
   AddGroup(a, 20, 10.0, 3.0, 0.05, rng, &hypotheses);
   AddGroup(b, 10, 10.0, 3.0, 0.05, rng, &hypotheses);
@@ -58,7 +61,8 @@ TEST(ClusteringTest, GroupsByTranslationAndRotationAndSuppressesOrientationsAtOn
   EXPECT_THAT(best.scene_from_centered, test::PoseNear(a, 0.03, 2.0));
   // The vote-weighted average of the members (here equal votes) is the cluster pose.
   std::vector<Eigen::Isometry3d> members;
-  for (int i = 0; i < 20; ++i) members.push_back(hypotheses[static_cast<std::size_t>(i)].scene_from_centered);
+  for (int i = 0; i < 20; ++i)
+    members.push_back(hypotheses[static_cast<std::size_t>(i)].scene_from_centered);
   EXPECT_THAT(best.scene_from_centered, test::PoseNear(AveragePoses(members), 1e-9, 1e-9));
   // Same place, other orientation: formed but suppressed by the better cluster, not dropped.
   EXPECT_DOUBLE_EQ(result.clusters[1].score, 150.0);
@@ -85,28 +89,34 @@ TEST(ClusteringTest, VotesWeighTheAverageAndSeedTheGreedyOrder) {
   hypotheses[2].scene_from_centered = p2;
   hypotheses[2].votes = 1.0;
   PoseClusteringOptions options;
-  options.translation_radius_mm = 5.0;  // the seed reaches both others; they do not reach each other
+  options.translation_radius_mm =
+      5.0;  // the seed reaches both others; they do not reach each other
   const ClusteringResult result = ClusterPoses(hypotheses, options);
   ASSERT_EQ(result.clusters.size(), 1U);
   EXPECT_EQ(result.clusters[0].seed, 1U);
   EXPECT_DOUBLE_EQ(result.clusters[0].seed_votes, 3.0);
-  EXPECT_NEAR(result.clusters[0].scene_from_centered.translation().x(), (0 * 1 + 4 * 3 + 8 * 1) / 5.0, 1e-12);
+  EXPECT_NEAR(result.clusters[0].scene_from_centered.translation().x(),
+              (0 * 1 + 4 * 3 + 8 * 1) / 5.0, 1e-12);
   EXPECT_TRUE(ClusterPoses({}, options).clusters.empty());
 }
 
 TEST(ClusteringTest, RejectsBadOptions) {
   PoseClusteringOptions options;
   options.translation_radius_mm = 0.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("translation_radius_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("translation_radius_mm")));
   options = {};
   options.rotation_threshold_rad = 4.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("rotation_threshold_rad")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("rotation_threshold_rad")));
   options = {};
   options.max_clusters = 0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("max_clusters")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("max_clusters")));
   options = {};
   options.duplicate_radius_mm = -1.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("duplicate_radius_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("duplicate_radius_mm")));
 }
 
 }  // namespace

@@ -22,13 +22,15 @@ TEST(CropBoxTest, KeepsPointsInsideTheBoxInAGivenFrame) {
   box.Extend({6, 1, 1});
   EXPECT_EQ(CropBoxIndices(cloud, box), (std::vector<std::size_t>{0, 1}));
   // The same box in a frame shifted by -5 mm along x: frame_from_cloud maps x -> x - 5.
-  const Eigen::Isometry3d frame_from_cloud = PoseFromRotationVector(Eigen::Vector3d::Zero(), {-5, 0, 0});
+  const Eigen::Isometry3d frame_from_cloud =
+      PoseFromRotationVector(Eigen::Vector3d::Zero(), {-5, 0, 0});
   EXPECT_EQ(CropBoxIndices(cloud, box, frame_from_cloud), (std::vector<std::size_t>{1, 2}));
   const PointCloud cropped = CropBox(cloud, box, frame_from_cloud);
   ASSERT_EQ(cropped.size(), 2U);
   EXPECT_EQ(cropped.intensity, (std::vector<float>{2, 3}));
   // Rotated frame: 90 deg about z maps (0, 20, 0) to (-20, 0, 0).
-  const Eigen::Isometry3d rotated = PoseFromRotationVector({0, 0, std::numbers::pi / 2}, Eigen::Vector3d::Zero());
+  const Eigen::Isometry3d rotated =
+      PoseFromRotationVector({0, 0, std::numbers::pi / 2}, Eigen::Vector3d::Zero());
   BoundingBox left;
   left.Extend({-21, -1, -1});
   left.Extend({-19, 1, 1});
@@ -46,10 +48,10 @@ PointCloud TwoBlobsAndSpecks() {
     cloud.column.push_back(c);
   };
   for (int r = 0; r < 10; ++r) {
-    for (int c = 0; c < 10; ++c) add(r, c, {r * 1.0, c * 1.0, 0.0});             // blob A: 100 points
+    for (int c = 0; c < 10; ++c) add(r, c, {r * 1.0, c * 1.0, 0.0});  // blob A: 100 points
   }
   for (int r = 20; r < 28; ++r) {
-    for (int c = 20; c < 28; ++c) add(r, c, {r * 1.0, c * 1.0, 5.0});           // blob B: 64 points
+    for (int c = 20; c < 28; ++c) add(r, c, {r * 1.0, c * 1.0, 5.0});  // blob B: 64 points
   }
   add(35, 5, {35, 5, 0});   // isolated
   add(35, 6, {35, 6, 0});   // its neighbour: a 2-point cluster
@@ -69,7 +71,7 @@ TEST(ClusterFilterTest, RemovesSmallComponentsByRadiusAndByGrid) {
     EXPECT_EQ(result.components, 4U);
     EXPECT_EQ(result.removed_components, 2U);
     EXPECT_EQ(result.kept.size(), 164U);
-    EXPECT_EQ(result.labels[0], 0);    // labels in order of first point
+    EXPECT_EQ(result.labels[0], 0);  // labels in order of first point
     EXPECT_EQ(result.labels[100], 1);
     EXPECT_EQ(result.labels[164], result.labels[165]);
     EXPECT_NE(result.labels[164], result.labels[166]);
@@ -93,10 +95,12 @@ TEST(ClusterFilterTest, GridPathRespectsTheDistance) {
 TEST(ClusterFilterTest, RejectsBadOptions) {
   ClusterFilterOptions options;
   options.radius_mm = -1.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("radius_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("radius_mm")));
   options = {};
   options.grid_window = 0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("grid_window")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("grid_window")));
 }
 
 TEST(VoxelGridTest, CentroidsAndAveragedNormals) {
@@ -153,10 +157,14 @@ TEST(VoxelGridTest, OneCentroidPerOccupiedVoxelOnRandomData) {
     sum[static_cast<std::size_t>(voxel_of_point[i])] += cloud.positions[i];
     ++count[static_cast<std::size_t>(voxel_of_point[i])];
     const Eigen::Vector3d a = ((cloud.positions[i] - origin) / 7.0).array().floor();
-    const Eigen::Vector3d b = ((out.positions[static_cast<std::size_t>(voxel_of_point[i])] - origin) / 7.0).array().floor();
+    const Eigen::Vector3d b =
+        ((out.positions[static_cast<std::size_t>(voxel_of_point[i])] - origin) / 7.0)
+            .array()
+            .floor();
     ASSERT_EQ(a, b);
   }
-  for (std::size_t v = 0; v < out.size(); ++v) EXPECT_TRUE(out.positions[v].isApprox(sum[v] / count[v], 1e-12));
+  for (std::size_t v = 0; v < out.size(); ++v)
+    EXPECT_TRUE(out.positions[v].isApprox(sum[v] / count[v], 1e-12));
   EXPECT_LE(out.size(), 15U * 15U * 15U);
   EXPECT_GT(out.size(), 14U * 14U * 14U);
 }
@@ -164,16 +172,19 @@ TEST(VoxelGridTest, OneCentroidPerOccupiedVoxelOnRandomData) {
 TEST(VoxelGridTest, RejectsBadOptions) {
   VoxelGridOptions options;
   options.voxel_size_mm = 0.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("voxel_size_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("voxel_size_mm")));
   options.voxel_size_mm = 1.0;
   options.min_normal_coherence = 2.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("min_normal_coherence")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("min_normal_coherence")));
   // Voxels far too small for the extent.
   PointCloud cloud;
   cloud.positions = {{0, 0, 0}, {1e6, 0, 0}};
   options = {};
   options.voxel_size_mm = 1e-3;
-  EXPECT_THAT([&] { VoxelGridDownsample(cloud, options); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("too small")));
+  EXPECT_THAT([&] { VoxelGridDownsample(cloud, options); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("too small")));
 }
 
 TEST(VoxelGridTest, EmptyCloudGivesEmptyOutput) {

@@ -24,8 +24,8 @@ PointCloud TargetShape(std::mt19937_64& rng, std::size_t sphere_points) {
 struct Problem {
   KdTree tree;
   std::vector<Eigen::Vector3d> normals;
-  std::vector<Eigen::Vector3d> source;      // in the source frame
-  Eigen::Isometry3d target_from_source;      // truth
+  std::vector<Eigen::Vector3d> source;   // in the source frame
+  Eigen::Isometry3d target_from_source;  // truth
 };
 
 // Source = freshly sampled surface points (not the target's), moved by the inverse truth,
@@ -44,7 +44,8 @@ Problem MakeProblem(std::uint64_t seed, double noise_mm, double outlier_fraction
   const Eigen::Isometry3d source_from_target = problem.target_from_source.inverse();
   for (std::size_t i = 0; i < surface.size(); ++i) {
     Eigen::Vector3d p = surface.positions[i] + g(rng) * surface.normals[i];
-    if (u(rng) < outlier_fraction) p += offset(rng) * surface.normals[i];  // clutter just above the surface
+    if (u(rng) < outlier_fraction)
+      p += offset(rng) * surface.normals[i];  // clutter just above the surface
     problem.source.push_back(source_from_target * p);
   }
   return problem;
@@ -85,13 +86,17 @@ TEST(IcpTest, RobustKernelsResistClutterNearTheSurface) {
   IcpOptions options;
   options.kernel = RobustKernel::kNone;
   const IcpResult plain = AlignFromPerturbed(p, options);
-  const double plain_error = test::PoseRmsMm(p.source, plain.target_from_source, p.target_from_source);
-  for (RobustKernel kernel : {RobustKernel::kTukey, RobustKernel::kGemanMcClure, RobustKernel::kHuber}) {
+  const double plain_error =
+      test::PoseRmsMm(p.source, plain.target_from_source, p.target_from_source);
+  for (RobustKernel kernel :
+       {RobustKernel::kTukey, RobustKernel::kGemanMcClure, RobustKernel::kHuber}) {
     options.kernel = kernel;
     const IcpResult robust = AlignFromPerturbed(p, options);
     const double error = test::PoseRmsMm(p.source, robust.target_from_source, p.target_from_source);
-    EXPECT_LT(error, 0.5 * plain_error) << "kernel " << static_cast<int>(kernel) << ": " << error << " vs " << plain_error;
-    if (kernel != RobustKernel::kHuber) {  // redescending kernels ignore the clutter almost entirely
+    EXPECT_LT(error, 0.5 * plain_error)
+        << "kernel " << static_cast<int>(kernel) << ": " << error << " vs " << plain_error;
+    if (kernel !=
+        RobustKernel::kHuber) {  // redescending kernels ignore the clutter almost entirely
       EXPECT_LT(error, 0.06) << "kernel " << static_cast<int>(kernel);
     }
   }
@@ -115,7 +120,8 @@ TEST(IcpTest, IdenticalForAnyThreadCount) {
 
 TEST(IcpTest, ReportsTooFewCorrespondencesAndDegeneracy) {
   const Problem p = MakeProblem(65, 0.2, 0.0);
-  const Eigen::Isometry3d far = PoseFromRotationVector(Eigen::Vector3d::Zero(), {1000, 0, 0}) * p.target_from_source;
+  const Eigen::Isometry3d far =
+      PoseFromRotationVector(Eigen::Vector3d::Zero(), {1000, 0, 0}) * p.target_from_source;
   const IcpResult lost = AlignIcp(p.source, p.tree, p.normals, far, IcpOptions{});
   EXPECT_FALSE(lost.converged);
   EXPECT_EQ(lost.termination, IcpTermination::kTooFewCorrespondences);
@@ -132,27 +138,33 @@ TEST(IcpTest, ReportsTooFewCorrespondencesAndDegeneracy) {
     }
   }
   const KdTree tree(plane);
-  const IcpResult flat = AlignIcp(source, tree, normals, Eigen::Isometry3d::Identity(), IcpOptions{});
+  const IcpResult flat =
+      AlignIcp(source, tree, normals, Eigen::Isometry3d::Identity(), IcpOptions{});
   EXPECT_TRUE(flat.converged) << flat.Summary();
   EXPECT_TRUE(flat.degenerate);
   EXPECT_NEAR(flat.target_from_source.translation().z(), -2.0, 1e-6);
-  EXPECT_NEAR(flat.target_from_source.translation().head<2>().norm(), 0.0, 1e-3);  // damped, not drifting
+  EXPECT_NEAR(flat.target_from_source.translation().head<2>().norm(), 0.0,
+              1e-3);  // damped, not drifting
 }
 
 TEST(IcpTest, RejectsBadOptionsAndInput) {
   IcpOptions options;
   options.max_correspondence_distance_mm = 0.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("max_correspondence_distance_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("max_correspondence_distance_mm")));
   options = {};
   options.max_iterations = 0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("max_iterations")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("max_iterations")));
   options = {};
   options.kernel_scale_mm = -1.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("kernel_scale_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("kernel_scale_mm")));
   const KdTree tree(std::vector<Eigen::Vector3d>{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}});
   const std::vector<Eigen::Vector3d> source = {{0, 0, 0}};
-  EXPECT_THAT([&] { AlignIcp(source, tree, {}, Eigen::Isometry3d::Identity(), IcpOptions{}); },
-              ::testing::ThrowsMessage<InputError>(HasSubstr("one target normal per target point")));
+  EXPECT_THAT(
+      [&] { AlignIcp(source, tree, {}, Eigen::Isometry3d::Identity(), IcpOptions{}); },
+      ::testing::ThrowsMessage<InputError>(HasSubstr("one target normal per target point")));
 }
 
 }  // namespace

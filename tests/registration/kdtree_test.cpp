@@ -20,9 +20,11 @@ std::vector<Eigen::Vector3d> RandomPoints(std::size_t n, std::uint64_t seed) {
 }
 
 // Brute force reference: all (distance_sq, index) sorted by distance then index.
-std::vector<Neighbor> BruteForce(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector3d& q) {
+std::vector<Neighbor> BruteForce(const std::vector<Eigen::Vector3d>& points,
+                                 const Eigen::Vector3d& q) {
   std::vector<Neighbor> all;
-  for (std::size_t i = 0; i < points.size(); ++i) all.push_back({static_cast<std::uint32_t>(i), (points[i] - q).squaredNorm()});
+  for (std::size_t i = 0; i < points.size(); ++i)
+    all.push_back({static_cast<std::uint32_t>(i), (points[i] - q).squaredNorm()});
   std::sort(all.begin(), all.end(), [](const Neighbor& a, const Neighbor& b) {
     return a.distance_sq < b.distance_sq || (a.distance_sq == b.distance_sq && a.index < b.index);
   });
@@ -112,7 +114,8 @@ TEST(KdTreeTest, SurvivesMove) {
 }
 
 TEST(KdTreeTest, RejectsNonFinitePoints) {
-  std::vector<Eigen::Vector3d> points = {{0, 0, 0}, {std::numeric_limits<double>::quiet_NaN(), 0, 0}};
+  std::vector<Eigen::Vector3d> points = {{0, 0, 0},
+                                         {std::numeric_limits<double>::quiet_NaN(), 0, 0}};
   try {
     KdTree tree(points);
     FAIL() << "expected InputError";

@@ -1,5 +1,3 @@
-#include "registration/localize_in_cloud.hpp"
-
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -7,6 +5,7 @@
 #include <random>
 
 #include "core/error.hpp"
+#include "registration/localize_in_cloud.hpp"
 #include "registration_test_util.hpp"
 
 namespace lasercell::registration {
@@ -59,13 +58,15 @@ TEST(LocalizeRealTest, ReferencePoseIsAStableIcpOptimum) {
   icp.threads = 0;
   std::mt19937_64 rng(81);
   for (int start = 0; start < 3; ++start) {
-    Eigen::Isometry3d pose = reference * model.model_from_centered() * test::RandomPerturbation(rng, 0.035, 4.0) *
+    Eigen::Isometry3d pose = reference * model.model_from_centered() *
+                             test::RandomPerturbation(rng, 0.035, 4.0) *
                              model.model_from_centered().inverse();
     for (int round = 0; round < 3; ++round) {
       std::vector<std::uint32_t> overlap;
       VerifyPose(test::UwaScene()->positions, model, pose, Viewpoint{}, grid, &overlap);
       std::vector<Eigen::Vector3d> source;
-      for (std::size_t k = 0; k < overlap.size(); k += 3) source.push_back(test::UwaScene()->positions[overlap[k]]);
+      for (std::size_t k = 0; k < overlap.size(); k += 3)
+        source.push_back(test::UwaScene()->positions[overlap[k]]);
       const IcpResult result = AlignIcp(source, model.refinement_tree(), model.refinement_normals(),
                                         (pose * model.model_from_centered()).inverse(), icp);
       pose = result.target_from_source.inverse() * model.model_from_centered().inverse();
@@ -87,7 +88,8 @@ TEST(LocalizeRealTest, IdenticalForAnyThreadCount) {
     EXPECT_EQ(one.hypotheses, other.hypotheses);
     EXPECT_EQ(one.votes_cast, other.votes_cast);
     for (std::size_t i = 0; i < one.candidates.size(); ++i) {
-      EXPECT_EQ(one.candidates[i].scene_from_model.matrix(), other.candidates[i].scene_from_model.matrix());
+      EXPECT_EQ(one.candidates[i].scene_from_model.matrix(),
+                other.candidates[i].scene_from_model.matrix());
       EXPECT_EQ(one.candidates[i].score, other.candidates[i].score);
       EXPECT_EQ(one.candidates[i].verification.support, other.candidates[i].verification.support);
       EXPECT_EQ(one.candidates[i].icp.rmse_mm, other.candidates[i].icp.rmse_mm);
@@ -111,13 +113,16 @@ TEST(LocalizeSyntheticTest, FindsRandomPlacementsInRealClutter) {
     std::size_t visible = 0;
     const PointCloud scan = test::SyntheticRs1Scan({truth}, 0.3, rng, &visible);
     const double unoccluded =
-        static_cast<double>(visible) / test::VisibleFromOrigin(test::UwaModelDenseSurface().Transformed(truth), 0.8, 2.0).size();
+        static_cast<double>(visible) /
+        test::VisibleFromOrigin(test::UwaModelDenseSurface().Transformed(truth), 0.8, 2.0).size();
     const LocalizationResult result = LocalizeInCloud(scan, UwaPpfModel());
-    const double error = result.found ? ModelRmsMm(result.candidates.front().scene_from_model, truth) : -1.0;
+    const double error =
+        result.found ? ModelRmsMm(result.candidates.front().scene_from_model, truth) : -1.0;
     const bool ok = result.found && error < 1.0;
     found += ok ? 1 : 0;
     if (unoccluded >= 0.6) {
-      EXPECT_TRUE(ok) << "trial " << trial << " (" << unoccluded << " unoccluded): error " << error << " mm; " << result.Summary();
+      EXPECT_TRUE(ok) << "trial " << trial << " (" << unoccluded << " unoccluded): error " << error
+                      << " mm; " << result.Summary();
     }
   }
   EXPECT_GE(found, 9);
@@ -136,7 +141,8 @@ TEST(LocalizeSyntheticTest, FindsTwoInstances) {
   options.max_instances = 2;
   const LocalizationResult result = LocalizeInCloud(scan, UwaPpfModel(), options);
   ASSERT_EQ(result.candidates.size(), 2U) << result.Summary();
-  const Eigen::Isometry3d first = result.candidates[0].scene_from_model, second = result.candidates[1].scene_from_model;
+  const Eigen::Isometry3d first = result.candidates[0].scene_from_model,
+                          second = result.candidates[1].scene_from_model;
   const bool in_order = ModelRmsMm(first, a) < ModelRmsMm(first, b);
   EXPECT_LT(ModelRmsMm(in_order ? first : second, a), 1.0);
   EXPECT_LT(ModelRmsMm(in_order ? second : first, b), 1.0);
@@ -145,7 +151,8 @@ TEST(LocalizeSyntheticTest, FindsTwoInstances) {
 
 TEST(LocalizeBadInputTest, SceneWithoutThePartIsNotFound) {
   LASERCELL_REQUIRE_UWA();
-  const LocalizationResult result = LocalizeInCloud(test::Rs1WithoutParasaurolophus(), UwaPpfModel());
+  const LocalizationResult result =
+      LocalizeInCloud(test::Rs1WithoutParasaurolophus(), UwaPpfModel());
   EXPECT_FALSE(result.found) << result.Summary();
   EXPECT_TRUE(result.candidates.empty());
   EXPECT_FALSE(result.rejected.empty());
@@ -193,11 +200,13 @@ TEST(LocalizeBadInputTest, ModelLargerThanTheSceneIsNotFound) {
 
 TEST(LocalizeBadInputTest, EmptyAndMalformedScenes) {
   const PpfModel model = PpfModel::Build(test::BoxPoints({30, 20, 10}, 2.0));
-  EXPECT_THAT([&] { LocalizeInCloud(PointCloud{}, model); }, ::testing::ThrowsMessage<InputError>(HasSubstr("scene cloud is empty")));
+  EXPECT_THAT([&] { LocalizeInCloud(PointCloud{}, model); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("scene cloud is empty")));
   PointCloud mismatched;
   mismatched.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   mismatched.normals = {{0, 0, 1}};
-  EXPECT_THAT([&] { LocalizeInCloud(mismatched, model); }, ::testing::ThrowsMessage<InputError>(HasSubstr("'normals' has 1 values for 3")));
+  EXPECT_THAT([&] { LocalizeInCloud(mismatched, model); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("'normals' has 1 values for 3")));
   PointCloud all_nan;
   all_nan.positions.assign(10, Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
   const LocalizationResult result = LocalizeInCloud(all_nan, model);
@@ -216,7 +225,8 @@ TEST(LocalizeBadInputTest, AbsurdOptionsNameTheField) {
   const PpfModel model = PpfModel::Build(test::BoxPoints({30, 20, 10}, 2.0));
   const PointCloud scene = test::BoxPoints({30, 20, 10}, 2.0);
   auto expect_error = [&](const LocalizeOptions& options, const char* field) {
-    EXPECT_THAT([&] { LocalizeInCloud(scene, model, options); }, ::testing::ThrowsMessage<OptionError>(HasSubstr(field)));
+    EXPECT_THAT([&] { LocalizeInCloud(scene, model, options); },
+                ::testing::ThrowsMessage<OptionError>(HasSubstr(field)));
   };
   LocalizeOptions o;
   o.scene_sampling_step_mm = -2.0;
@@ -268,7 +278,8 @@ TEST(LocalizeAmbiguityTest, SymmetricViewIsFlagged) {
   const PpfModel model = PpfModel::Build(box);
   const Eigen::Isometry3d truth = PoseFromRotationVector({0.3, -0.2, 0.4}, {0, 0, -500});
   std::mt19937_64 rng(94);
-  const PointCloud view = test::SimulateView(box.Transformed(truth), Viewpoint{}, 1.0, 0.5, 0.1, rng);
+  const PointCloud view =
+      test::SimulateView(box.Transformed(truth), Viewpoint{}, 1.0, 0.5, 0.1, rng);
   const LocalizationResult result = LocalizeInCloud(view, model);
   ASSERT_TRUE(result.found) << result.Summary();
   EXPECT_TRUE(result.ambiguous) << result.Summary();
@@ -285,14 +296,17 @@ TEST(LocalizeProgressTest, ReportsEveryStageInOrder) {
     stages.emplace_back(stage);
   };
   options.scene_normal_mode = VoxelNormalMode::kNearestPoint;
-  const LocalizationResult result = LocalizeInCloud(box.Transformed(PoseFromRotationVector({0.3, 0.2, 0.1}, {0, 0, -400})), model, options);
+  const LocalizationResult result = LocalizeInCloud(
+      box.Transformed(PoseFromRotationVector({0.3, 0.2, 0.1}, {0, 0, -400})), model, options);
   EXPECT_TRUE(result.found) << result.Summary();
-  EXPECT_EQ(stages, (std::vector<std::string>{"preprocess", "normals", "subsample", "matching", "clustering", "refinement"}));
+  EXPECT_EQ(stages, (std::vector<std::string>{"preprocess", "normals", "subsample", "matching",
+                                              "clustering", "refinement"}));
 }
 
 TEST(LocalizeConvenienceTest, BuildsTheModelFromACloud) {
   LASERCELL_REQUIRE_UWA();
-  const LocalizationResult result = LocalizeInCloud(*test::UwaScene(), *test::UwaModel(), PpfModelOptions{}, LocalizeOptions{});
+  const LocalizationResult result =
+      LocalizeInCloud(*test::UwaScene(), *test::UwaModel(), PpfModelOptions{}, LocalizeOptions{});
   ASSERT_TRUE(result.found);
   EXPECT_LT(ModelRmsMm(result.candidates.front().scene_from_model, test::Rs1ReferencePose()), 1.0);
 }

@@ -58,7 +58,8 @@ TEST(NormalsTest, SphereNormalsAreRadialAndFaceTheViewpoint) {
     const double error = AngleTo(result.normals[i], cloud.positions[i] - centre);
     sum += error;
     worst = std::max(worst, error);
-    EXPECT_GE(result.normals[i].dot(-cloud.positions[i]), 0.0) << "point " << i << " faces away from the sensor";
+    EXPECT_GE(result.normals[i].dot(-cloud.positions[i]), 0.0)
+        << "point " << i << " faces away from the sensor";
     EXPECT_NEAR(result.normals[i].norm(), 1.0, 1e-12);
   }
   // 12 neighbours span ~5 mm on a 50 mm sphere: the fit is nearly unbiased; sampling
@@ -115,10 +116,12 @@ TEST(NormalsTest, PerPointLineOfSightOrientsEachNormal) {
   std::vector<Eigen::Vector3d> line_of_sight(cloud.size(), Eigen::Vector3d::UnitZ());
   for (std::size_t i = 0; i < cloud.size(); i += 2) line_of_sight[i] = -Eigen::Vector3d::UnitZ();
   const auto result = EstimateNormals(cloud, NormalOptions{}, line_of_sight);
-  for (std::size_t i = 0; i < cloud.size(); ++i) EXPECT_GT(result.normals[i].dot(line_of_sight[i]), 0.9);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    EXPECT_GT(result.normals[i].dot(line_of_sight[i]), 0.9);
   const std::vector<Eigen::Vector3d> wrong(3, Eigen::Vector3d::UnitZ());
   EXPECT_THAT([&] { EstimateNormals(cloud, NormalOptions{}, wrong); },
-              ::testing::ThrowsMessage<InputError>(HasSubstr("line_of_sight has 3 vectors for 100 points")));
+              ::testing::ThrowsMessage<InputError>(
+                  HasSubstr("line_of_sight has 3 vectors for 100 points")));
 }
 
 TEST(NormalsTest, IdenticalForAnyThreadCount) {
@@ -155,13 +158,16 @@ TEST(NormalsTest, DegenerateNeighbourhoodsAreReportedAndDropped) {
 TEST(NormalsTest, RejectsBadOptionsAndInput) {
   NormalOptions options;
   options.k = 2;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("NormalOptions.k")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("NormalOptions.k")));
   options = {};
   options.radius_mm = -1.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("radius_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("radius_mm")));
   options = {};
   options.viewpoint = Viewpoint::AlongDirection(Eigen::Vector3d::Zero());
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("direction")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("direction")));
   PointCloud nan_cloud;
   nan_cloud.positions = {{0, 0, 0}, {std::nan(""), 0, 0}, {1, 1, 0}};
   EXPECT_THROW(EstimateNormals(nan_cloud, NormalOptions{}), InputError);
@@ -250,9 +256,10 @@ TEST(MeshNormalsTest, AgreeWithTheNormalsShippedWithTheRealUwaMesh) {
   std::sort(angles_deg.begin(), angles_deg.end());
   const double median = angles_deg[angles_deg.size() / 2];
   const double p99 = angles_deg[angles_deg.size() * 99 / 100];
-  std::printf("UWA mesh: %zu vertex normals, median %.4f deg, 99th percentile %.4f deg, %d "
-              "opposite\n",
-              angles_deg.size(), median, p99, opposite);
+  std::printf(
+      "UWA mesh: %zu vertex normals, median %.4f deg, 99th percentile %.4f deg, %d "
+      "opposite\n",
+      angles_deg.size(), median, p99, opposite);
   EXPECT_LT(median, 5.0);
   EXPECT_LT(p99, 60.0);
   EXPECT_LT(opposite, static_cast<int>(angles_deg.size()) / 200);  // < 0.5 %

@@ -46,8 +46,9 @@ PointCloud ReadPclMm(const std::string& file) {
 // 1e-3 per entry, 1e-2 for (0, 1); active in PCL master 1fdb038 of 2026-08-18, commented out in
 // some older versions). We hold every entry, (0, 1) included, to 1e-3. (PCL's PPFRegistration
 // test has a different bun0 -> bun4 "ground truth", a 34 deg turn about y; that is not what ICP
-// converges to from the identity and not what its ICP test expects.) Cross-checked by running PCL 1.13's IterativeClosestPoint
-// (Debian libpcl-dev 1.13.0) with those settings in a scratch program outside the repository:
+// converges to from the identity and not what its ICP test expects.) Cross-checked by running
+// PCL 1.13's IterativeClosestPoint (Debian libpcl-dev 1.13.0) with those settings in a scratch
+// program outside the repository:
 //   0.880590  0.036486 -0.472476  0.034531
 //  -0.023652  0.999174  0.033075 -0.001506
 //   0.473292 -0.017950  0.880723  0.041126
@@ -64,13 +65,16 @@ Eigen::Matrix4d PclBun0ToBun4ExpectedMetres() {
 // Compares a target_from_source transform in mm with a metre-unit PCL reference the way PCL's
 // test does: every rotation entry within `tolerance`, every translation entry within
 // `tolerance` metres (= 1000 x tolerance mm).
-void ExpectNearPclReference(const Eigen::Isometry3d& found_mm, const Eigen::Matrix4d& expected, double tolerance) {
+void ExpectNearPclReference(const Eigen::Isometry3d& found_mm, const Eigen::Matrix4d& expected,
+                            double tolerance) {
   Eigen::Matrix4d found = found_mm.matrix();
   found.block<3, 1>(0, 3) /= kMmPerMetre;
   for (int r = 0; r < 4; ++r) {
     for (int c = 0; c < 4; ++c) {
-      EXPECT_NEAR(found(r, c), expected(r, c), tolerance) << "entry (" << r << ", " << c << ")\nfound (m):\n"
-                                                         << found << "\nexpected (m):\n" << expected;
+      EXPECT_NEAR(found(r, c), expected(r, c), tolerance)
+          << "entry (" << r << ", " << c << ")\nfound (m):\n"
+          << found << "\nexpected (m):\n"
+          << expected;
     }
   }
 }
@@ -90,7 +94,8 @@ TEST(PclDataTest, Bun0ToBun4PointToPointMatchesPclsIcpTest) {
   options.max_iterations = 50;
   options.translation_tolerance_mm = 1e-4;
   options.rotation_tolerance_rad = 1e-7;
-  const IcpResult result = AlignIcp(source.positions, tree, {}, Eigen::Isometry3d::Identity(), options);
+  const IcpResult result =
+      AlignIcp(source.positions, tree, {}, Eigen::Isometry3d::Identity(), options);
   EXPECT_EQ(result.correspondences, source.size()) << result.Summary();
   ExpectNearPclReference(result.target_from_source, PclBun0ToBun4ExpectedMetres(), 1e-3);
   // PCL's fitness score (mean squared nearest distance, m^2) is 4.0e-5 at its result.
@@ -129,7 +134,8 @@ TEST(PclDataTest, Bun0ToBun4PointToPlaneMatchesPcl) {
   options.kernel = RobustKernel::kNone;
   options.max_correspondence_distance_mm = 0.05 * kMmPerMetre;
   options.max_iterations = 50;
-  const IcpResult result = AlignIcp(source.positions, tree, normals.normals, Eigen::Isometry3d::Identity(), options);
+  const IcpResult result =
+      AlignIcp(source.positions, tree, normals.normals, Eigen::Isometry3d::Identity(), options);
   EXPECT_TRUE(result.converged) << result.Summary();
   ExpectNearPclReference(result.target_from_source, PclPointToPlaneBun0ToBun4Metres(), 1e-3);
   EXPECT_LT(result.point_rmse_mm, std::sqrt(5.0e-5) * kMmPerMetre) << result.Summary();
@@ -145,8 +151,8 @@ TEST(PclDataTest, FindsTheMilkCartonInTheKinectScene) {
   ASSERT_EQ(model.size(), 13704U);
   ASSERT_TRUE(scene.IsOrganized());
   ASSERT_FALSE(scene.HasNormals());
-  const Eigen::Isometry3d reference =
-      datasets::ReadPoseFile(std::string(LASERCELL_SOURCE_DIR) + "/tests/registration/data/milk_reference.txt");
+  const Eigen::Isometry3d reference = datasets::ReadPoseFile(
+      std::string(LASERCELL_SOURCE_DIR) + "/tests/registration/data/milk_reference.txt");
 
   // Default options. The verification scene is thinned in space (one point per cell of half the
   // refined support distance); thinned by an index stride to 30000 points (stride 8 on this
@@ -162,12 +168,15 @@ TEST(PclDataTest, FindsTheMilkCartonInTheKinectScene) {
   // 0.002 deg (the model is a cut-out of this scan, so the noise is common to model and scene).
   const double rms_mm = test::PoseRmsMm(model.positions, best.scene_from_model, reference);
   EXPECT_LT(rms_mm, 1.0) << result.Summary();
-  EXPECT_LT(RotationDistance(best.scene_from_model, reference), 0.2 * std::numbers::pi / 180.0) << result.Summary();
+  EXPECT_LT(RotationDistance(best.scene_from_model, reference), 0.2 * std::numbers::pi / 180.0)
+      << result.Summary();
   EXPECT_TRUE(best.icp_run);
   EXPECT_GT(best.verification.support, 0.6) << result.Summary();
-  std::printf("milk: %s\n  RMS %.3f mm from the reference, rotation %.4f deg, translation %.3f mm\n", result.Summary().c_str(),
-              rms_mm, RotationDistance(best.scene_from_model, reference) * 180.0 / std::numbers::pi,
-              TranslationDistance(best.scene_from_model, reference));
+  std::printf(
+      "milk: %s\n  RMS %.3f mm from the reference, rotation %.4f deg, translation %.3f mm\n",
+      result.Summary().c_str(), rms_mm,
+      RotationDistance(best.scene_from_model, reference) * 180.0 / std::numbers::pi,
+      TranslationDistance(best.scene_from_model, reference));
 }
 
 // The room-size scene around a small part: the reference points are capped (default 1000) so the
@@ -211,10 +220,12 @@ TEST(PclDataTest, NotFoundMessageNamesTheStrongestCandidate) {
     if (strongest == nullptr || c.score > strongest->score) strongest = &c;
   }
   ASSERT_NE(strongest, nullptr);
-  for (const LocalizationCandidate& c : result.rejected) higher_support_elsewhere |= c.verification.support > strongest->verification.support;
+  for (const LocalizationCandidate& c : result.rejected)
+    higher_support_elsewhere |= c.verification.support > strongest->verification.support;
   EXPECT_TRUE(higher_support_elsewhere) << "the case this test is about";
   EXPECT_TRUE(strongest->icp_run);
-  EXPECT_THAT(result.message, ::testing::HasSubstr("the strongest, cluster " + std::to_string(strongest->cluster) + " "));
+  EXPECT_THAT(result.message, ::testing::HasSubstr("the strongest, cluster " +
+                                                   std::to_string(strongest->cluster) + " "));
   EXPECT_THAT(result.message, ::testing::HasSubstr("was rejected: " + strongest->rejection_reason));
   EXPECT_THAT(result.message, ::testing::HasSubstr("after ICP"));
   EXPECT_THAT(result.message, ::testing::HasSubstr("x the next"));
@@ -227,8 +238,8 @@ TEST(PclDataTest, MilkReferencePutsTheModelOnTheScene) {
   const PointCloud scene = ReadPclMm("milk_cartoon_all_small_clorox.pcd");
   ASSERT_FALSE(model.empty());
   ASSERT_FALSE(scene.empty());
-  const Eigen::Isometry3d reference =
-      datasets::ReadPoseFile(std::string(LASERCELL_SOURCE_DIR) + "/tests/registration/data/milk_reference.txt");
+  const Eigen::Isometry3d reference = datasets::ReadPoseFile(
+      std::string(LASERCELL_SOURCE_DIR) + "/tests/registration/data/milk_reference.txt");
   const KdTree tree(scene.positions);
   std::size_t within = 0;
   for (const auto& p : model.positions) {

@@ -31,7 +31,8 @@ SampledScene Sample(const PointCloud& scene, double step_mm) {
 class PpfMatcherTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    if (test::UwaModel() == nullptr || test::UwaScene() == nullptr) GTEST_FAIL() << "bundled UWA data missing from datasets/real/uwa";
+    if (test::UwaModel() == nullptr || test::UwaScene() == nullptr)
+      GTEST_FAIL() << "bundled UWA data missing from datasets/real/uwa";
     model_ = PpfModel::Build(*test::UwaModel());
     std::mt19937_64 rng(71);
     truth_ = test::RandomPlacementInRs1(test::UwaModel()->Centroid(), rng);
@@ -74,8 +75,9 @@ TEST_F(PpfMatcherTest, VotesAndClustersFindASyntheticPoseInRealClutter) {
   // The best cluster is the part: within the clustering radius and two angle steps. (The
   // coarse pose is refined by ICP later; here only the voting is tested.)
   const Eigen::Isometry3d scene_from_centered = truth_ * model_.model_from_centered();
-  EXPECT_THAT(clusters.clusters[0].scene_from_centered,
-              test::PoseNear(scene_from_centered, 2 * model_.angle_step_rad(), 0.1 * model_.diameter_mm()));
+  EXPECT_THAT(
+      clusters.clusters[0].scene_from_centered,
+      test::PoseNear(scene_from_centered, 2 * model_.angle_step_rad(), 0.1 * model_.diameter_mm()));
   EXPECT_GT(clusters.clusters[0].score, 2.0 * clusters.clusters[1].score);
 }
 
@@ -93,7 +95,8 @@ TEST_F(PpfMatcherTest, SpreadingStillFindsThePose) {
   const ClusteringResult clusters = ClusterPoses(spread.hypotheses, clustering);
   ASSERT_FALSE(clusters.clusters.empty());
   EXPECT_THAT(clusters.clusters[0].scene_from_centered,
-              test::PoseNear(truth_ * model_.model_from_centered(), 2 * model_.angle_step_rad(), 0.1 * model_.diameter_mm()));
+              test::PoseNear(truth_ * model_.model_from_centered(), 2 * model_.angle_step_rad(),
+                             0.1 * model_.diameter_mm()));
 }
 
 TEST_F(PpfMatcherTest, IdenticalForAnyThreadCount) {
@@ -106,7 +109,8 @@ TEST_F(PpfMatcherTest, IdenticalForAnyThreadCount) {
     ASSERT_EQ(one.hypotheses.size(), other.hypotheses.size());
     EXPECT_EQ(one.votes_cast, other.votes_cast);
     for (std::size_t i = 0; i < one.hypotheses.size(); ++i) {
-      EXPECT_EQ(one.hypotheses[i].scene_from_centered.matrix(), other.hypotheses[i].scene_from_centered.matrix());
+      EXPECT_EQ(one.hypotheses[i].scene_from_centered.matrix(),
+                other.hypotheses[i].scene_from_centered.matrix());
       EXPECT_EQ(one.hypotheses[i].votes, other.hypotheses[i].votes);
     }
   }
@@ -131,17 +135,21 @@ TEST_F(PpfMatcherTest, PeaksPerReferenceAreBestFirst) {
 TEST(PpfMatcherOptionsTest, RejectsBadOptionsAndInput) {
   PpfMatchOptions options;
   options.reference_stride = 0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("reference_stride")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("reference_stride")));
   options = {};
   options.peaks_per_reference = 0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("peaks_per_reference")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("peaks_per_reference")));
   options = {};
   options.peak_min_relative = -0.5;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("peak_min_relative")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("peak_min_relative")));
   const PpfModel model = PpfModel::Build(test::BoxPoints({30, 20, 10}, 2.0));
   const KdTree tree(std::vector<Eigen::Vector3d>{{0, 0, 0}, {1, 0, 0}});
   const std::vector<Eigen::Vector3d> one_normal = {{0, 0, 1}};
-  EXPECT_THAT([&] { MatchPpf(tree, one_normal, model); }, ::testing::ThrowsMessage<InputError>(HasSubstr("1 scene normals for 2")));
+  EXPECT_THAT([&] { MatchPpf(tree, one_normal, model); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("1 scene normals for 2")));
   EXPECT_TRUE(MatchPpf(KdTree(), {}, model).hypotheses.empty());
 }
 

@@ -22,7 +22,8 @@ struct OrientedPoint {
 
 OrientedPoint RandomOrientedPoint(std::mt19937_64& rng) {
   std::normal_distribution<double> g(0.0, 1.0);
-  return {Eigen::Vector3d(g(rng), g(rng), g(rng)) * 40.0, Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()};
+  return {Eigen::Vector3d(g(rng), g(rng), g(rng)) * 40.0,
+          Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()};
 }
 
 TEST(PpfFeatureTest, InvariantUnderRigidTransforms) {
@@ -47,7 +48,8 @@ TEST(PpfFeatureTest, InvariantUnderRigidTransforms) {
 
 TEST(PpfFeatureTest, RotationNormalToXIsARotationMappingNToX) {
   std::mt19937_64 rng(32);
-  std::vector<Eigen::Vector3d> normals = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
+  std::vector<Eigen::Vector3d> normals = {Eigen::Vector3d::UnitX(), -Eigen::Vector3d::UnitX(),
+                                          Eigen::Vector3d::UnitY(),
                                           Eigen::Vector3d(-1, 1e-12, 0).normalized()};
   for (int i = 0; i < 200; ++i) normals.push_back(RandomOrientedPoint(rng).n);
   for (const auto& n : normals) {
@@ -69,7 +71,9 @@ TEST(PpfFeatureTest, LocalCoordinatesRecoverThePose) {
     const Eigen::Vector3d n_s = scene_from_model.linear() * m_r.n;
     const Eigen::Matrix3d rot_m = RotationNormalToX(m_r.n), rot_s = RotationNormalToX(n_s);
     const double alpha = PairPlaneAngle(rot_s, s_r, s_i) - PairPlaneAngle(rot_m, m_r.p, m_i.p);
-    const Eigen::Matrix3d rot = rot_s.transpose() * Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX()).toRotationMatrix() * rot_m;
+    const Eigen::Matrix3d rot =
+        rot_s.transpose() * Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+        rot_m;
     EXPECT_TRUE(rot.isApprox(scene_from_model.linear(), 1e-9));
     EXPECT_TRUE((s_r - rot * m_r.p).isApprox(scene_from_model.translation(), 1e-9));
   }
@@ -99,10 +103,12 @@ TEST(PpfModelTest, StoresEveryOrderedPairUnderItsKey) {
     for (std::size_t i = 0; i < n; i += 7) {
       if (i == r) continue;
       std::uint32_t key = 0;
-      ASSERT_TRUE(model.PairKey(model.points()[r], model.normals()[r], model.points()[i], model.normals()[i], &key));
+      ASSERT_TRUE(model.PairKey(model.points()[r], model.normals()[r], model.points()[i],
+                                model.normals()[i], &key));
       const auto entries = model.Lookup(key);
       largest_bucket = std::max(largest_bucket, entries.size());
-      const std::uint16_t phi = PlaneAngleToTurn16(PairPlaneAngle(rot, model.points()[r], model.points()[i]));
+      const std::uint16_t phi =
+          PlaneAngleToTurn16(PairPlaneAngle(rot, model.points()[r], model.points()[i]));
       const bool found = std::any_of(entries.begin(), entries.end(), [&](const PpfPairEntry& e) {
         return e.reference == r && e.plane_angle == phi;
       });
@@ -144,10 +150,14 @@ TEST(PpfModelTest, SerializeRoundTripAndFiles) {
   EXPECT_TRUE(loaded.model_from_centered().isApprox(model.model_from_centered()));
   EXPECT_EQ(loaded.pair_count(), model.pair_count());
   std::uint32_t key = 0;
-  ASSERT_TRUE(model.PairKey(model.points()[0], model.normals()[0], model.points()[5], model.normals()[5], &key));
+  ASSERT_TRUE(model.PairKey(model.points()[0], model.normals()[0], model.points()[5],
+                            model.normals()[5], &key));
   ASSERT_EQ(loaded.Lookup(key).size(), model.Lookup(key).size());
-  EXPECT_TRUE(std::equal(loaded.Lookup(key).begin(), loaded.Lookup(key).end(), model.Lookup(key).begin(),
-                         [](const PpfPairEntry& a, const PpfPairEntry& b) { return a.reference == b.reference && a.plane_angle == b.plane_angle; }));
+  EXPECT_TRUE(std::equal(loaded.Lookup(key).begin(), loaded.Lookup(key).end(),
+                         model.Lookup(key).begin(),
+                         [](const PpfPairEntry& a, const PpfPairEntry& b) {
+                           return a.reference == b.reference && a.plane_angle == b.plane_angle;
+                         }));
 
   const ::lasercell::test::TestDir dir("ppf_model");
   const std::string path = dir.File("model.lcppf");
@@ -242,10 +252,12 @@ TEST(PpfModelTest, AMeshWithoutNormalsGetsOutwardNormalsFromItsFaces) {
 }
 
 TEST(PpfModelTest, RejectsBadInputAndOptions) {
-  EXPECT_THAT([] { PpfModel::Build(PointCloud{}); }, ::testing::ThrowsMessage<InputError>(HasSubstr("at least 3 points")));
+  EXPECT_THAT([] { PpfModel::Build(PointCloud{}); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("at least 3 points")));
   PointCloud zero_normals = BoxModel();
   for (auto& n : zero_normals.normals) n.setZero();
-  EXPECT_THAT([&] { PpfModel::Build(zero_normals); }, ::testing::ThrowsMessage<InputError>(HasSubstr("normal")));
+  EXPECT_THAT([&] { PpfModel::Build(zero_normals); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("normal")));
 
   auto expect_option_error = [](const PpfModelOptions& options, const char* field) {
     EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr(field)));
@@ -271,7 +283,8 @@ TEST(PpfModelTest, RejectsBadInputAndOptions) {
   // Too many points after sampling: the message says which step to change.
   o = {};
   o.sampling_step_mm = 0.5;
-  EXPECT_THAT([&] { PpfModel::Build(BoxModel(), o); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("larger sampling step")));
+  EXPECT_THAT([&] { PpfModel::Build(BoxModel(), o); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("larger sampling step")));
 }
 
 }  // namespace

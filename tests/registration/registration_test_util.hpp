@@ -12,11 +12,11 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <utility>
 #include <numbers>
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 
 #include "core/error.hpp"
 #include "core/io/point_cloud_io.hpp"
@@ -53,19 +53,21 @@ inline const PointCloud* UwaScene() {
   return cloud;
 }
 
-#define LASERCELL_REQUIRE_UWA()                                                            \
-  if (::lasercell::registration::test::UwaModel() == nullptr ||                            \
-      ::lasercell::registration::test::UwaScene() == nullptr)                              \
+#define LASERCELL_REQUIRE_UWA()                                                               \
+  if (::lasercell::registration::test::UwaModel() == nullptr ||                               \
+      ::lasercell::registration::test::UwaScene() == nullptr)                                 \
   GTEST_FAIL() << "bundled UWA data (parasaurolophus_6700.ply, rs1_normals.bin.ply) missing " \
                   "from datasets/real/uwa"
 
 /// The committed reference pose scene_from_model of the parasaurolophus in rs1.
 inline Eigen::Isometry3d Rs1ReferencePose() {
-  return datasets::ReadPoseFile(std::string(LASERCELL_SOURCE_DIR) + "/tests/registration/data/rs1_parasaurolophus_reference.txt");
+  return datasets::ReadPoseFile(std::string(LASERCELL_SOURCE_DIR) +
+                                "/tests/registration/data/rs1_parasaurolophus_reference.txt");
 }
 
 /// RMS displacement of `points` between two poses, mm (the pose error tests use).
-inline double PoseRmsMm(const std::vector<Eigen::Vector3d>& points, const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+inline double PoseRmsMm(const std::vector<Eigen::Vector3d>& points, const Eigen::Isometry3d& a,
+                        const Eigen::Isometry3d& b) {
   double sum = 0.0;
   for (const auto& p : points) sum += (a * p - b * p).squaredNorm();
   return std::sqrt(sum / static_cast<double>(points.size()));
@@ -80,18 +82,22 @@ MATCHER_P3(PoseNear, expected, rot_tol_rad, trans_tol_mm, "") {
 }
 
 /// A uniformly random rotation (random unit quaternion) and a translation in a cube of +-half_mm.
-inline Eigen::Isometry3d RandomPose(std::mt19937_64& rng, double half_mm) { return datasets::RandomPose(rng, half_mm); }
+inline Eigen::Isometry3d RandomPose(std::mt19937_64& rng, double half_mm) {
+  return datasets::RandomPose(rng, half_mm);
+}
 
 /// A small random rotation of exactly `angle_rad` about a random axis, then a translation of
 /// exactly `trans_mm` in a random direction.
-inline Eigen::Isometry3d RandomPerturbation(std::mt19937_64& rng, double angle_rad, double trans_mm) {
+inline Eigen::Isometry3d RandomPerturbation(std::mt19937_64& rng, double angle_rad,
+                                            double trans_mm) {
   std::normal_distribution<double> g(0.0, 1.0);
   Eigen::Vector3d w(g(rng), g(rng), g(rng)), t(g(rng), g(rng), g(rng));
   return PoseFromRotationVector(w.normalized() * angle_rad, t.normalized() * trans_mm);
 }
 
 /// n points on a sphere with outward unit normals.
-inline PointCloud SpherePoints(std::size_t n, double radius_mm, const Eigen::Vector3d& centre, std::mt19937_64& rng) {
+inline PointCloud SpherePoints(std::size_t n, double radius_mm, const Eigen::Vector3d& centre,
+                               std::mt19937_64& rng) {
   std::normal_distribution<double> g(0.0, 1.0);
   PointCloud cloud;
   for (std::size_t i = 0; i < n; ++i) {
@@ -127,14 +133,15 @@ inline PointCloud BoxPoints(const Eigen::Vector3d& half, double step) {
 /// Simulated single view of `cloud` from `viewpoint`: front-facing points that are nearest to the
 /// sensor in an orthographic grid of `cell_mm` cells (within `depth_tol_mm` of the front), plus
 /// Gaussian noise of sigma `noise_mm` along the line of sight. Normals are kept (exact).
-inline PointCloud SimulateView(const PointCloud& cloud, const Viewpoint& viewpoint, double cell_mm, double depth_tol_mm,
-                               double noise_mm, std::mt19937_64& rng) {
+inline PointCloud SimulateView(const PointCloud& cloud, const Viewpoint& viewpoint, double cell_mm,
+                               double depth_tol_mm, double noise_mm, std::mt19937_64& rng) {
   const Eigen::Vector3d centre = cloud.Centroid();
   const Eigen::Vector3d view = -viewpoint.TowardSensor(centre);
   const Eigen::Vector3d e1 = view.unitOrthogonal(), e2 = view.cross(e1);
   std::map<std::pair<long, long>, double> front;
   auto key = [&](const Eigen::Vector3d& p) {
-    return std::make_pair(std::lround(std::floor((p - centre).dot(e1) / cell_mm)), std::lround(std::floor((p - centre).dot(e2) / cell_mm)));
+    return std::make_pair(std::lround(std::floor((p - centre).dot(e1) / cell_mm)),
+                          std::lround(std::floor((p - centre).dot(e2) / cell_mm)));
   };
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     if (cloud.normals[i].dot(view) >= 0.0) continue;
@@ -166,13 +173,15 @@ inline PointCloud Rs1WithoutParasaurolophus(double margin_mm = 8.0) {
 /// The UWA parasaurolophus mesh sampled uniformly at about rs1's density (one point per
 /// 0.5 mm^2, normals interpolated from the vertex normals, seed 99), cached.
 inline const PointCloud& UwaModelDenseSurface() {
-  static const PointCloud cloud = datasets::SampleMeshSurface(io::ReadPlyMesh(RealDataFile("uwa", "parasaurolophus_6700.ply")), 0.5, 99);
+  static const PointCloud cloud = datasets::SampleMeshSurface(
+      io::ReadPlyMesh(RealDataFile("uwa", "parasaurolophus_6700.ply")), 0.5, 99);
   return cloud;
 }
 
 /// Perspective z-buffer from the origin: per angular cell (cell_mm at 600 mm), the points within
 /// depth_tol_mm of the nearest; back faces (normal away from the sensor) are dropped.
-inline std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, double cell_mm, double depth_tol_mm) {
+inline std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, double cell_mm,
+                                                  double depth_tol_mm) {
   return datasets::VisibleFromOrigin(cloud, cell_mm, depth_tol_mm);
 }
 
@@ -182,8 +191,9 @@ inline std::vector<std::size_t> VisibleFromOrigin(const PointCloud& cloud, doubl
 /// the origin (the scanner). The part's normals are re-estimated from its noisy visible points
 /// (k = 12); the clutter keeps rs1's normals. `part_points` (optional) receives how many points
 /// of the part are visible.
-inline PointCloud SyntheticRs1Scan(const std::vector<Eigen::Isometry3d>& scene_from_model, double noise_mm,
-                                   std::mt19937_64& rng, std::size_t* part_points = nullptr) {
+inline PointCloud SyntheticRs1Scan(const std::vector<Eigen::Isometry3d>& scene_from_model,
+                                   double noise_mm, std::mt19937_64& rng,
+                                   std::size_t* part_points = nullptr) {
   static const PointCloud clutter = [] {
     PointCloud c = Rs1WithoutParasaurolophus();
     for (auto& n : c.normals) n.normalize();
@@ -191,14 +201,16 @@ inline PointCloud SyntheticRs1Scan(const std::vector<Eigen::Isometry3d>& scene_f
   }();
   datasets::SyntheticScanOptions options;
   options.noise_sigma_mm = noise_mm;
-  datasets::SyntheticScan scan = datasets::RenderSyntheticScan(clutter, UwaModelDenseSurface(), scene_from_model, options, rng);
+  datasets::SyntheticScan scan = datasets::RenderSyntheticScan(clutter, UwaModelDenseSurface(),
+                                                               scene_from_model, options, rng);
   if (part_points) *part_points = scan.part_points;
   return std::move(scan.cloud);
 }
 
 /// A random placement of a model (frame `model`, centroid `model_centroid`) in rs1's field of
 /// view: uniform random rotation, centroid within the scene's x/y footprint at its depth.
-inline Eigen::Isometry3d RandomPlacementInRs1(const Eigen::Vector3d& model_centroid, std::mt19937_64& rng) {
+inline Eigen::Isometry3d RandomPlacementInRs1(const Eigen::Vector3d& model_centroid,
+                                              std::mt19937_64& rng) {
   return datasets::RandomPlacementInRs1(model_centroid, rng);
 }
 

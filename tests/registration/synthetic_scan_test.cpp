@@ -38,13 +38,16 @@ TEST(SyntheticScanTest, OptionsAreChecked) {
   SyntheticScanOptions options;
   EXPECT_NO_THROW(options.Check());
   options.noise_sigma_mm = -1.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("noise_sigma_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("noise_sigma_mm")));
   options = {};
   options.zbuffer_cell_mm = 0.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("zbuffer_cell_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("zbuffer_cell_mm")));
   options = {};
   options.part_normal_neighbors = 2;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("part_normal_neighbors")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("part_normal_neighbors")));
 }
 
 // The clutter: a wall 700 mm away. The part: a patch 600 mm away, 100 mm wide, in front of it.
@@ -70,11 +73,16 @@ TEST_F(SyntheticScanFixture, PartOccludesTheClutterBehindIt) {
   EXPECT_EQ(scan.part_points, part_.size());
   // The part hides the wall inside its shadow: a cone from the origin, 100 x 700/600 mm wide.
   std::size_t shadowed = 0;
-  for (const auto& p : wall_.positions) shadowed += (std::abs(p.x()) < 50.0 * 700.0 / 600.0 - 1.0 && std::abs(p.y()) < 50.0 * 700.0 / 600.0 - 1.0) ? 1 : 0;
+  for (const auto& p : wall_.positions)
+    shadowed += (std::abs(p.x()) < 50.0 * 700.0 / 600.0 - 1.0 &&
+                 std::abs(p.y()) < 50.0 * 700.0 / 600.0 - 1.0)
+                    ? 1
+                    : 0;
   EXPECT_LE(scan.clutter_points, wall_.size() - shadowed);
   EXPECT_GT(scan.clutter_points, wall_.size() / 2);
   // Re-estimated part normals face the sensor (+z here).
-  for (std::size_t i = scan.clutter_points; i < scan.cloud.size(); ++i) EXPECT_GT(scan.cloud.normals[i].z(), 0.99);
+  for (std::size_t i = scan.clutter_points; i < scan.cloud.size(); ++i)
+    EXPECT_GT(scan.cloud.normals[i].z(), 0.99);
 }
 
 TEST_F(SyntheticScanFixture, SameSeedSameScanOtherSeedOtherScan) {
@@ -117,7 +125,8 @@ TEST(SyntheticScanTest, MeshSamplingHasTheRequestedDensity) {
   mesh.vertices.normals.assign(4, Eigen::Vector3d::UnitZ());
   mesh.faces = {{0, 1, 2}, {0, 2, 3}};
   const PointCloud sampled = SampleMeshSurface(mesh, 0.5, 3);
-  EXPECT_NEAR(static_cast<double>(sampled.size()), 20000.0, 2.0);  // stochastic rounding: +-1 per face
+  EXPECT_NEAR(static_cast<double>(sampled.size()), 20000.0,
+              2.0);  // stochastic rounding: +-1 per face
   for (std::size_t i = 0; i < sampled.size(); ++i) {
     EXPECT_NEAR(sampled.positions[i].z(), 0.0, 1e-12);
     EXPECT_GE(sampled.positions[i].x(), -1e-9);
@@ -133,13 +142,15 @@ TEST(SyntheticScanTest, CutOutRemovesOnlyThePartsSurroundings) {
   // Removed: the 21 x 21 part footprint grown by 2 mm on each side (25 x 25, corners rounded).
   EXPECT_LT(cut.size(), scene.size() - 21 * 21);
   EXPECT_GT(cut.size(), scene.size() - 25 * 25);
-  for (const auto& p : cut.positions) EXPECT_FALSE(std::abs(p.x() - 50) <= 10 && std::abs(p.y() - 50) <= 10);
+  for (const auto& p : cut.positions)
+    EXPECT_FALSE(std::abs(p.x() - 50) <= 10 && std::abs(p.y() - 50) <= 10);
 }
 
 TEST(SyntheticScanTest, ReadPoseFileReadsTheReferenceAndRejectsMissingFiles) {
   EXPECT_THROW(ReadPoseFile("/nonexistent/pose.txt"), FileError);
   const Eigen::Isometry3d rs1 =
-      ReadPoseFile(std::string(LASERCELL_SOURCE_DIR) + "/tests/registration/data/rs1_parasaurolophus_reference.txt");
+      ReadPoseFile(std::string(LASERCELL_SOURCE_DIR) +
+                   "/tests/registration/data/rs1_parasaurolophus_reference.txt");
   EXPECT_NEAR(rs1.linear().determinant(), 1.0, 1e-6);
 }
 

@@ -58,7 +58,8 @@ TEST_F(VerificationTest, TruePoseIsSupportedAndSelectsTheOverlap) {
   // only along the bottom edges, where the box's side faces meet the floor.
   EXPECT_GT(overlap.size(), 4000U);
   EXPECT_EQ(result.overlapping_scene_points, overlap.size());
-  const auto on_floor = std::count_if(overlap.begin(), overlap.end(), [&](std::uint32_t i) { return scene_[i].z() < -449.0; });
+  const auto on_floor = std::count_if(overlap.begin(), overlap.end(),
+                                      [&](std::uint32_t i) { return scene_[i].z() < -449.0; });
   EXPECT_LT(static_cast<double>(on_floor), 0.05 * overlap.size());
   EXPECT_TRUE(std::is_sorted(overlap.begin(), overlap.end()));
 }
@@ -67,19 +68,22 @@ TEST_F(VerificationTest, WrongPosesAreRejectedWithReasons) {
   VerificationOptions options;
   options.support_distance_mm = 2.0;
   // Floating 15 mm toward the sensor: the scene is seen behind the model (free-space conflict).
-  const Eigen::Isometry3d floating = PoseFromRotationVector(Eigen::Vector3d::Zero(), {0, 0, 15}) * truth_;
+  const Eigen::Isometry3d floating =
+      PoseFromRotationVector(Eigen::Vector3d::Zero(), {0, 0, 15}) * truth_;
   const VerificationResult in_front = Verify(floating, options);
   EXPECT_FALSE(in_front.accepted);
   EXPECT_LT(in_front.support, 0.3);
   EXPECT_GT(in_front.conflicting_cells, in_front.occluded_cells);
   EXPECT_THAT(in_front.rejection_reason, HasSubstr("support"));
   // Sunk 15 mm into the floor: the scene lies in front of the model (occlusion).
-  const Eigen::Isometry3d sunk = PoseFromRotationVector(Eigen::Vector3d::Zero(), {0, 0, -15}) * truth_;
+  const Eigen::Isometry3d sunk =
+      PoseFromRotationVector(Eigen::Vector3d::Zero(), {0, 0, -15}) * truth_;
   const VerificationResult behind = Verify(sunk, options);
   EXPECT_FALSE(behind.accepted);
   EXPECT_GT(behind.occluded_cells, behind.conflicting_cells);
   // Outside the scanned area: no scene at all in its cells.
-  const Eigen::Isometry3d away = PoseFromRotationVector(Eigen::Vector3d::Zero(), {500, 0, 0}) * truth_;
+  const Eigen::Isometry3d away =
+      PoseFromRotationVector(Eigen::Vector3d::Zero(), {500, 0, 0}) * truth_;
   const VerificationResult empty = Verify(away, options);
   EXPECT_FALSE(empty.accepted);
   EXPECT_EQ(empty.empty_cells, empty.visible_cells);
@@ -100,7 +104,8 @@ TEST_F(VerificationTest, SupportingPlaneAndStablePoses) {
   EXPECT_NEAR(upright.tilt_rad, 0.0, 1e-9);
   EXPECT_LT(upright.penetration_mm, 2.0);
 
-  const Eigen::Isometry3d tilted = truth_ * PoseFromRotationVector({0.7, 0, 0}, Eigen::Vector3d::Zero());
+  const Eigen::Isometry3d tilted =
+      truth_ * PoseFromRotationVector({0.7, 0, 0}, Eigen::Vector3d::Zero());
   const VerificationResult tilt = Verify(tilted, options);
   EXPECT_FALSE(tilt.accepted);
   EXPECT_NEAR(tilt.tilt_rad, 0.7, 1e-9);
@@ -108,12 +113,14 @@ TEST_F(VerificationTest, SupportingPlaneAndStablePoses) {
   // A second stable pose (lying on another face) makes the tilted orientation legal.
   VerificationResult result;
   PoseConstraints stable = options.constraints;
-  stable.up_in_model.push_back(Eigen::AngleAxisd(-0.7, Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitZ());
+  stable.up_in_model.push_back(Eigen::AngleAxisd(-0.7, Eigen::Vector3d::UnitX()) *
+                               Eigen::Vector3d::UnitZ());
   stable.max_penetration_mm = -1.0;
   EXPECT_TRUE(CheckPoseConstraints(model_, tilted, stable, &result));
   EXPECT_NEAR(result.tilt_rad, 0.0, 1e-9);
 
-  const Eigen::Isometry3d sunk = PoseFromRotationVector(Eigen::Vector3d::Zero(), {0, 0, -10}) * truth_;
+  const Eigen::Isometry3d sunk =
+      PoseFromRotationVector(Eigen::Vector3d::Zero(), {0, 0, -10}) * truth_;
   const VerificationResult sinks = Verify(sunk, options);
   EXPECT_FALSE(sinks.accepted);
   EXPECT_NEAR(sinks.penetration_mm, 10.0, 1.0);
@@ -123,17 +130,21 @@ TEST_F(VerificationTest, SupportingPlaneAndStablePoses) {
 TEST(VerificationOptionsTest, RejectsAbsurdValues) {
   VerificationOptions options;
   options.grid_rows = 0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("grid_rows/grid_cols = 0x48")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("grid_rows/grid_cols = 0x48")));
   options = {};
   options.support_distance_mm = -1.0;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("support_distance_mm")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("support_distance_mm")));
   options = {};
   options.min_support = 1.5;
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("min_support")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("min_support")));
   options = {};
   options.constraints.enabled = true;
   options.constraints.plane_normal = Eigen::Vector3d::Zero();
-  EXPECT_THAT([&] { options.Check(); }, ::testing::ThrowsMessage<OptionError>(HasSubstr("plane_normal")));
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("plane_normal")));
 }
 
 }  // namespace

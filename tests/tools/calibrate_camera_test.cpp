@@ -28,9 +28,7 @@ class CalibrateCameraCli : public ::testing::Test {
   }
   void TearDown() override { RemoveTestDir(dir_); }
 
-  static CommandResult Exec(const std::string& args) {
-    return RunCli("calibrate camera " + args);
-  }
+  static CommandResult Exec(const std::string& args) { return RunCli("calibrate camera " + args); }
   // Copies left<NN>.jpg into dir_/images.
   void CopyImages(std::initializer_list<int> numbers) const {
     for (int n : numbers) {
@@ -88,10 +86,10 @@ TEST_F(CalibrateCameraCli, ReportLoadsInHeadlessChromiumWithItsPlots) {
       Exec(Images() + " --board chessboard:9x6:25 --report " + html.string() + " " + Outputs());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string page = Slurp(html);
-  for (const char* plot : {"Residual norm of the inlier corners", "Residual vectors over the image",
-                           "RMS reprojection error per image",
-                           "Coverage of the image by the observed corners",
-                           "Projection uncertainty (1 sigma"}) {
+  for (const char* plot :
+       {"Residual norm of the inlier corners", "Residual vectors over the image",
+        "RMS reprojection error per image", "Coverage of the image by the observed corners",
+        "Projection uncertainty (1 sigma"}) {
     EXPECT_THAT(page, HasSubstr(plot));
   }
   const std::string dom = HeadlessChromiumDom(html.string());

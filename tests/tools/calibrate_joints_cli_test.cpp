@@ -39,8 +39,8 @@ class CalibrateJointsCli : public ::testing::Test {
     // The laser plane from the truth: n . p + d = 0.
     const std::string sensor = Slurp(dir_ / "sim/truth/sensor.yaml");
     std::smatch m;
-    ASSERT_TRUE(std::regex_search(sensor, m, std::regex(
-        R"(normal: \[([^,]+), ([^,]+), ([^\]]+)\]\n  d_mm: ([^\n]+))")));
+    ASSERT_TRUE(std::regex_search(
+        sensor, m, std::regex(R"(normal: \[([^,]+), ([^,]+), ([^\]]+)\]\n  d_mm: ([^\n]+))")));
     plane_ = std::string(m[1]) + "," + std::string(m[2]) + "," + std::string(m[3]) + "," +
              std::string(m[4]);
     // A cell whose vision robot is nominal (joint offsets zeroed): what a user starts from.
@@ -80,7 +80,8 @@ TEST_F(CalibrateJointsCli, JointsUpdatesOnlyTheRobotAndWritesAVersionedJson) {
   EXPECT_FALSE(j["joint_offsets"][0]["estimated"].get<bool>());
   EXPECT_EQ(j["observability"]["unidentifiable"][0]["parameters"][0], "joint_offset_1");
   // The true offsets (truth/cell.yaml's vision robot) of joints 2..6 are recovered.
-  const lasercell::FrameGraph truth = lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
+  const lasercell::FrameGraph truth =
+      lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
   const auto& true_chain = dynamic_cast<const lasercell::DhChain&>(truth.Robot("vision_robot"));
   for (int k = 1; k < 6; ++k) {
     const double true_deg = true_chain.joints()[k].joint_offset_rad * 180 / M_PI;
@@ -90,8 +91,7 @@ TEST_F(CalibrateJointsCli, JointsUpdatesOnlyTheRobotAndWritesAVersionedJson) {
   const std::string after = Slurp(cell);
   const lasercell::FrameGraph updated = lasercell::LoadFrameGraph(cell.string());
   EXPECT_EQ(lasercell::FrameGraphToYaml(updated), after);
-  const lasercell::FrameGraph original =
-      lasercell::FrameGraphFromYaml(before, "nominal_cell.yaml");
+  const lasercell::FrameGraph original = lasercell::FrameGraphFromYaml(before, "nominal_cell.yaml");
   EXPECT_EQ(updated.static_edges().size(), original.static_edges().size());
   for (std::size_t e = 0; e < original.static_edges().size(); ++e) {
     EXPECT_EQ(lasercell::PoseToFileNotation(updated.static_edges()[e].parent_from_child),
@@ -114,7 +114,8 @@ TEST_F(CalibrateJointsCli, TouchesMakeJointOneIdentifiable) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "touch.json"));
   EXPECT_TRUE(j["observability"]["unidentifiable"].empty());
-  const lasercell::FrameGraph truth = lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
+  const lasercell::FrameGraph truth =
+      lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
   const auto& true_chain = dynamic_cast<const lasercell::DhChain&>(truth.Robot("vision_robot"));
   for (int k = 0; k < 6; ++k) {
     const double true_deg = true_chain.joints()[k].joint_offset_rad * 180 / M_PI;
@@ -133,7 +134,8 @@ TEST_F(CalibrateJointsCli, HandEyeLaserUpdatesTheFlangeSensorEdge) {
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "he.json"));
   EXPECT_EQ(j["format"], "lasercell.laser_hand_eye");
   EXPECT_EQ(j["version"], 1);
-  const lasercell::FrameGraph truth = lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
+  const lasercell::FrameGraph truth =
+      lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
   const Eigen::Isometry3d x_true = truth.Transform("vision_flange", "sensor");
   const auto& t = j["vision_flange_from_sensor"]["translation_mm"];
   const Eigen::Vector3d t_est(t[0].get<double>(), t[1].get<double>(), t[2].get<double>());
@@ -150,8 +152,7 @@ TEST_F(CalibrateJointsCli, HandEyeLaserUpdatesTheFlangeSensorEdge) {
 
 TEST_F(CalibrateJointsCli, TakesTheLaserPlaneFromTheCellWhenNotGiven) {
   // The cell's calibrated `laser` plane (what `calibrate laser` writes) replaces --laser-plane.
-  lasercell::FrameGraph graph =
-      lasercell::LoadFrameGraph((dir_ / "nominal_cell.yaml").string());
+  lasercell::FrameGraph graph = lasercell::LoadFrameGraph((dir_ / "nominal_cell.yaml").string());
   std::vector<double> v;
   std::stringstream in(plane_);
   for (std::string item; std::getline(in, item, ',');) v.push_back(std::stod(item));

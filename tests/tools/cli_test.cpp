@@ -182,7 +182,6 @@ TEST_F(CliTest, BadCellFileIsOneLineExitTwo) {
   EXPECT_THAT(r.err, HasSubstr("version"));
 }
 
-
 TEST_F(CliTest, LocalizeFindsTheParasaurolophusInRs1) {
   const std::string out = (dir_ / "result.json").string();
   const CommandResult r =

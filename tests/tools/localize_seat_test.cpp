@@ -24,10 +24,10 @@ Eigen::Vector3d Vec3(const YAML::Node& node) {
 
 Eigen::Isometry3d Pose(const YAML::Node& node) {
   const YAML::Node q = node["rotation_wxyz"];
-  return PoseFromQuaternion(Eigen::Quaterniond(q[0].as<double>(), q[1].as<double>(),
-                                               q[2].as<double>(), q[3].as<double>())
-                                .normalized(),
-                            Vec3(node["translation_mm"]));
+  return PoseFromQuaternion(
+      Eigen::Quaterniond(q[0].as<double>(), q[1].as<double>(), q[2].as<double>(), q[3].as<double>())
+          .normalized(),
+      Vec3(node["translation_mm"]));
 }
 
 // Placements of seed 11 (not the seeds the mesh-normal fix was tried on: 1, 3, 5). Measured:
@@ -42,9 +42,8 @@ TEST(LocalizeSeat, TheSimulatedSeatsHoleIsFoundWithinAMillimetreAndAHalf) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
 
   const YAML::Node truth = YAML::LoadFile(sim + "/truth/captures.yaml");
-  const Eigen::Vector3d v =
-      triangulation::ReadLinearSweepRecord(sim + "/records/linear_sweep.yaml")
-          .velocity_mm_s_in_sensor;
+  const Eigen::Vector3d v = triangulation::ReadLinearSweepRecord(sim + "/records/linear_sweep.yaml")
+                                .velocity_mm_s_in_sensor;
   char velocity[128];
   std::snprintf(velocity, sizeof velocity, "%.17g,%.17g,%.17g", v[0], v[1], v[2]);
   const Eigen::Vector3d hole_in_part = Vec3(truth["hole_center_in_part"]);

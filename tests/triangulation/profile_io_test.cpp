@@ -140,8 +140,8 @@ TEST(ProfileIo, LayoutMatchesTheSpec) {
 
 TEST(ProfileIo, TruncatedFileNamesFileAndProblem) {
   const std::string bytes = EncodeProfiles(MakeSet(32, 0, 4));
-  const std::string msg = FileErrorMessage(
-      [&] { DecodeProfiles(bytes.substr(0, bytes.size() - 5), "cut.lcp"); });
+  const std::string msg =
+      FileErrorMessage([&] { DecodeProfiles(bytes.substr(0, bytes.size() - 5), "cut.lcp"); });
   EXPECT_NE(msg.find("cut.lcp"), std::string::npos) << msg;
   EXPECT_NE(msg.find("truncated"), std::string::npos) << msg;
   const std::string msg2 =
@@ -156,8 +156,7 @@ TEST(ProfileIo, WrongMagicIsRejected) {
   const std::string msg = FileErrorMessage([&] { DecodeProfiles(bytes, "magic.lcp"); });
   EXPECT_NE(msg.find("magic.lcp"), std::string::npos) << msg;
   EXPECT_NE(msg.find("magic"), std::string::npos) << msg;
-  EXPECT_NE(FileErrorMessage([&] { DecodeProfiles("ply\nformat ascii", "x.ply"); })
-                .find("magic"),
+  EXPECT_NE(FileErrorMessage([&] { DecodeProfiles("ply\nformat ascii", "x.ply"); }).find("magic"),
             std::string::npos);
 }
 

@@ -28,14 +28,15 @@ namespace {
 const char kSet[] = "laser_stripe_chessboard";
 
 // Skips the calling test (with the reason) when the shared set is absent.
-#define REQUIRE_STRIPE_IMAGES()                                                 \
-  if (lasercell::shared_data::SharedDataSet(kSet).empty()) {                         \
-    GTEST_SKIP() << lasercell::shared_data::SharedDataMissing(kSet);                 \
+#define REQUIRE_STRIPE_IMAGES()                                      \
+  if (lasercell::shared_data::SharedDataSet(kSet).empty()) {         \
+    GTEST_SKIP() << lasercell::shared_data::SharedDataMissing(kSet); \
   }
 
 // Green minus red (640 x 480, 8-bit).
 std::vector<std::uint8_t> StripeSignal(const std::string& file, int* w, int* h) {
-  const cv::Mat bgr = cv::imread(lasercell::shared_data::SharedDataSet(kSet) + "/" + file, cv::IMREAD_COLOR);
+  const cv::Mat bgr =
+      cv::imread(lasercell::shared_data::SharedDataSet(kSet) + "/" + file, cv::IMREAD_COLOR);
   EXPECT_FALSE(bgr.empty()) << file;
   *w = bgr.cols;
   *h = bgr.rows;

@@ -165,7 +165,8 @@ TEST_F(ScanCli, LinearSweepIsPlacedThroughStaticEdges) {
   edge.parent = "handling_base";
   edge.child = "sensor";
   const Eigen::Isometry3d hb_from_sensor =
-      Eigen::Translation3d(1500, -20, 900) * Eigen::AngleAxisd(3.0, Eigen::Vector3d(1, 1, 0).normalized());
+      Eigen::Translation3d(1500, -20, 900) *
+      Eigen::AngleAxisd(3.0, Eigen::Vector3d(1, 1, 0).normalized());
   edge.parent_from_child = QuaternionPose::FromIsometry(hb_from_sensor);
   graph.SetStaticEdge(edge);
   io::WriteFileAtomically(P("cell.yaml"), FrameGraphToYaml(graph));
@@ -180,8 +181,8 @@ TEST_F(ScanCli, LinearSweepIsPlacedThroughStaticEdges) {
   const PointCloud hb = io::ReadPointCloud(P("hb.ply"));
   ASSERT_EQ(t0.size(), hb.size());
   ASSERT_GT(t0.size(), 1000u);
-  const Eigen::Isometry3d placed = FrameGraphFromYaml(FrameGraphToYaml(graph), "g").Transform(
-      "handling_base", "sensor");
+  const Eigen::Isometry3d placed =
+      FrameGraphFromYaml(FrameGraphToYaml(graph), "g").Transform("handling_base", "sensor");
   for (std::size_t i = 0; i < t0.size(); i += 97) {
     // Both files hold float32 positions: 2 ulp at ~2 m is ~5e-4 mm.
     const double ulp = 1.2e-7 * (placed * t0.positions[i]).norm();
