@@ -27,6 +27,41 @@ mrcal_lensmodel_t ParseLensmodel(const std::string& name) {
   return lens;
 }
 
+// mrcal's .cameramodel lexer trusts its buffer to hold a complete model: a quoted string or a
+// bracket left open by a truncated file makes it read past the end of the buffer (SIGSEGV).
+// This check, at lasercell's boundary, lets only complete texts through: no NUL byte, every
+// string closed on its line, brackets balanced, and a top-level { ... } present.
+void CheckCompleteModelText(const std::string& text, const std::string& name) {
+  int line = 1;
+  int depth = 0;
+  bool opened = false;
+  const auto fail = [&](const std::string& what) {
+    throw FileError(name, "line " + std::to_string(line) + ": " + what +
+                              " (truncated or not a mrcal .cameramodel?)");
+  };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\0') fail("contains a NUL byte; a .cameramodel is text");
+    if (c == '\n') {
+      ++line;
+    } else if (c == '#') {
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+    } else if (c == '\'' || c == '"') {
+      const char stops[] = {c, '\n', '\0'};
+      const std::size_t close = text.find_first_of(stops, i + 1);
+      if (close == std::string::npos || text[close] != c) fail("a quoted string is not closed");
+      i = close;
+    } else if (c == '{' || c == '[' || c == '(') {
+      ++depth;
+      opened = true;
+    } else if (c == '}' || c == ']' || c == ')') {
+      if (--depth < 0) fail(std::string("a closing '") + c + "' closes nothing");
+    }
+  }
+  if (!opened) fail("no '{' starts the model");
+  if (depth != 0) fail("the model's brackets are not all closed");
+}
+
 using ModelPtr = std::unique_ptr<mrcal_cameramodel_t, void (*)(mrcal_cameramodel_t*)>;
 
 ModelPtr Guard(mrcal_cameramodel_t* model) {
@@ -152,8 +187,11 @@ std::string CameraModelText(const CameraModel& model, const std::string& comment
 }
 
 CameraModel ParseCameraModel(const std::string& text, const std::string& name) {
+  CheckCompleteModelText(text, name);
+  // A final comment without its newline would also run mrcal's lexer off the end.
+  const std::string terminated = text + "\n";
   mrcal_cameramodel_t* raw =
-      mrcal_read_cameramodel_string(text.data(), static_cast<int>(text.size()));
+      mrcal_read_cameramodel_string(terminated.data(), static_cast<int>(terminated.size()));
   if (raw == nullptr) {
     throw FileError(name,
                     "mrcal could not parse this .cameramodel (expected a mrcal camera "

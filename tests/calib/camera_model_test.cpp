@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdlib>
+#include <random>
 #include <sstream>
 #include <string>
 
@@ -134,6 +137,57 @@ TEST(CameraModel, BadInputsSayWhatIsWrong) {
   EXPECT_THROW(CameraModel("LENSMODEL_PINHOLE", {1, 1, 1, 1}, 0, 10), InputError);
   EXPECT_THROW(ParseCameraModel("{ 'nope': 1 }", "bad.cameramodel"), FileError);
   EXPECT_THROW(LoadCameraModel("/nonexistent/x.cameramodel"), FileError);
+}
+
+// mrcal's lexer reads past the end of a buffer that stops inside a comment or a quoted string (a
+// truncated file crashed `scan triangulate` with SIGSEGV). Every prefix of a valid model, and
+// seeded random edits of it, must either parse or throw a FileError naming the file.
+TEST(CameraModel, TruncatedOrMangledTextIsAFileErrorNotACrash) {
+  const std::string text = CameraModelText(Opencv8(), "a comment line");
+  const auto parse_or_file_error = [](const std::string& t) {
+    try {
+      ParseCameraModel(t, "cut.cameramodel");
+      return true;
+    } catch (const FileError& e) {
+      EXPECT_NE(std::string(e.what()).find("cut.cameramodel"), std::string::npos) << e.what();
+      return false;
+    }
+  };
+  // A prefix is complete once it holds the final '}'; every shorter one is an error.
+  const std::size_t complete = text.rfind('}') + 1;
+  for (std::size_t n = 0; n <= text.size(); ++n) {
+    EXPECT_EQ(parse_or_file_error(text.substr(0, n)), n >= complete) << "prefix of " << n;
+  }
+
+  std::mt19937 rng(7);
+  const std::string inserts = "{}[]()'\",#\n0.e-";
+  for (int k = 0; k < 2000; ++k) {
+    std::string t = text;
+    for (int e = 0; e < 3; ++e) {
+      const std::size_t pos = rng() % t.size();
+      switch (rng() % 3) {
+        case 0:
+          t[pos] = static_cast<char>(rng() % 256);
+          break;
+        case 1:
+          t.insert(pos, 1, inserts[rng() % inserts.size()]);
+          break;
+        default:
+          t.resize(std::max<std::size_t>(pos, 1));
+          break;
+      }
+    }
+    parse_or_file_error(t);
+  }
+  try {
+    ParseCameraModel("# lasercell-cameramodel v1\n{\n  'lensmodel':  'LENSMODEL_OPE",
+                     "cut.cameramodel");
+    FAIL();
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("line 3: a quoted string is not closed"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
