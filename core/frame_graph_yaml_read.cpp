@@ -233,7 +233,7 @@ FrameGraph ReadCell(const YAML::Node& root, const std::string& name) {
                               starts);
   }
   Fields top(root, "", name, yaml::ErrorKind::kFile);
-  top.RequireFormat(kCellFormatName, kCellFormatVersion);
+  top.RequireFormat(kCellFormatName, kCellFormatVersion, "is this a lasercell cell file?");
   top.Known({"format", "version", "frames", "robots", "edges", "laser_planes"});
   top.Done();
   FrameGraph graph;

@@ -92,11 +92,15 @@ void Fields::ExpectFormat(const std::string& format, int version) {
     Fail("version", "is " + std::to_string(v) + "; " + ReadsVersion(format, version));
 }
 
-void Fields::RequireFormat(const std::string& expected_format, int version) {
+void Fields::RequireFormat(const std::string& expected_format, int version,
+                           const std::string& hint) {
+  const std::string tail = hint.empty() ? "" : " (" + hint + ")";
   std::string format;
-  if (!Read("format", &format)) Fail("format", "is required, expected '" + expected_format + "'");
+  if (!Read("format", &format)) {
+    Fail("format", "is required, expected '" + expected_format + "'" + tail);
+  }
   if (format != expected_format) {
-    Fail("format", "is '" + format + "', expected '" + expected_format + "'");
+    Fail("format", "is '" + format + "', expected '" + expected_format + "'" + tail);
   }
   RequireVersion(version, expected_format);
 }

@@ -48,8 +48,9 @@ class Fields {
   ///   "touches.yaml: line 1: field 'format' is required, expected 'lasercell.touches'",
   ///   "touches.yaml: line 1: field 'format' is 'foo', expected 'lasercell.touches'",
   ///   "touches.yaml: line 2: field 'version' is 2; this build reads lasercell.touches version 1"
-  /// (and "field 'version' is required; this build reads ..." when it is absent).
-  void RequireFormat(const std::string& expected_format, int version);
+  /// (and "field 'version' is required; this build reads ..." when it is absent). `hint`, when
+  /// given, ends the two format messages (e.g. "is this a lasercell cell file?").
+  void RequireFormat(const std::string& expected_format, int version, const std::string& hint = "");
   /// A required `version` key equal to `version`, with RequireFormat's messages; `what` names
   /// what is versioned ("this build reads <what> version 1"), e.g. a section of a file.
   void RequireVersion(int version, const std::string& what);

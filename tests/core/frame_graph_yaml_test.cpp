@@ -516,7 +516,8 @@ TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {
       {Replace(v, "format: lasercell.cell\n", ""),
        "line 1: field 'format' is required, expected 'lasercell.cell'"},
       {Replace(v, "lasercell.cell", "lasercell.job"),
-       "line 1: field 'format' is 'lasercell.job', expected 'lasercell.cell'"},
+       "line 1: field 'format' is 'lasercell.job', expected 'lasercell.cell' (is this a "
+       "lasercell cell file?)"},
       {Replace(v, "version: 1\n", ""),
        "field 'version' is required; this build reads lasercell.cell version 1"},
       {Replace(v, "version: 1", "version: 7"),
