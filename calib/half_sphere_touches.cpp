@@ -79,15 +79,7 @@ SphereTouches ParseTouchesYaml(const std::string& text, const std::string& name)
   top.Known({"format", "version", "robot", "frame", "handling_flange_from_tool_tip",
              "stated_sigma_mm", "sphere_radius_mm", "touches"});
   top.Done();
-  std::string format;
-  top.ReadRequired("format", &format);
-  if (format != "lasercell.touches") top.Fail("format", "must be 'lasercell.touches'");
-  int version = 0;
-  top.ReadRequired("version", &version);
-  if (version != 1) {
-    top.Fail("version", "is " + std::to_string(version) +
-                            ": unsupported version (this lasercell reads version 1)");
-  }
+  top.RequireFormat("lasercell.touches", 1);
   SphereTouches t;
   top.Read("robot", &t.robot);
   if (top.Read("frame", &t.frame) && t.frame != "handling_base") {

@@ -32,15 +32,7 @@ std::string Fmt(const char* f, double v) {
 // A YAML record's root as a Fields walker (FileError), its format and version checked.
 yaml::Fields RecordFields(const std::string& text, const std::string& name, const char* format) {
   yaml::Fields top = yaml::Fields::Parse(text, name, yaml::ErrorKind::kFile);
-  std::string f;
-  top.ReadRequired("format", &f);
-  if (f != format) top.Fail("format", "is '" + f + "'; expected '" + format + "'");
-  int version = 0;
-  top.ReadRequired("version", &version);
-  if (version != 1) {
-    top.Fail("version", "is " + std::to_string(version) +
-                            ": unsupported version (this lasercell reads version 1)");
-  }
+  top.RequireFormat(format, 1);
   return top;
 }
 

@@ -31,17 +31,6 @@ std::string Joined(const std::vector<std::string>& names) {
   return out.empty() ? "(none)" : out;
 }
 
-/// `version` of `fields` must be `expected` (an integer).
-void CheckVersion(Fields& fields, int expected) {
-  int version = 0;
-  fields.ReadRequired("version", &version);
-  if (version != expected) {
-    fields.Fail("version", ": unsupported version " + std::to_string(version) +
-                               "; this lasercell reads version " + std::to_string(expected) +
-                               " (use the lasercell that wrote the file)");
-  }
-}
-
 /// A frame name that must be listed in frames.
 std::string FrameOf(Fields& fields, const char* key, const FrameGraph& graph) {
   std::string frame;
@@ -135,7 +124,7 @@ void ReadLaserPlanes(Fields& top, FrameGraph& graph) {
   Fields section = top.Sub("laser_planes");
   section.Known({"version", "planes"});
   section.Done();
-  CheckVersion(section, kLaserPlanesSectionVersion);
+  section.RequireVersion(kLaserPlanesSectionVersion, "laser_planes");
   if (!section.Has("planes")) section.Fail("planes", "is required");
   Fields planes = section.Sub("planes");
   const std::vector<std::string> names = planes.Keys();
@@ -244,17 +233,7 @@ FrameGraph ReadCell(const YAML::Node& root, const std::string& name) {
                               starts);
   }
   Fields top(root, "", name, yaml::ErrorKind::kFile);
-  if (!top.Has("format")) {
-    top.Fail("format", "is required; a lasercell cell file starts with 'format: " +
-                           std::string(kCellFormatName) + "' (is this a cell file?)");
-  }
-  std::string format;
-  top.ReadRequired("format", &format);
-  if (format != kCellFormatName) {
-    top.Fail("format", "is '" + format + "'; expected '" + kCellFormatName +
-                           "' (is this a lasercell cell file?)");
-  }
-  CheckVersion(top, kCellFormatVersion);
+  top.RequireFormat(kCellFormatName, kCellFormatVersion, "is this a lasercell cell file?");
   top.Known({"format", "version", "frames", "robots", "edges", "laser_planes"});
   top.Done();
   FrameGraph graph;

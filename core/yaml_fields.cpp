@@ -29,6 +29,10 @@ int LineOf(const YAML::Node& n) {
   return n.Mark().line + 1;
 }
 
+std::string ReadsVersion(const std::string& what, int version) {
+  return "this build reads " + what + " version " + std::to_string(version);
+}
+
 }  // namespace
 
 std::string UnitHint(const std::string& key, const std::set<std::string>& known) {
@@ -84,10 +88,27 @@ void Fields::ExpectFormat(const std::string& format, int version) {
   Read("format", &f);
   Read("version", &v);
   if (f != format) Fail("format", "is '" + f + "', expected '" + format + "'");
-  if (v != version) {
-    Fail("version",
-         "is " + std::to_string(v) + "; this build reads version " + std::to_string(version));
+  if (v != version)
+    Fail("version", "is " + std::to_string(v) + "; " + ReadsVersion(format, version));
+}
+
+void Fields::RequireFormat(const std::string& expected_format, int version,
+                           const std::string& hint) {
+  const std::string tail = hint.empty() ? "" : " (" + hint + ")";
+  std::string format;
+  if (!Read("format", &format)) {
+    Fail("format", "is required, expected '" + expected_format + "'" + tail);
   }
+  if (format != expected_format) {
+    Fail("format", "is '" + format + "', expected '" + expected_format + "'" + tail);
+  }
+  RequireVersion(version, expected_format);
+}
+
+void Fields::RequireVersion(int version, const std::string& what) {
+  int v = 0;
+  if (!Read("version", &v)) Fail("version", "is required; " + ReadsVersion(what, version));
+  if (v != version) Fail("version", "is " + std::to_string(v) + "; " + ReadsVersion(what, version));
 }
 
 bool Fields::Has(const char* key) const {

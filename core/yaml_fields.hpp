@@ -44,6 +44,16 @@ class Fields {
 
   /// Optional `format` and `version` keys must equal the given values when present.
   void ExpectFormat(const std::string& format, int version);
+  /// Required `format` and `version` keys, e.g. for `lasercell.touches` version 1:
+  ///   "touches.yaml: line 1: field 'format' is required, expected 'lasercell.touches'",
+  ///   "touches.yaml: line 1: field 'format' is 'foo', expected 'lasercell.touches'",
+  ///   "touches.yaml: line 2: field 'version' is 2; this build reads lasercell.touches version 1"
+  /// (and "field 'version' is required; this build reads ..." when it is absent). `hint`, when
+  /// given, ends the two format messages (e.g. "is this a lasercell cell file?").
+  void RequireFormat(const std::string& expected_format, int version, const std::string& hint = "");
+  /// A required `version` key equal to `version`, with RequireFormat's messages; `what` names
+  /// what is versioned ("this build reads <what> version 1"), e.g. a section of a file.
+  void RequireVersion(int version, const std::string& what);
   /// True when the key is present and not null.
   bool Has(const char* key) const;
   /// The sub-map at `key` (absent -> a walker without fields); throws when it is not a map.

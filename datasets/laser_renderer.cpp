@@ -21,6 +21,55 @@ constexpr double kDegToRad = std::numbers::pi / 180.0;
 
 using FanSample = LaserRenderer::FanSampleRef;
 
+// The fan angle whose hit projects onto column c, between the samples a and b: Illinois regula
+// falsi on f(alpha) = u(alpha) - c (Dowell & Jarratt 1971), bracketed by the two samples.
+// `trace(alpha, t_hint)` intersects the ray with the bracket's surface, `project(p)` maps a scene
+// point to a pixel. False when a ray misses the surface or its hit does not project before
+// |f| < 1e-9 px.
+template <typename Trace, typename Project>
+bool SolveColumn(const FanSample& a, const FanSample& b, int c, const Trace& trace,
+                 const Project& project, std::optional<RayHit>* hit_out,
+                 Eigen::Vector2d* pixel_out) {
+  std::optional<RayHit>& hit = *hit_out;
+  Eigen::Vector2d& pixel = *pixel_out;
+  double xa = a.alpha, xb = b.alpha;
+  double fa = a.pixel.x() - c, fb = b.pixel.x() - c;
+  if (fa == 0) {
+    hit = a.hit;
+    pixel = a.pixel;
+    return true;
+  }
+  if (fb == 0) {
+    hit = b.hit;
+    pixel = b.pixel;
+    return true;
+  }
+  int side = 0;
+  for (int iter = 0; iter < 40; ++iter) {
+    const double x = xb - fb * (xb - xa) / (fb - fa);
+    const double w = (x - a.alpha) / (b.alpha - a.alpha);
+    hit = trace(x, (1 - w) * a.hit.t_mm + w * b.hit.t_mm);
+    if (!hit) return false;
+    const auto q = project(hit->point);
+    if (!q) return false;
+    pixel = *q;
+    const double f = pixel.x() - c;
+    if (std::abs(f) < 1e-9 || std::abs(xb - xa) < 1e-15) return true;
+    if ((f > 0) == (fb > 0)) {
+      xb = x;
+      fb = f;
+      if (side == -1) fa /= 2;
+      side = -1;
+    } else {
+      xa = x;
+      fa = f;
+      if (side == 1) fb /= 2;
+      side = 1;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 void LaserRenderOptions::Check(const std::string& what) const {
@@ -182,47 +231,9 @@ ExposureTruth LaserRenderer::RenderExact(const Eigen::Isometry3d& scene_from_sen
     };
 
     for (int c = c0; c <= c1; ++c) {
-      // Illinois regula falsi on f(alpha) = u(alpha) - c, bracketed by the two samples.
-      double xa = a.alpha, xb = b.alpha;
-      double fa = a.pixel.x() - c, fb = b.pixel.x() - c;
       std::optional<RayHit> hit;
       Eigen::Vector2d pixel;
-      if (fa == 0) {
-        hit = a.hit;
-        pixel = a.pixel;
-      } else if (fb == 0) {
-        hit = b.hit;
-        pixel = b.pixel;
-      } else {
-        int side = 0;
-        bool ok = false;
-        for (int iter = 0; iter < 40; ++iter) {
-          const double x = xb - fb * (xb - xa) / (fb - fa);
-          const double w = (x - a.alpha) / (b.alpha - a.alpha);
-          hit = trace(x, (1 - w) * a.hit.t_mm + w * b.hit.t_mm);
-          if (!hit) break;
-          const auto q = project(hit->point);
-          if (!q) break;
-          pixel = *q;
-          const double f = pixel.x() - c;
-          if (std::abs(f) < 1e-9 || std::abs(xb - xa) < 1e-15) {
-            ok = true;
-            break;
-          }
-          if ((f > 0) == (fb > 0)) {
-            xb = x;
-            fb = f;
-            if (side == -1) fa /= 2;
-            side = -1;
-          } else {
-            xa = x;
-            fa = f;
-            if (side == 1) fb /= 2;
-            side = 1;
-          }
-        }
-        if (!ok) continue;
-      }
+      if (!SolveColumn(a, b, c, trace, project, &hit, &pixel)) continue;
       pixel.x() = c;  // exact by construction (to 1e-9 px)
       if (!camera.InImage(pixel)) continue;
 

@@ -90,6 +90,53 @@ void HandEyeImageOptions::Check(const std::string& what) const {
   CheckRange(board_yaw_deg, -180.0, 180.0, what + ".board_yaw_deg");
 }
 
+namespace {
+
+// Does the sensor see the targets? The laser's central ray points straight down during a
+// linear sweep and crosses the optical axis at measuring_height_mm, so a horizontal target at
+// height h lies at range (measuring_height - h) + |emitter -> crossing| along it.
+void CheckTargetsInRange(const SimConfig& c) {
+  const SensorModel model = MakeSensor(c.sensor);
+  const double to_crossing = std::hypot(c.sensor.baseline_mm, c.sensor.standoff_mm);
+  const auto check_range = [&](double height, const std::string& field, const char* target) {
+    const double range = c.measuring_height_mm - height + to_crossing;
+    const double far = std::min(model.central_range_mm[1], c.render.max_range_mm);
+    if (!(range > model.central_range_mm[0] && range < far)) {
+      std::ostringstream msg;
+      msg << "SimConfig." << field << ": the sensor sees nothing of the " << target << " at height "
+          << height << " mm: the laser meets it " << range
+          << " mm from the emitter, outside the sensor's measuring range ["
+          << model.central_range_mm[0] << ", " << far << "] mm along the laser; change " << field
+          << " or sweep.measuring_height_mm (or sensor.baseline_mm/standoff_mm/camera, "
+             "render.max_range_mm)";
+      throw OptionError(msg.str());
+    }
+  };
+  if (c.capture_planes) {
+    for (std::size_t i = 0; i < c.plane_heights_mm.size(); ++i) {
+      check_range(c.plane_heights_mm[i], "planes.heights_mm[" + std::to_string(i) + "]",
+                  "white plane");
+    }
+  }
+  if (c.capture_spheres) {
+    const std::vector<Eigen::Vector3d> centers = c.spheres.CentersInCell();
+    for (std::size_t i = 0; i < centers.size(); ++i) {
+      check_range(centers[i].z() + c.spheres.radius_mm,
+                  "spheres.stand_heights_mm[" + std::to_string(i) + "]", "sphere top");
+    }
+  }
+  if (c.capture_seats || c.capture_trajectory) {
+    check_range(kPalletHeightMm, "sweep.measuring_height_mm", "pallet deck under the seat");
+    const double seat_height = c.seat_shape.thickness_mm + c.seat_shape.front_roll_mm +
+                               c.seat_shape.crown_mm + c.seat_shape.side_lift_mm +
+                               c.seat_shape.boss_height_mm;
+    check_range(kPalletHeightMm + seat_height, "seats.shape.boss_height_mm",
+                "top of the seat's boss");
+  }
+}
+
+}  // namespace
+
 void SimConfig::Check() const {
   sensor.Check("SimConfig.sensor");
   render.Check("SimConfig.render");
@@ -218,54 +265,13 @@ void SimConfig::Check() const {
     throw OptionError("SimConfig.trajectory.waypoints must be in [2, 1000] (got " +
                       std::to_string(arc_waypoints) + ")");
   }
-
-  // Does the sensor see the targets? The laser's central ray points straight down during a
-  // linear sweep and crosses the optical axis at measuring_height_mm, so a horizontal target at
-  // height h lies at range (measuring_height - h) + |emitter -> crossing| along it.
-  const SensorModel model = MakeSensor(sensor);
-  const double to_crossing = std::hypot(sensor.baseline_mm, sensor.standoff_mm);
-  const auto check_range = [&](double height, const std::string& field, const char* target) {
-    const double range = measuring_height_mm - height + to_crossing;
-    const double far = std::min(model.central_range_mm[1], render.max_range_mm);
-    if (!(range > model.central_range_mm[0] && range < far)) {
-      std::ostringstream msg;
-      msg << "SimConfig." << field << ": the sensor sees nothing of the " << target << " at height "
-          << height << " mm: the laser meets it " << range
-          << " mm from the emitter, outside the sensor's measuring range ["
-          << model.central_range_mm[0] << ", " << far << "] mm along the laser; change " << field
-          << " or sweep.measuring_height_mm (or sensor.baseline_mm/standoff_mm/camera, "
-             "render.max_range_mm)";
-      throw OptionError(msg.str());
-    }
-  };
-  if (capture_planes) {
-    for (std::size_t i = 0; i < plane_heights_mm.size(); ++i) {
-      check_range(plane_heights_mm[i], "planes.heights_mm[" + std::to_string(i) + "]",
-                  "white plane");
-    }
-  }
-  if (capture_spheres) {
-    const std::vector<Eigen::Vector3d> centers = spheres.CentersInCell();
-    for (std::size_t i = 0; i < centers.size(); ++i) {
-      check_range(centers[i].z() + spheres.radius_mm,
-                  "spheres.stand_heights_mm[" + std::to_string(i) + "]", "sphere top");
-    }
-  }
-  if (capture_seats || capture_trajectory) {
-    check_range(kPalletHeightMm, "sweep.measuring_height_mm", "pallet deck under the seat");
-    const double seat_height = seat_shape.thickness_mm + seat_shape.front_roll_mm +
-                               seat_shape.crown_mm + seat_shape.side_lift_mm +
-                               seat_shape.boss_height_mm;
-    check_range(kPalletHeightMm + seat_height, "seats.shape.boss_height_mm",
-                "top of the seat's boss");
-  }
+  CheckTargetsInRange(*this);
 }
 
-SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
-  SimConfig c;
-  Fields top = Fields::Parse(text, name);
-  top.ExpectFormat("lasercell.sim_config", kSimConfigVersion);
-  top.Read("seed", &c.seed);
+namespace {
+
+// The sensor, how it renders and when it exposes.
+void ReadSensorSections(Fields& top, SimConfig& c) {
   {
     Fields s = top.Sub("sensor");
     {
@@ -317,6 +323,10 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     t.Read("start_ns", &c.timing.start_ns);
     t.Done();
   }
+}
+
+// The cell's layout and materials, and the vision robot's kinematic errors.
+void ReadCellSections(Fields& top, SimConfig& c) {
   {
     Fields cell = top.Sub("cell");
     cell.Read("vision_base_mm", &c.vision_base_mm);
@@ -350,6 +360,10 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     r.Read("dh_length_sigma_mm", &c.dh_length_sigma_mm);
     r.Done();
   }
+}
+
+// The linear sweep and what it scans: seats, white planes, spheres.
+void ReadSceneSections(Fields& top, SimConfig& c) {
   {
     Fields s = top.Sub("sweep");
     s.Read("measuring_height_mm", &c.measuring_height_mm);
@@ -396,6 +410,18 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     s.Read("segments", &c.spheres.segments);
     s.Done();
   }
+}
+
+}  // namespace
+
+SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
+  SimConfig c;
+  Fields top = Fields::Parse(text, name);
+  top.ExpectFormat("lasercell.sim_config", kSimConfigVersion);
+  top.Read("seed", &c.seed);
+  ReadSensorSections(top, c);
+  ReadCellSections(top, c);
+  ReadSceneSections(top, c);
   {
     Fields t = top.Sub("trajectory");
     t.Read("arc_radius_mm", &c.arc_radius_mm);

@@ -186,10 +186,7 @@ Eigen::Vector4d SimSensorTruth::LaserPlane() const {
 
 SimSensorTruth ParseSensorTruth(const std::string& text, const std::string& name) {
   yaml::Fields f = yaml::Fields::Parse(text, name);
-  if (!f.Has("format")) {
-    throw FileError(name, "is not a simulator sensor truth file (format: lasercell.sim_sensor)");
-  }
-  f.ExpectFormat("lasercell.sim_sensor", 1);
+  f.RequireFormat("lasercell.sim_sensor", 1);
   SimSensorTruth t;
   if (!f.Has("laser_plane_in_sensor")) {
     throw FileError(name, "has no laser_plane_in_sensor {normal, d_mm}");

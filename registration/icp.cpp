@@ -58,6 +58,169 @@ struct Partial {
   Eigen::Matrix3d cross = Eigen::Matrix3d::Zero();
 };
 
+// What AlignIcp's stages share: the inputs, and per source point its position at the current
+// pose and its correspondence (buffers reused by every association).
+struct IcpProblem {
+  std::span<const Eigen::Vector3d> source;
+  const KdTree& target;
+  std::span<const Eigen::Vector3d> target_normals;
+  const IcpOptions& options;
+  bool plane = true;    // point-to-plane (Chen & Medioni), else point-to-point
+  double max_sq = 0.0;  // squared max correspondence distance, mm^2
+  std::vector<Match> matches;
+  std::vector<Eigen::Vector3d> moved;
+};
+
+// Nearest target point and residual for every source point at the current pose; returns the
+// |residual| of the valid matches.
+std::vector<double> Associate(IcpProblem& p, const Eigen::Isometry3d& pose) {
+  const std::size_t n = p.source.size();
+  const auto& target_points = p.target.points();
+  ParallelForChunks(p.options.threads, n, kChunk, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
+      p.moved[i] = pose * p.source[i];
+      Neighbor nn;
+      Match& m = p.matches[i];
+      m.valid = p.target.Nearest(p.moved[i], &nn) && nn.distance_sq <= p.max_sq;
+      if (!m.valid) continue;
+      m.target = nn.index;
+      m.residual = p.plane ? p.target_normals[nn.index].dot(p.moved[i] - target_points[nn.index])
+                           : std::sqrt(nn.distance_sq);
+    }
+  });
+  std::vector<double> abs_r;
+  abs_r.reserve(n);
+  for (const Match& m : p.matches) {
+    if (m.valid) abs_r.push_back(std::abs(m.residual));
+  }
+  return abs_r;
+}
+
+// Kernel scale: fixed, or 1.4826 x MAD (median of |r|, residuals being centred at 0).
+double KernelScale(const IcpOptions& options, std::vector<double>& abs_r) {
+  if (options.kernel_scale_mm > 0.0) return options.kernel_scale_mm;
+  if (abs_r.empty()) return options.min_kernel_scale_mm;
+  auto mid = abs_r.begin() + static_cast<std::ptrdiff_t>(abs_r.size() / 2);
+  std::nth_element(abs_r.begin(), mid, abs_r.end());
+  return std::max(options.min_kernel_scale_mm, 1.4826 * *mid);
+}
+
+// Centroid of the matched moved source points: the linearization point (conditioning far from
+// the origin).
+Eigen::Vector3d MatchedCentroid(const IcpProblem& p) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < p.source.size(); ++i) {
+    if (p.matches[i].valid) {
+      c += p.moved[i];
+      ++valid;
+    }
+  }
+  c /= static_cast<double>(valid);
+  return c;
+}
+
+// Robustly weighted sums about the centroid c over all matches, in fixed chunks.
+Partial Accumulate(const IcpProblem& p, double sigma, const Eigen::Vector3d& c) {
+  const std::size_t n = p.source.size();
+  const auto& target_points = p.target.points();
+  const std::size_t chunks = ChunkCount(n, kChunk);
+  std::vector<Partial> partial(chunks);
+  ParallelForChunks(p.options.threads, chunks, 1, [&](std::size_t begin, std::size_t end) {
+    for (std::size_t k = begin; k < end; ++k) {
+      Partial& s = partial[k];
+      for (std::size_t i = k * kChunk; i < std::min(n, (k + 1) * kChunk); ++i) {
+        const Match& m = p.matches[i];
+        if (!m.valid) continue;
+        const double w = Weight(p.options.kernel, m.residual, sigma);
+        if (w <= 0.0) continue;
+        const Eigen::Vector3d a = p.moved[i] - c;
+        if (p.plane) {
+          // r(x) = n.(s' + w x (s'-c) + v - q): J = [((s'-c) x n)^T, n^T]  (Chen & Medioni).
+          const Eigen::Vector3d& nq = p.target_normals[m.target];
+          Vector6d j;
+          j << a.cross(nq), nq;
+          s.h.noalias() += w * j * j.transpose();
+          s.b.noalias() += w * m.residual * j;
+        } else {
+          const Eigen::Vector3d b = target_points[m.target] - c;
+          s.w += w;
+          s.sum_a += w * a;
+          s.sum_b += w * b;
+          s.cross.noalias() += w * b * a.transpose();
+        }
+      }
+    }
+  });
+  Partial total;
+  for (const Partial& s : partial) {
+    total.h += s.h;
+    total.b += s.b;
+    total.w += s.w;
+    total.sum_a += s.sum_a;
+    total.sum_b += s.sum_b;
+    total.cross += s.cross;
+  }
+  return total;
+}
+
+// Point-to-plane step from the normal equations; false when they have no positive eigenvalue.
+bool SolvePointToPlane(const Partial& total, Eigen::Matrix3d* d_rot, Eigen::Vector3d* d_trans,
+                       bool* degenerate) {
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(total.h);
+  const double max_eig = eig.eigenvalues().maxCoeff();
+  *degenerate = !(max_eig > 0.0) || eig.eigenvalues().minCoeff() < 1e-9 * max_eig;
+  if (!(max_eig > 0.0)) return false;
+  // Tiny damping keeps unobservable directions (planes, cylinders) where they are.
+  const Vector6d x = -(total.h + 1e-9 * max_eig * Matrix6d::Identity()).ldlt().solve(total.b);
+  *d_rot = QuaternionFromRotationVector(x.head<3>()).toRotationMatrix();
+  *d_trans = x.tail<3>();
+  return true;
+}
+
+// Point-to-point step; false when no match has a positive weight.
+bool SolvePointToPoint(const Partial& total, Eigen::Matrix3d* d_rot, Eigen::Vector3d* d_trans,
+                       bool* degenerate) {
+  if (!(total.w > 0.0)) return false;
+  // Weighted Horn/Umeyama (no scale): rotation from the SVD of the cross-covariance.
+  const Eigen::Vector3d mean_a = total.sum_a / total.w, mean_b = total.sum_b / total.w;
+  const Eigen::Matrix3d cov = total.cross / total.w - mean_b * mean_a.transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d s = Eigen::Matrix3d::Identity();
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) s(2, 2) = -1.0;
+  *d_rot = svd.matrixU() * s * svd.matrixV().transpose();
+  *d_trans = mean_b - *d_rot * mean_a;
+  const Eigen::Vector3d sv = svd.singularValues();
+  *degenerate = sv(1) < 1e-9 * sv(0);
+  return true;
+}
+
+// Statistics at the returned pose: correspondences, kernel scale, inliers within 3 sigma, RMSEs.
+void ReportFit(IcpProblem& p, IcpResult& result) {
+  const std::size_t n = p.source.size();
+  const auto& target_points = p.target.points();
+  std::vector<double> abs_r = Associate(p, result.target_from_source);
+  result.correspondences = abs_r.size();
+  result.kernel_scale_mm = KernelScale(p.options, abs_r);
+  double sum_sq = 0.0, sum_point_sq = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Match& m = p.matches[i];
+    if (!m.valid || std::abs(m.residual) > 3.0 * result.kernel_scale_mm) continue;
+    ++result.inliers;
+    sum_sq += m.residual * m.residual;
+    sum_point_sq += (p.moved[i] - target_points[m.target]).squaredNorm();
+  }
+  if (result.inliers > 0) {
+    result.rmse_mm = std::sqrt(sum_sq / result.inliers);
+    result.point_rmse_mm = std::sqrt(sum_point_sq / result.inliers);
+  }
+  result.inlier_fraction = n > 0 ? static_cast<double>(result.inliers) / n : 0.0;
+  if (result.correspondences < p.options.min_correspondences) {
+    result.termination = IcpTermination::kTooFewCorrespondences;
+    result.converged = false;
+  }
+}
+
 }  // namespace
 
 void IcpOptions::Check() const {
@@ -111,128 +274,33 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
   IcpResult result;
   result.target_from_source = initial_target_from_source;
   const std::size_t n = source.size();
-  std::vector<Match> matches(n);
-  std::vector<Eigen::Vector3d> moved(n);
-  const double max_sq =
-      options.max_correspondence_distance_mm * options.max_correspondence_distance_mm;
-  const auto& target_points = target.points();
-
-  // Nearest target point and residual for every source point at the current pose.
-  auto associate = [&](const Eigen::Isometry3d& pose) {
-    ParallelForChunks(options.threads, n, kChunk, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i) {
-        moved[i] = pose * source[i];
-        Neighbor nn;
-        Match& m = matches[i];
-        m.valid = target.Nearest(moved[i], &nn) && nn.distance_sq <= max_sq;
-        if (!m.valid) continue;
-        m.target = nn.index;
-        m.residual = plane ? target_normals[nn.index].dot(moved[i] - target_points[nn.index])
-                           : std::sqrt(nn.distance_sq);
-      }
-    });
-    std::vector<double> abs_r;
-    abs_r.reserve(n);
-    for (const Match& m : matches) {
-      if (m.valid) abs_r.push_back(std::abs(m.residual));
-    }
-    return abs_r;
-  };
-  // Kernel scale: fixed, or 1.4826 x MAD (median of |r|, residuals being centred at 0).
-  auto scale_of = [&](std::vector<double>& abs_r) {
-    if (options.kernel_scale_mm > 0.0) return options.kernel_scale_mm;
-    if (abs_r.empty()) return options.min_kernel_scale_mm;
-    auto mid = abs_r.begin() + static_cast<std::ptrdiff_t>(abs_r.size() / 2);
-    std::nth_element(abs_r.begin(), mid, abs_r.end());
-    return std::max(options.min_kernel_scale_mm, 1.4826 * *mid);
-  };
+  IcpProblem problem{
+      source,
+      target,
+      target_normals,
+      options,
+      plane,
+      options.max_correspondence_distance_mm * options.max_correspondence_distance_mm,
+      std::vector<Match>(n),
+      std::vector<Eigen::Vector3d>(n)};
 
   result.termination = IcpTermination::kMaxIterations;
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {
-    std::vector<double> abs_r = associate(result.target_from_source);
+    std::vector<double> abs_r = Associate(problem, result.target_from_source);
     if (abs_r.size() < options.min_correspondences) {
       result.termination = IcpTermination::kTooFewCorrespondences;
       break;
     }
-    const double sigma = scale_of(abs_r);
-    // Linearize about the centroid of the moved source points (conditioning far from origin).
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    std::size_t valid = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (matches[i].valid) {
-        c += moved[i];
-        ++valid;
-      }
-    }
-    c /= static_cast<double>(valid);
-
-    const std::size_t chunks = ChunkCount(n, kChunk);
-    std::vector<Partial> partial(chunks);
-    ParallelForChunks(options.threads, chunks, 1, [&](std::size_t begin, std::size_t end) {
-      for (std::size_t k = begin; k < end; ++k) {
-        Partial& p = partial[k];
-        for (std::size_t i = k * kChunk; i < std::min(n, (k + 1) * kChunk); ++i) {
-          const Match& m = matches[i];
-          if (!m.valid) continue;
-          const double w = Weight(options.kernel, m.residual, sigma);
-          if (w <= 0.0) continue;
-          const Eigen::Vector3d a = moved[i] - c;
-          if (plane) {
-            // r(x) = n.(s' + w x (s'-c) + v - q): J = [((s'-c) x n)^T, n^T]  (Chen & Medioni).
-            const Eigen::Vector3d& nq = target_normals[m.target];
-            Vector6d j;
-            j << a.cross(nq), nq;
-            p.h.noalias() += w * j * j.transpose();
-            p.b.noalias() += w * m.residual * j;
-          } else {
-            const Eigen::Vector3d b = target_points[m.target] - c;
-            p.w += w;
-            p.sum_a += w * a;
-            p.sum_b += w * b;
-            p.cross.noalias() += w * b * a.transpose();
-          }
-        }
-      }
-    });
-    Partial total;
-    for (const Partial& p : partial) {
-      total.h += p.h;
-      total.b += p.b;
-      total.w += p.w;
-      total.sum_a += p.sum_a;
-      total.sum_b += p.sum_b;
-      total.cross += p.cross;
-    }
-
+    const double sigma = KernelScale(options, abs_r);
+    const Eigen::Vector3d c = MatchedCentroid(problem);
+    const Partial total = Accumulate(problem, sigma, c);
     Eigen::Matrix3d d_rot = Eigen::Matrix3d::Identity();
     Eigen::Vector3d d_trans = Eigen::Vector3d::Zero();
-    if (plane) {
-      const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(total.h);
-      const double max_eig = eig.eigenvalues().maxCoeff();
-      result.degenerate = !(max_eig > 0.0) || eig.eigenvalues().minCoeff() < 1e-9 * max_eig;
-      if (!(max_eig > 0.0)) {
-        result.termination = IcpTermination::kTooFewCorrespondences;
-        break;
-      }
-      // Tiny damping keeps unobservable directions (planes, cylinders) where they are.
-      const Vector6d x = -(total.h + 1e-9 * max_eig * Matrix6d::Identity()).ldlt().solve(total.b);
-      d_rot = QuaternionFromRotationVector(x.head<3>()).toRotationMatrix();
-      d_trans = x.tail<3>();
-    } else {
-      if (!(total.w > 0.0)) {
-        result.termination = IcpTermination::kTooFewCorrespondences;
-        break;
-      }
-      // Weighted Horn/Umeyama (no scale): rotation from the SVD of the cross-covariance.
-      const Eigen::Vector3d mean_a = total.sum_a / total.w, mean_b = total.sum_b / total.w;
-      const Eigen::Matrix3d cov = total.cross / total.w - mean_b * mean_a.transpose();
-      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Eigen::Matrix3d s = Eigen::Matrix3d::Identity();
-      if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) s(2, 2) = -1.0;
-      d_rot = svd.matrixU() * s * svd.matrixV().transpose();
-      d_trans = mean_b - d_rot * mean_a;
-      const Eigen::Vector3d sv = svd.singularValues();
-      result.degenerate = sv(1) < 1e-9 * sv(0);
+    const bool solved = plane ? SolvePointToPlane(total, &d_rot, &d_trans, &result.degenerate)
+                              : SolvePointToPoint(total, &d_rot, &d_trans, &result.degenerate);
+    if (!solved) {
+      result.termination = IcpTermination::kTooFewCorrespondences;
+      break;
     }
     // Update: p -> c + dR (p - c) + dt, applied on the left of the current pose.
     Eigen::Isometry3d update = Eigen::Isometry3d::Identity();
@@ -249,28 +317,7 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
     }
   }
   result.converged = result.termination == IcpTermination::kConverged;
-
-  // Statistics at the returned pose.
-  std::vector<double> abs_r = associate(result.target_from_source);
-  result.correspondences = abs_r.size();
-  result.kernel_scale_mm = scale_of(abs_r);
-  double sum_sq = 0.0, sum_point_sq = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Match& m = matches[i];
-    if (!m.valid || std::abs(m.residual) > 3.0 * result.kernel_scale_mm) continue;
-    ++result.inliers;
-    sum_sq += m.residual * m.residual;
-    sum_point_sq += (moved[i] - target_points[m.target]).squaredNorm();
-  }
-  if (result.inliers > 0) {
-    result.rmse_mm = std::sqrt(sum_sq / result.inliers);
-    result.point_rmse_mm = std::sqrt(sum_point_sq / result.inliers);
-  }
-  result.inlier_fraction = n > 0 ? static_cast<double>(result.inliers) / n : 0.0;
-  if (result.correspondences < options.min_correspondences) {
-    result.termination = IcpTermination::kTooFewCorrespondences;
-    result.converged = false;
-  }
+  ReportFit(problem, result);
   return result;
 }
 

@@ -241,6 +241,169 @@ nlohmann::json PrintSimTable(const std::string& title, const std::vector<Row>& r
   return j;
 }
 
+// Sanity: the truth chain closes (A_i X C_i is one board pose).
+void CheckTruthChain(const std::vector<calib::HandEyeView>& views, const Eigen::Isometry3d& x_true,
+                     const datasets::HandEyeImageSet& set) {
+  const Eigen::Isometry3d y0 = views[0].base_from_flange * x_true * set.images[0].camera_from_board;
+  for (std::size_t i = 0; i < views.size(); ++i) {
+    const Eigen::Isometry3d yi =
+        views[i].base_from_flange * x_true * set.images[i].camera_from_board;
+    if (TranslationDistance(yi, y0) > 1e-6) {
+      throw InternalError("bench calibration: simulator truth chain does not close");
+    }
+  }
+}
+
+// Monte Carlo over the corner noise: RMS error per method, and the coverage of our 1 sigma.
+// Draws continue `rng` / `noise` after the first table's corners.
+nlohmann::json RunMonteCarlo(const CalibrationBenchArgs& args,
+                             const std::vector<calib::HandEyeView>& views,
+                             const datasets::HandEyeImageSet& set, const calib::CameraModel& camera,
+                             const Eigen::Isometry3d& x_true, std::mt19937_64& rng,
+                             std::normal_distribution<double>& noise) {
+  std::vector<double> ss_r, ss_t;
+  std::vector<int> threw;
+  std::vector<std::string> names;
+  int inside = 0, total = 0;
+  for (int draw = 0; draw < args.sim_draws; ++draw) {
+    std::vector<calib::HandEyeView> noisy = views;
+    for (std::size_t i = 0; i < noisy.size(); ++i) {
+      for (std::size_t k = 0; k < noisy[i].corners_px.size(); ++k) {
+        noisy[i].corners_px[k] =
+            set.images[i].corners_px[k] + Eigen::Vector2d(noise(rng), noise(rng));
+      }
+    }
+    calib::HandEyeResult r;
+    const std::vector<Row> draw_rows = RunMethods(noisy, camera, &r);
+    if (names.empty()) {
+      for (const Row& row : draw_rows) names.push_back(row.method);
+      ss_r.assign(names.size(), 0.0);
+      ss_t.assign(names.size(), 0.0);
+      threw.assign(names.size(), 0);
+    }
+    for (std::size_t m = 0; m < draw_rows.size(); ++m) {
+      if (draw_rows[m].note == "threw") {
+        ++threw[m];
+        continue;
+      }
+      ss_r[m] += std::pow(RotationDistance(draw_rows[m].x, x_true) / kDeg, 2);
+      ss_t[m] += std::pow(TranslationDistance(draw_rows[m].x, x_true), 2);
+    }
+    const Eigen::Vector3d dr =
+        RotationVectorFromMatrix(x_true.linear() * r.flange_from_camera.linear().transpose());
+    const Eigen::Vector3d dt = x_true.translation() - r.flange_from_camera.translation();
+    for (int k = 0; k < 6; ++k) {
+      const double e = k < 3 ? dr[k] : dt[k - 3];
+      inside += std::abs(e) <= std::sqrt(r.flange_from_camera_covariance(k, k)) ? 1 : 0;
+      ++total;
+    }
+  }
+  std::printf(
+      "\n### Simulated cell, %d draws of N(0, %.2f px) on the true projections (same "
+      "poses): RMS error over the draws\n\n| method | RMS rot err deg | RMS trans err mm "
+      "| draws that threw |\n|---|---|---|---|\n",
+      args.sim_draws, args.sim_noise_px);
+  nlohmann::json mc = nlohmann::json::array();
+  for (std::size_t m = 0; m < names.size(); ++m) {
+    const int ok = args.sim_draws - threw[m];
+    if (ok == 0) {
+      std::printf("| %s | - | - | %d |\n", names[m].c_str(), threw[m]);
+      mc.push_back({{"method", names[m]}, {"threw", threw[m]}});
+      continue;
+    }
+    const double rr = std::sqrt(ss_r[m] / ok), rt = std::sqrt(ss_t[m] / ok);
+    std::printf("| %s | %.5f | %.4f | %d |\n", names[m].c_str(), rr, rt, threw[m]);
+    mc.push_back({{"method", names[m]},
+                  {"rms_rotation_error_deg", rr},
+                  {"rms_translation_error_mm", rt},
+                  {"threw", threw[m]}});
+  }
+  std::printf(
+      "\nlasercell 1-sigma coverage: truth inside the reported 1 sigma for %.1f %% of "
+      "%d components (68.3 %% expected)\n",
+      100.0 * inside / std::max(total, 1), total);
+  return {{"draws", args.sim_draws},
+          {"rows", mc},
+          {"coverage_1sigma", static_cast<double>(inside) / std::max(total, 1)}};
+}
+
+// The detector's corner order can differ from the board's by a reversal of rows and/or
+// columns (its own board frame); relabel to the simulator's order, chosen from truth. Returns
+// the variant (0: as detected; bit 0 rows, bit 1 columns reversed), the relabelled corners in
+// *best and their squared distance sum to the truth in *best_ss.
+int RelabelCorners(const std::vector<Eigen::Vector2d>& found_px,
+                   const std::vector<Eigen::Vector2d>& truth_px, int cols, int rows_n,
+                   std::vector<Eigen::Vector2d>* best, double* best_ss) {
+  *best_ss = 1e300;
+  int best_variant = 0;
+  for (int variant = 0; variant < 4; ++variant) {
+    std::vector<Eigen::Vector2d> cand(found_px.size());
+    double ss = 0;
+    for (int rr = 0; rr < rows_n; ++rr) {
+      for (int cc = 0; cc < cols; ++cc) {
+        const int sr = (variant & 1) ? rows_n - 1 - rr : rr;
+        const int sc = (variant & 2) ? cols - 1 - cc : cc;
+        cand[static_cast<std::size_t>(rr * cols + cc)] =
+            found_px[static_cast<std::size_t>(sr * cols + sc)];
+      }
+    }
+    for (std::size_t k = 0; k < cand.size(); ++k) ss += (cand[k] - truth_px[k]).squaredNorm();
+    if (ss < *best_ss) {
+      *best_ss = ss;
+      *best = cand;
+      best_variant = variant;
+    }
+  }
+  return best_variant;
+}
+
+// The same views with corners detected in rendered images; null when fewer than 3 boards are
+// found.
+nlohmann::json RunRendered(const CalibrationBenchArgs& args, const datasets::SimConfig& config,
+                           const datasets::CellTruth& truth,
+                           const datasets::ChessboardTarget& board,
+                           const datasets::HandEyeImageSet& set,
+                           const std::vector<calib::HandEyeView>& views,
+                           const Eigen::Isometry3d& x_true) {
+  const calib::CameraModel& camera = truth.sensor.camera;
+  const datasets::ImageRenderer renderer(truth.sensor.camera);
+  const calib::BoardSpec rendered_board =
+      calib::BoardSpec::Chessboard(board.squares_x - 1, board.squares_y - 1, board.square_mm);
+  std::vector<calib::HandEyeView> detected;
+  int flipped = 0;
+  double det_ss = 0;
+  int det_n = 0;
+  for (std::size_t i = 0; i < set.images.size(); ++i) {
+    const datasets::GrayImage img = renderer.RenderChessboard(
+        board, set.images[i].camera_from_board, config.images, args.seed * 1000 + i);
+    const calib::TargetDetection found =
+        calib::DetectTarget({img.width, img.height, img.pixels}, rendered_board);
+    if (!found.found()) continue;
+    std::vector<Eigen::Vector2d> best;
+    double best_ss = 0;
+    const int variant = RelabelCorners(found.corners_px, set.images[i].corners_px,
+                                       board.squares_x - 1, board.squares_y - 1, &best, &best_ss);
+    if (variant != 0) ++flipped;
+    det_ss += best_ss;
+    det_n += static_cast<int>(best.size());
+    calib::HandEyeView v = views[i];
+    v.corners_px = std::move(best);
+    detected.push_back(v);
+  }
+  char title[256];
+  std::snprintf(title, sizeof title,
+                "Simulated cell, rendered images (default image noise/blur), corners by "
+                "calib::DetectTarget (findChessboardCornersSB + cornerSubPix): %zu of %zu boards "
+                "found, detection "
+                "error vs true projections %.3f px RMS, %d corner orderings relabelled from truth",
+                detected.size(), set.images.size(), std::sqrt(det_ss / std::max(det_n, 1)),
+                flipped);
+  if (detected.size() < 3) return nullptr;
+  calib::HandEyeResult ours;
+  const std::vector<Row> rows = RunMethods(detected, camera, &ours);
+  return PrintSimTable(title, rows, detected, ours, camera, x_true);
+}
+
 nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   datasets::SimConfig config;
   config.seed = args.seed;
@@ -266,15 +429,7 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
     v.base_from_flange = truth.nominal_vision_robot.BaseFromFlange(im.joints_rad);
     nominal_views.push_back(v);
   }
-  // Sanity: the truth chain closes (A_i X C_i is one board pose).
-  const Eigen::Isometry3d y0 = views[0].base_from_flange * x_true * set.images[0].camera_from_board;
-  for (std::size_t i = 0; i < views.size(); ++i) {
-    const Eigen::Isometry3d yi =
-        views[i].base_from_flange * x_true * set.images[i].camera_from_board;
-    if (TranslationDistance(yi, y0) > 1e-6) {
-      throw InternalError("bench calibration: simulator truth chain does not close");
-    }
-  }
+  CheckTruthChain(views, x_true, set);
   nlohmann::json out;
   char title[256];
   std::snprintf(title, sizeof title,
@@ -285,132 +440,12 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   calib::HandEyeResult ours;
   std::vector<Row> rows = RunMethods(views, camera, &ours);
   out["synthetic_noise"] = PrintSimTable(title, rows, views, ours, camera, x_true);
-
-  // Monte Carlo over the corner noise: RMS error per method, and the coverage of our 1 sigma.
   if (args.sim_draws > 0) {
-    std::vector<double> ss_r, ss_t;
-    std::vector<int> threw;
-    std::vector<std::string> names;
-    int inside = 0, total = 0;
-    for (int draw = 0; draw < args.sim_draws; ++draw) {
-      std::vector<calib::HandEyeView> noisy = views;
-      for (std::size_t i = 0; i < noisy.size(); ++i) {
-        for (std::size_t k = 0; k < noisy[i].corners_px.size(); ++k) {
-          noisy[i].corners_px[k] =
-              set.images[i].corners_px[k] + Eigen::Vector2d(noise(rng), noise(rng));
-        }
-      }
-      calib::HandEyeResult r;
-      const std::vector<Row> draw_rows = RunMethods(noisy, camera, &r);
-      if (names.empty()) {
-        for (const Row& row : draw_rows) names.push_back(row.method);
-        ss_r.assign(names.size(), 0.0);
-        ss_t.assign(names.size(), 0.0);
-        threw.assign(names.size(), 0);
-      }
-      for (std::size_t m = 0; m < draw_rows.size(); ++m) {
-        if (draw_rows[m].note == "threw") {
-          ++threw[m];
-          continue;
-        }
-        ss_r[m] += std::pow(RotationDistance(draw_rows[m].x, x_true) / kDeg, 2);
-        ss_t[m] += std::pow(TranslationDistance(draw_rows[m].x, x_true), 2);
-      }
-      const Eigen::Vector3d dr =
-          RotationVectorFromMatrix(x_true.linear() * r.flange_from_camera.linear().transpose());
-      const Eigen::Vector3d dt = x_true.translation() - r.flange_from_camera.translation();
-      for (int k = 0; k < 6; ++k) {
-        const double e = k < 3 ? dr[k] : dt[k - 3];
-        inside += std::abs(e) <= std::sqrt(r.flange_from_camera_covariance(k, k)) ? 1 : 0;
-        ++total;
-      }
-    }
-    std::printf(
-        "\n### Simulated cell, %d draws of N(0, %.2f px) on the true projections (same "
-        "poses): RMS error over the draws\n\n| method | RMS rot err deg | RMS trans err mm "
-        "| draws that threw |\n|---|---|---|---|\n",
-        args.sim_draws, args.sim_noise_px);
-    nlohmann::json mc = nlohmann::json::array();
-    for (std::size_t m = 0; m < names.size(); ++m) {
-      const int ok = args.sim_draws - threw[m];
-      if (ok == 0) {
-        std::printf("| %s | - | - | %d |\n", names[m].c_str(), threw[m]);
-        mc.push_back({{"method", names[m]}, {"threw", threw[m]}});
-        continue;
-      }
-      const double rr = std::sqrt(ss_r[m] / ok), rt = std::sqrt(ss_t[m] / ok);
-      std::printf("| %s | %.5f | %.4f | %d |\n", names[m].c_str(), rr, rt, threw[m]);
-      mc.push_back({{"method", names[m]},
-                    {"rms_rotation_error_deg", rr},
-                    {"rms_translation_error_mm", rt},
-                    {"threw", threw[m]}});
-    }
-    std::printf(
-        "\nlasercell 1-sigma coverage: truth inside the reported 1 sigma for %.1f %% of "
-        "%d components (68.3 %% expected)\n",
-        100.0 * inside / std::max(total, 1), total);
-    out["monte_carlo"] = {{"draws", args.sim_draws},
-                          {"rows", mc},
-                          {"coverage_1sigma", static_cast<double>(inside) / std::max(total, 1)}};
+    out["monte_carlo"] = RunMonteCarlo(args, views, set, camera, x_true, rng, noise);
   }
-
   if (args.sim_render) {
-    const datasets::ImageRenderer renderer(truth.sensor.camera);
-    const calib::BoardSpec rendered_board =
-        calib::BoardSpec::Chessboard(board.squares_x - 1, board.squares_y - 1, board.square_mm);
-    std::vector<calib::HandEyeView> detected;
-    int flipped = 0;
-    double det_ss = 0;
-    int det_n = 0;
-    for (std::size_t i = 0; i < set.images.size(); ++i) {
-      const datasets::GrayImage img = renderer.RenderChessboard(
-          board, set.images[i].camera_from_board, config.images, args.seed * 1000 + i);
-      const calib::TargetDetection found =
-          calib::DetectTarget({img.width, img.height, img.pixels}, rendered_board);
-      if (!found.found()) continue;
-      // The detector's corner order can differ from the board's by a reversal of rows and/or
-      // columns (its own board frame); relabel to the simulator's order, chosen from truth.
-      const auto& truth_px = set.images[i].corners_px;
-      const int cols = board.squares_x - 1, rows_n = board.squares_y - 1;
-      std::vector<Eigen::Vector2d> best;
-      double best_ss = 1e300;
-      int best_variant = 0;
-      for (int variant = 0; variant < 4; ++variant) {
-        std::vector<Eigen::Vector2d> cand(found.corners_px.size());
-        double ss = 0;
-        for (int rr = 0; rr < rows_n; ++rr) {
-          for (int cc = 0; cc < cols; ++cc) {
-            const int sr = (variant & 1) ? rows_n - 1 - rr : rr;
-            const int sc = (variant & 2) ? cols - 1 - cc : cc;
-            cand[static_cast<std::size_t>(rr * cols + cc)] =
-                found.corners_px[static_cast<std::size_t>(sr * cols + sc)];
-          }
-        }
-        for (std::size_t k = 0; k < cand.size(); ++k) ss += (cand[k] - truth_px[k]).squaredNorm();
-        if (ss < best_ss) {
-          best_ss = ss;
-          best = cand;
-          best_variant = variant;
-        }
-      }
-      if (best_variant != 0) ++flipped;
-      det_ss += best_ss;
-      det_n += static_cast<int>(best.size());
-      calib::HandEyeView v = views[i];
-      v.corners_px = std::move(best);
-      detected.push_back(v);
-    }
-    std::snprintf(
-        title, sizeof title,
-        "Simulated cell, rendered images (default image noise/blur), corners by "
-        "calib::DetectTarget (findChessboardCornersSB + cornerSubPix): %zu of %zu boards "
-        "found, detection "
-        "error vs true projections %.3f px RMS, %d corner orderings relabelled from truth",
-        detected.size(), set.images.size(), std::sqrt(det_ss / std::max(det_n, 1)), flipped);
-    if (detected.size() >= 3) {
-      rows = RunMethods(detected, camera, &ours);
-      out["rendered"] = PrintSimTable(title, rows, detected, ours, camera, x_true);
-    }
+    nlohmann::json rendered = RunRendered(args, config, truth, board, set, views, x_true);
+    if (!rendered.is_null()) out["rendered"] = std::move(rendered);
   }
   // What the controller reports: nominal kinematics at the commanded joints.
   std::snprintf(title, sizeof title,

@@ -26,6 +26,7 @@
 #include <sstream>
 
 #include "registration/icp.hpp"
+#include "registration/localize_in_cloud.hpp"
 #include "registration/verification.hpp"
 
 namespace lasercell::tools {
@@ -161,6 +162,50 @@ std::string Ms(double ms) {
   char b[32];
   std::snprintf(b, sizeof b, ms < 100.0 ? "%.1f" : "%.0f", ms);
   return b;
+}
+
+// Model build (median of up to 5), then LocalizeInCloud `runs` times (median).
+std::vector<BenchRow> RunLasercell(const PointCloud& model_cloud, const PointCloud& scene,
+                                   const LasercellBenchOptions& options,
+                                   registration::PpfModel* model) {
+  registration::PpfModelOptions model_options;
+  model_options.threads = options.threads;
+  std::vector<double> build_ms;
+  for (int i = 0; i < std::min(options.runs, 5); ++i) {
+    const auto start = Clock::now();
+    *model = registration::PpfModel::Build(model_cloud, model_options);
+    build_ms.push_back(MsSince(start));
+  }
+  registration::LocalizeOptions localize;
+  localize.threads = options.threads;
+  std::vector<double> total_ms, icp_ms, cpu_ms;
+  registration::LocalizationResult result;
+  for (int i = 0; i < options.runs; ++i) {
+    const auto start = Clock::now();
+    const double cpu_start = CpuMs();
+    result = registration::LocalizeInCloud(scene, *model, localize);
+    total_ms.push_back(MsSince(start));
+    cpu_ms.push_back(CpuMs() - cpu_start);
+    icp_ms.push_back(result.timings.icp_ms);
+  }
+  const double total = Median(total_ms), icp = Median(icp_ms);
+  BenchRow coarse{
+      "lasercell (coarse, before ICP)", "", Median(build_ms), total - icp, -1.0, -1.0, -1.0, {}};
+  BenchRow refined{"lasercell", "", coarse.build_ms, total - icp, icp, total, Median(cpu_ms), {}};
+  std::ostringstream note;
+  const auto& t = result.timings;
+  note << "defaults; median of " << options.runs << " runs; " << model->points().size()
+       << " model points, " << result.sampled_points
+       << " scene points after voxel grid; last run: subsample " << Ms(t.subsample_ms)
+       << ", kd-tree " << Ms(t.kdtree_ms) << ", voting " << Ms(t.matching_ms) << ", clustering "
+       << Ms(t.clustering_ms) << ", verification " << Ms(t.verification_ms) << " ms";
+  refined.note = note.str();
+  coarse.note = "cluster pose of the same candidates";
+  for (const auto& c : result.candidates) {
+    coarse.poses.push_back(c.coarse_scene_from_model);
+    refined.poses.push_back(c.scene_from_model);
+  }
+  return {coarse, refined};
 }
 
 std::vector<BenchRow> RunOpenCvPpf(const PointCloud& model, const PointCloud& scene,

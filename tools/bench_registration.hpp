@@ -1,7 +1,8 @@
 #pragma once
-// The peer libraries of `lasercell bench registration` (bench_registration.cpp): OpenCV
-// cv::ppf_match_3d (PPF3DDetector + its ICP) and PCL (PPFEstimation + PPFHashMapSearch +
-// PPFRegistration, IterativeClosestPointWithNormals), run on lasercell's in-memory clouds. The
+// The methods of `lasercell bench registration` (bench_registration.cpp): lasercell's
+// LocalizeInCloud and its peer libraries, OpenCV cv::ppf_match_3d (PPF3DDetector + its ICP) and
+// PCL (PPFEstimation + PPFHashMapSearch + PPFRegistration, IterativeClosestPointWithNormals), run
+// on lasercell's in-memory clouds. The
 // conversions Eigen <-> cv::Mat / pcl::PointCloud<pcl::PointNormal> live only in that file, so
 // no other file of the tool compiles OpenCV or PCL headers. Also here: the pose evaluation against
 // the reference and the ICP-only comparison (lasercell AlignIcp vs PCL point-to-plane ICP).
@@ -34,6 +35,19 @@ struct BenchRow {
   double total_cpu_ms = -1.0;            ///< Process CPU time of total_ms (fair under load).
   std::vector<Eigen::Isometry3d> poses;  ///< Ranked scene_from_model, best first; may be empty.
 };
+
+/// lasercell's LocalizeInCloud at default options.
+struct LasercellBenchOptions {
+  int runs =
+      20;  ///< LocalizeInCloud runs (median reported); the model is built min(runs, 5) times.
+  int threads = 1;  ///< Threads of the model build and of LocalizeInCloud.
+};
+
+/// Two rows: the candidates' cluster poses (coarse, before ICP), then the refined poses with the
+/// median times. The built model is left in *model.
+std::vector<BenchRow> RunLasercell(const PointCloud& model_cloud, const PointCloud& scene,
+                                   const LasercellBenchOptions& options,
+                                   registration::PpfModel* model);
 
 /// OpenCV cv::ppf_match_3d as its sample uses it: PPF3DDetector(sampling, 0.05) trained ONCE on the
 /// model, match at each relativeSceneSampleStep, its ICP(100, 0.005, 2.5, 8) on the top poses.
@@ -80,7 +94,7 @@ std::string Ms(double ms);
 struct PoseError {
   double rotation_deg = 0.0;  ///< Rotation angle between the poses.
   double centroid_mm = 0.0;   ///< Displacement of the model centroid.
-  double rms_mm = 0.0;        ///< RMS displacement of all model points (the issue's measure).
+  double rms_mm = 0.0;        ///< RMS displacement of all model points.
   double within_2mm = 0.0;    ///< Fraction of model points within 2 mm of a scene point.
 };
 

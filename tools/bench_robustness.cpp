@@ -96,9 +96,7 @@ std::string Cell(double v, const char* format) {
   return buf;
 }
 
-}  // namespace
-
-void RunRobustnessBench(const RobustnessBenchArgs& args) {
+void CheckArgs(const RobustnessBenchArgs& args) {
   if (args.placements < 1) throw OptionError("bench robustness: --placements must be >= 1");
   if (args.noise_mm.empty())
     throw OptionError("bench robustness: --noise needs at least one level");
@@ -108,117 +106,108 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
   }
   if (args.threads < 0)
     throw OptionError("bench robustness: --threads must be >= 0 (0 = all cores)");
+}
 
-  const std::string root = FindSourceRoot();
-  std::fprintf(stderr, "[robustness] loading %s/%s ...\n", root.c_str(), kUwaDir);
-  const datasets::Rs1SyntheticData data =
-      datasets::LoadRs1SyntheticData(root + "/" + kUwaDir, root + "/" + kReferenceFile);
-  const auto build_start = std::chrono::steady_clock::now();
-  const registration::PpfModel model = registration::PpfModel::Build(data.model);
-  const double build_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start)
-          .count();
-  const double diameter_mm = model.diameter_mm();
-  const double threshold_mm = 0.05 * diameter_mm;
-  const Eigen::Vector3d centroid = data.model.Centroid();
-  std::fprintf(stderr,
-               "[robustness] model: %zu points, diameter %.1f mm (ADD threshold %.2f mm), built in "
-               "%.0f ms\n",
-               data.model.size(), diameter_mm, threshold_mm, build_ms);
+// What every trial of the curve shares.
+struct Trials {
+  const RobustnessBenchArgs& args;
+  const datasets::Rs1SyntheticData& data;
+  const registration::PpfModel& model;
+  const registration::LocalizeOptions& options;
+  Eigen::Vector3d centroid;  // of the model, for the random placements
+  double threshold_mm;       // ADD threshold of a success
+};
 
-  registration::LocalizeOptions options;
-  options.threads = args.threads;
+// Placement i at noise level `level`: renders the scene, localizes, counts the outcome into
+// `stats` and returns the trial's JSON.
+nlohmann::json RunTrial(const Trials& bench, std::size_t level, int i,
+                        const datasets::SyntheticScanOptions& scan_options, LevelStats& stats) {
+  const RobustnessBenchArgs& args = bench.args;
+  const datasets::Rs1SyntheticData& data = bench.data;
+  // Same placement at every level; the noise has its own stream per level and placement.
+  std::mt19937_64 pose_rng(datasets::StreamSeed(args.seed, static_cast<std::uint64_t>(i)));
+  std::mt19937_64 noise_rng(datasets::StreamSeed(datasets::StreamSeed(args.seed, 1000003 + level),
+                                                 static_cast<std::uint64_t>(i)));
+  const Eigen::Isometry3d truth = datasets::RandomPlacementInRs1(bench.centroid, pose_rng);
+  const datasets::SyntheticScan scan = datasets::RenderSyntheticScan(
+      data.clutter, data.part_surface, {truth}, scan_options, noise_rng);
+  // Fraction of the part's surface that the clutter leaves visible (the part alone, rendered
+  // alike).
+  const std::size_t alone = datasets::VisibleFromOrigin(data.part_surface.Transformed(truth),
+                                                        scan_options.zbuffer_cell_mm,
+                                                        scan_options.zbuffer_depth_tolerance_mm)
+                                .size();
+  const double unoccluded =
+      alone > 0 ? static_cast<double>(scan.part_points) / static_cast<double>(alone) : 0.0;
 
-  nlohmann::json trials = nlohmann::json::array();
-  nlohmann::json no_part = nlohmann::json::array();
-  std::vector<LevelStats> levels;
-  for (std::size_t level = 0; level < args.noise_mm.size(); ++level) {
-    LevelStats stats;
-    stats.noise_mm = args.noise_mm[level];
-    datasets::SyntheticScanOptions scan_options;
-    scan_options.noise_sigma_mm = stats.noise_mm;
-    for (int i = 0; i < args.placements; ++i) {
-      // Same placement at every level; the noise has its own stream per level and placement.
-      std::mt19937_64 pose_rng(datasets::StreamSeed(args.seed, static_cast<std::uint64_t>(i)));
-      std::mt19937_64 noise_rng(datasets::StreamSeed(
-          datasets::StreamSeed(args.seed, 1000003 + level), static_cast<std::uint64_t>(i)));
-      const Eigen::Isometry3d truth = datasets::RandomPlacementInRs1(centroid, pose_rng);
-      const datasets::SyntheticScan scan = datasets::RenderSyntheticScan(
-          data.clutter, data.part_surface, {truth}, scan_options, noise_rng);
-      // Fraction of the part's surface that the clutter leaves visible (the part alone, rendered
-      // alike).
-      const std::size_t alone = datasets::VisibleFromOrigin(data.part_surface.Transformed(truth),
-                                                            scan_options.zbuffer_cell_mm,
-                                                            scan_options.zbuffer_depth_tolerance_mm)
-                                    .size();
-      const double unoccluded =
-          alone > 0 ? static_cast<double>(scan.part_points) / static_cast<double>(alone) : 0.0;
+  const registration::LocalizationResult result =
+      registration::LocalizeInCloud(scan.cloud, bench.model, bench.options);
+  const double add =
+      result.found ? AddMm(data.model.positions, truth, result.candidates.front().scene_from_model)
+                   : std::numeric_limits<double>::infinity();
+  const bool success = add <= bench.threshold_mm;
+  ++stats.trials;
+  stats.found += success ? 1 : 0;
+  stats.within_1mm += add <= 1.0 ? 1 : 0;
+  stats.wrong_pose += result.found && !success ? 1 : 0;
+  stats.nothing += result.found ? 0 : 1;
+  stats.failed_occluded += !success && unoccluded < 0.5 ? 1 : 0;
+  stats.add_mm.push_back(add);
+  stats.time_ms.push_back(result.timings.total_ms);
 
-      const registration::LocalizationResult result =
-          registration::LocalizeInCloud(scan.cloud, model, options);
-      const double add = result.found ? AddMm(data.model.positions, truth,
-                                              result.candidates.front().scene_from_model)
-                                      : std::numeric_limits<double>::infinity();
-      const bool success = add <= threshold_mm;
-      ++stats.trials;
-      stats.found += success ? 1 : 0;
-      stats.within_1mm += add <= 1.0 ? 1 : 0;
-      stats.wrong_pose += result.found && !success ? 1 : 0;
-      stats.nothing += result.found ? 0 : 1;
-      stats.failed_occluded += !success && unoccluded < 0.5 ? 1 : 0;
-      stats.add_mm.push_back(add);
-      stats.time_ms.push_back(result.timings.total_ms);
-
-      nlohmann::json t;
-      t["noise_mm"] = stats.noise_mm;
-      t["placement"] = i;
-      t["scene_from_model_true"] = json::MatrixFlat(truth);
-      t["scene_points"] = scan.cloud.size();
-      t["part_points"] = scan.part_points;
-      t["unoccluded_fraction"] = unoccluded;
-      t["found"] = result.found;
-      t["success"] = success;
-      t["time_ms"] = result.timings.total_ms;
-      if (result.found) {
-        const registration::LocalizationCandidate& best = result.candidates.front();
-        t["add_mm"] = add;
-        t["rotation_error_deg"] =
-            RotationDistance(best.scene_from_model, truth) * 180.0 / 3.14159265358979323846;
-        t["translation_error_mm"] = TranslationDistance(best.scene_from_model, truth);
-        t["scene_from_model_found"] = json::MatrixFlat(best.scene_from_model);
-        t["support"] = best.verification.support;
-        t["icp_rmse_mm"] = best.icp.rmse_mm;
-      } else {
-        t["add_mm"] = nullptr;
-        t["message"] = result.message;
-      }
-      trials.push_back(std::move(t));
-      if ((i + 1) % 20 == 0 || i + 1 == args.placements) {
-        std::fprintf(stderr, "[robustness] sigma %.2f mm: %d/%d placements, %d found\n",
-                     stats.noise_mm, i + 1, args.placements, stats.found);
-      }
-    }
-
-    // The scene without the part: the clutter with this level's noise, normals re-estimated.
-    datasets::SyntheticScanOptions empty_options = scan_options;
-    empty_options.clutter_noise_sigma_mm = stats.noise_mm;
-    std::mt19937_64 empty_rng(datasets::StreamSeed(args.seed, 2000003 + level));
-    datasets::SyntheticScan empty = datasets::RenderSyntheticScan(data.clutter, data.part_surface,
-                                                                  {}, empty_options, empty_rng);
-    if (stats.noise_mm > 0.0) empty.cloud.normals.clear();
-    const registration::LocalizationResult empty_result =
-        registration::LocalizeInCloud(empty.cloud, model, options);
-    stats.no_part_found = empty_result.found;
-    no_part.push_back({{"noise_mm", stats.noise_mm},
-                       {"scene_points", empty.cloud.size()},
-                       {"found", empty_result.found},
-                       {"message", empty_result.message},
-                       {"time_ms", empty_result.timings.total_ms}});
-    std::fprintf(stderr, "[robustness] sigma %.2f mm: scene without the part -> found = %s\n",
-                 stats.noise_mm, empty_result.found ? "true (FALSE POSITIVE)" : "false");
-    levels.push_back(std::move(stats));
+  nlohmann::json t;
+  t["noise_mm"] = stats.noise_mm;
+  t["placement"] = i;
+  t["scene_from_model_true"] = json::MatrixFlat(truth);
+  t["scene_points"] = scan.cloud.size();
+  t["part_points"] = scan.part_points;
+  t["unoccluded_fraction"] = unoccluded;
+  t["found"] = result.found;
+  t["success"] = success;
+  t["time_ms"] = result.timings.total_ms;
+  if (result.found) {
+    const registration::LocalizationCandidate& best = result.candidates.front();
+    t["add_mm"] = add;
+    t["rotation_error_deg"] =
+        RotationDistance(best.scene_from_model, truth) * 180.0 / 3.14159265358979323846;
+    t["translation_error_mm"] = TranslationDistance(best.scene_from_model, truth);
+    t["scene_from_model_found"] = json::MatrixFlat(best.scene_from_model);
+    t["support"] = best.verification.support;
+    t["icp_rmse_mm"] = best.icp.rmse_mm;
+  } else {
+    t["add_mm"] = nullptr;
+    t["message"] = result.message;
   }
+  return t;
+}
 
+// The scene without the part: the clutter with this level's noise, normals re-estimated. Sets
+// stats.no_part_found; returns the scene's JSON.
+nlohmann::json RunSceneWithoutPart(const Trials& bench, std::size_t level,
+                                   const datasets::SyntheticScanOptions& scan_options,
+                                   LevelStats& stats) {
+  datasets::SyntheticScanOptions empty_options = scan_options;
+  empty_options.clutter_noise_sigma_mm = stats.noise_mm;
+  std::mt19937_64 empty_rng(datasets::StreamSeed(bench.args.seed, 2000003 + level));
+  datasets::SyntheticScan empty = datasets::RenderSyntheticScan(
+      bench.data.clutter, bench.data.part_surface, {}, empty_options, empty_rng);
+  if (stats.noise_mm > 0.0) empty.cloud.normals.clear();
+  const registration::LocalizationResult empty_result =
+      registration::LocalizeInCloud(empty.cloud, bench.model, bench.options);
+  stats.no_part_found = empty_result.found;
+  std::fprintf(stderr, "[robustness] sigma %.2f mm: scene without the part -> found = %s\n",
+               stats.noise_mm, empty_result.found ? "true (FALSE POSITIVE)" : "false");
+  return {{"noise_mm", stats.noise_mm},
+          {"scene_points", empty.cloud.size()},
+          {"found", empty_result.found},
+          {"message", empty_result.message},
+          {"time_ms", empty_result.timings.total_ms}};
+}
+
+// The Markdown table, one row per noise level (sorts each level's ADDs and times); returns the
+// rows as JSON.
+nlohmann::json PrintCurve(const RobustnessBenchArgs& args, std::vector<LevelStats>& levels,
+                          double diameter_mm, double threshold_mm) {
   std::printf(
       "Synthetic robustness: UWA parasaurolophus in real rs1 clutter, %d placements per level, "
       "seed %u, "
@@ -266,6 +255,53 @@ void RunRobustnessBench(const RobustnessBenchArgs& args) {
       "total, "
       "scene generation excluded.)\n");
   std::fflush(stdout);
+  return summary;
+}
+
+}  // namespace
+
+void RunRobustnessBench(const RobustnessBenchArgs& args) {
+  CheckArgs(args);
+  const std::string root = FindSourceRoot();
+  std::fprintf(stderr, "[robustness] loading %s/%s ...\n", root.c_str(), kUwaDir);
+  const datasets::Rs1SyntheticData data =
+      datasets::LoadRs1SyntheticData(root + "/" + kUwaDir, root + "/" + kReferenceFile);
+  const auto build_start = std::chrono::steady_clock::now();
+  const registration::PpfModel model = registration::PpfModel::Build(data.model);
+  const double build_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - build_start)
+          .count();
+  const double diameter_mm = model.diameter_mm();
+  const double threshold_mm = 0.05 * diameter_mm;
+  const Eigen::Vector3d centroid = data.model.Centroid();
+  std::fprintf(stderr,
+               "[robustness] model: %zu points, diameter %.1f mm (ADD threshold %.2f mm), built in "
+               "%.0f ms\n",
+               data.model.size(), diameter_mm, threshold_mm, build_ms);
+
+  registration::LocalizeOptions options;
+  options.threads = args.threads;
+  const Trials bench{args, data, model, options, centroid, threshold_mm};
+
+  nlohmann::json trials = nlohmann::json::array();
+  nlohmann::json no_part = nlohmann::json::array();
+  std::vector<LevelStats> levels;
+  for (std::size_t level = 0; level < args.noise_mm.size(); ++level) {
+    LevelStats stats;
+    stats.noise_mm = args.noise_mm[level];
+    datasets::SyntheticScanOptions scan_options;
+    scan_options.noise_sigma_mm = stats.noise_mm;
+    for (int i = 0; i < args.placements; ++i) {
+      trials.push_back(RunTrial(bench, level, i, scan_options, stats));
+      if ((i + 1) % 20 == 0 || i + 1 == args.placements) {
+        std::fprintf(stderr, "[robustness] sigma %.2f mm: %d/%d placements, %d found\n",
+                     stats.noise_mm, i + 1, args.placements, stats.found);
+      }
+    }
+    no_part.push_back(RunSceneWithoutPart(bench, level, scan_options, stats));
+    levels.push_back(std::move(stats));
+  }
+  nlohmann::json summary = PrintCurve(args, levels, diameter_mm, threshold_mm);
 
   if (!args.json_out.empty()) {
     nlohmann::json j;

@@ -1,16 +1,12 @@
 // `lasercell bench registration`: lasercell's LocalizeInCloud next to OpenCV cv::ppf_match_3d and
 // PCL PPFRegistration (+ their ICPs), and ICP alone (ours vs PCL point-to-plane), on the same
 // in-memory clouds in one process; a Markdown table of stage times and pose errors against the
-// committed rs1 reference pose (BENCHMARKS.md). `lasercell bench robustness` is in
-// bench_robustness.cpp. Units: mm, deg in the table; times are wall milliseconds.
-#include <algorithm>
-#include <chrono>
-#include <cmath>
+// committed rs1 reference pose (BENCHMARKS.md). The methods run in bench_registration.cpp, the
+// table is built in bench_report.cpp; `lasercell bench robustness` is in bench_robustness.cpp.
+// Units: mm, deg in the table; times are wall milliseconds.
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -22,11 +18,11 @@
 #include "registration/ppf_model.hpp"
 #include "tools/bench.hpp"
 #include "tools/bench_registration.hpp"
+#include "tools/bench_report.hpp"
 
 namespace lasercell::tools {
 namespace {
 
-using Clock = std::chrono::steady_clock;
 using registration::PpfModel;
 
 struct RegistrationBenchArgs {
@@ -43,65 +39,6 @@ struct RegistrationBenchArgs {
   std::string json_out;
 };
 
-double MsSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
-
-// The target for a refined pose is <= 2 mm RMS; a coarse pose within 0.1 x diameter
-// (the usual ADD threshold) is in the right place but not yet accurate.
-std::string Verdict(double rms_mm, double near_mm) {
-  return rms_mm <= 2.0 ? "<= 2 mm" : rms_mm <= near_mm ? "near" : "WRONG";
-}
-
-std::string Num(const char* format, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, format, v);
-  return b;
-}
-
-// lasercell: model build (median of up to 5), then LocalizeInCloud `runs` times (median).
-std::vector<BenchRow> RunLasercell(const PointCloud& model_cloud, const PointCloud& scene,
-                                   const RegistrationBenchArgs& args, PpfModel* model) {
-  registration::PpfModelOptions model_options;
-  model_options.threads = args.threads;
-  std::vector<double> build_ms;
-  for (int i = 0; i < std::min(args.runs, 5); ++i) {
-    const auto start = Clock::now();
-    *model = PpfModel::Build(model_cloud, model_options);
-    build_ms.push_back(MsSince(start));
-  }
-  registration::LocalizeOptions options;
-  options.threads = args.threads;
-  std::vector<double> total_ms, icp_ms, cpu_ms;
-  registration::LocalizationResult result;
-  for (int i = 0; i < args.runs; ++i) {
-    const auto start = Clock::now();
-    const double cpu_start = CpuMs();
-    result = registration::LocalizeInCloud(scene, *model, options);
-    total_ms.push_back(MsSince(start));
-    cpu_ms.push_back(CpuMs() - cpu_start);
-    icp_ms.push_back(result.timings.icp_ms);
-  }
-  const double total = Median(total_ms), icp = Median(icp_ms);
-  BenchRow coarse{
-      "lasercell (coarse, before ICP)", "", Median(build_ms), total - icp, -1.0, -1.0, -1.0, {}};
-  BenchRow refined{"lasercell", "", coarse.build_ms, total - icp, icp, total, Median(cpu_ms), {}};
-  std::ostringstream note;
-  const auto& t = result.timings;
-  note << "defaults; median of " << args.runs << " runs; " << model->points().size()
-       << " model points, " << result.sampled_points
-       << " scene points after voxel grid; last run: subsample " << Ms(t.subsample_ms)
-       << ", kd-tree " << Ms(t.kdtree_ms) << ", voting " << Ms(t.matching_ms) << ", clustering "
-       << Ms(t.clustering_ms) << ", verification " << Ms(t.verification_ms) << " ms";
-  refined.note = note.str();
-  coarse.note = "cluster pose of the same candidates";
-  for (const auto& c : result.candidates) {
-    coarse.poses.push_back(c.coarse_scene_from_model);
-    refined.poses.push_back(c.scene_from_model);
-  }
-  return {coarse, refined};
-}
-
 void RunRegistrationBench(const RegistrationBenchArgs& args) {
   const PointCloud model_cloud = io::ReadPointCloud(args.model);
   const PointCloud scene = io::ReadPointCloud(args.scene);
@@ -112,7 +49,7 @@ void RunRegistrationBench(const RegistrationBenchArgs& args) {
   const PoseEvaluator evaluate(model_cloud, scene, reference);
 
   PpfModel model;
-  std::vector<BenchRow> rows = RunLasercell(model_cloud, scene, args, &model);
+  std::vector<BenchRow> rows = RunLasercell(model_cloud, scene, {args.runs, args.threads}, &model);
   const double diameter = model.diameter_mm();
   if (!args.skip_opencv) {
     std::fprintf(stderr, "bench: OpenCV PPF3DDetector training (quadratic; about a minute)...\n");
@@ -144,74 +81,8 @@ void RunRegistrationBench(const RegistrationBenchArgs& args) {
       "WRONG\n\n",
       args.model.c_str(), model_cloud.size(), diameter, args.scene.c_str(), scene.size(),
       args.threads, args.reference.c_str(), correct_mm);
-  std::printf(
-      "| method | build ms | match ms | ICP ms | total ms | total CPU ms | top pose | "
-      "rot err deg | centroid err mm | RMS err mm | model pts within 2 mm |\n"
-      "|---|---|---|---|---|---|---|---|---|---|---|\n");
-  nlohmann::json json_rows = nlohmann::json::array();
-  std::vector<std::string> notes;
-  for (const BenchRow& r : rows) {
-    std::string verdict = "none";
-    PoseError e;
-    if (!r.poses.empty()) {
-      e = evaluate(r.poses.front());
-      verdict = Verdict(e.rms_mm, correct_mm);
-      for (std::size_t k = 1; verdict != "<= 2 mm" && k < r.poses.size(); ++k) {
-        const std::string other = Verdict(evaluate(r.poses[k]).rms_mm, correct_mm);
-        if (other != "WRONG" && (verdict == "WRONG" || other == "<= 2 mm")) {
-          verdict += " (rank " + std::to_string(k + 1) + ": " + other + ")";
-          break;
-        }
-      }
-    }
-    const bool have = !r.poses.empty();
-    std::printf("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", r.method.c_str(),
-                Ms(r.build_ms).c_str(), Ms(r.match_ms).c_str(), Ms(r.icp_ms).c_str(),
-                Ms(r.total_ms).c_str(), Ms(r.total_cpu_ms).c_str(), verdict.c_str(),
-                have ? Num("%.2f", e.rotation_deg).c_str() : "-",
-                have ? Num("%.2f", e.centroid_mm).c_str() : "-",
-                have ? Num("%.2f", e.rms_mm).c_str() : "-",
-                have ? Num("%.1f %%", 100.0 * e.within_2mm).c_str() : "-");
-    if (!r.note.empty()) notes.push_back(r.method + ": " + r.note);
-    nlohmann::json j = {{"method", r.method},
-                        {"note", r.note},
-                        {"build_ms", r.build_ms},
-                        {"match_ms", r.match_ms},
-                        {"icp_ms", r.icp_ms},
-                        {"total_ms", r.total_ms},
-                        {"total_cpu_ms", r.total_cpu_ms},
-                        {"top_pose", verdict}};
-    if (have) {
-      j["pose_error"] = {{"rotation_deg", e.rotation_deg},
-                         {"centroid_mm", e.centroid_mm},
-                         {"rms_mm", e.rms_mm},
-                         {"within_2mm", e.within_2mm}};
-      const Eigen::Matrix<double, 4, 4, Eigen::RowMajor> m = r.poses.front().matrix();
-      j["scene_from_model"] = std::vector<double>(m.data(), m.data() + 16);  // 4x4 row-major
-    }
-    json_rows.push_back(j);
-  }
-  std::printf("| reference pose (for scale) | | | | | | | 0 | 0 | 0 | %.1f %% |\n\n",
-              100.0 * evaluate(reference).within_2mm);
-  for (const auto& n : notes) std::printf("- %s\n", n.c_str());
-
-  const BenchRow& ours = rows[1];
-  for (const BenchRow& r : rows) {
-    if (r.method.rfind("OpenCV", 0) != 0 || r.method.find("+ ICP") == std::string::npos ||
-        r.poses.empty())
-      continue;
-    const double rms = evaluate(r.poses.front()).rms_mm;
-    std::printf(
-        "\nlasercell vs %s (match + ICP %s ms, CPU %s ms): %.0fx faster in wall time, "
-        "%.0fx in CPU time (lasercell total %s ms, CPU %s ms); %s\n",
-        r.method.c_str(), Ms(r.total_ms).c_str(), Ms(r.total_cpu_ms).c_str(),
-        r.total_ms / ours.total_ms, r.total_cpu_ms / ours.total_cpu_ms, Ms(ours.total_ms).c_str(),
-        Ms(ours.total_cpu_ms).c_str(),
-        rms <= 2.0
-            ? "OpenCV finds the part here (target >= 30x)"
-            : ("for information only: OpenCV's top pose stays " + Num("%.1f", rms) + " mm RMS off")
-                  .c_str());
-  }
+  const nlohmann::json json_rows = PrintRegistrationTable(rows, evaluate, reference, correct_mm);
+  PrintSpeedupsOverOpenCv(rows, rows[1], evaluate);
   const nlohmann::json icp = RunIcpComparison(model, scene, reference, evaluate,
                                               {args.icp_starts, args.threads, !args.skip_pcl});
   if (!args.json_out.empty()) {

@@ -42,8 +42,7 @@ std::string LinearSweepRecordYaml(const LinearSweepRecord& r) {
 
 LinearSweepRecord ParseLinearSweepRecord(const std::string& text, const std::string& name) {
   yaml::Fields f = yaml::Fields::Parse(text, name);
-  if (!f.Has("format")) f.Fail("format", "is required (lasercell.linear_sweep)");
-  f.ExpectFormat("lasercell.linear_sweep", 1);
+  f.RequireFormat("lasercell.linear_sweep", 1);
   LinearSweepRecord r;
   f.ReadRequired("t0_ns", &r.t0_ns);
   f.ReadRequired("velocity_mm_s_in_sensor", &r.velocity_mm_s_in_sensor);

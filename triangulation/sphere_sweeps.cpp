@@ -53,12 +53,7 @@ std::string SphereSweepListYaml(const SphereSweepList& list) {
 
 SphereSweepList ParseSphereSweepList(const std::string& text, const std::string& name) {
   yaml::Fields root = yaml::Fields::Parse(text, name);
-  if (!root.Has("format") || !root.Has("version")) {
-    root.Fail(root.Has("format") ? "version" : "format",
-              std::string("is required (a sphere-sweep list has format: ") + kFormat +
-                  ", version: " + std::to_string(kVersion) + ")");
-  }
-  root.ExpectFormat(kFormat, kVersion);
+  root.RequireFormat(kFormat, kVersion);
   SphereSweepList list;
   for (const auto& item : root.node()) {
     const std::string key = item.first.as<std::string>();

@@ -390,8 +390,10 @@ TEST(ParseTouchesYaml, OtherProblemsNameTheField) {
   ExpectFileError(Replace(kTouchesYaml, "[1120.0, 160.0, 274.0]", "[1120.0, 160.0]"),
                   "line 13: field 'touches[1].point_in_handling_base' must list exactly 3 numbers "
                   "(got 2)");
+  ExpectFileError(Replace(kTouchesYaml, "format: lasercell.touches", "format: foo"),
+                  "line 1: field 'format' is 'foo', expected 'lasercell.touches'");
   ExpectFileError(Replace(kTouchesYaml, "version: 1", "version: 2"),
-                  "line 2: field 'version' is 2: unsupported version");
+                  "line 2: field 'version' is 2; this build reads lasercell.touches version 1");
   ExpectFileError("[1, 2]", "is not a touches file");
 }
 

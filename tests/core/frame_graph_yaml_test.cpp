@@ -514,13 +514,14 @@ TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {
       {"- a\n- b\n", "is not a mapping at the top level"},
       {"", "is empty"},
       {Replace(v, "format: lasercell.cell\n", ""),
-       "line 1: field 'format' is required; a lasercell cell file starts with 'format: "
-       "lasercell.cell'"},
+       "line 1: field 'format' is required, expected 'lasercell.cell'"},
       {Replace(v, "lasercell.cell", "lasercell.job"),
-       "line 1: field 'format' is 'lasercell.job'; expected 'lasercell.cell'"},
-      {Replace(v, "version: 1\n", ""), "field 'version' is required"},
+       "line 1: field 'format' is 'lasercell.job', expected 'lasercell.cell' (is this a "
+       "lasercell cell file?)"},
+      {Replace(v, "version: 1\n", ""),
+       "field 'version' is required; this build reads lasercell.cell version 1"},
       {Replace(v, "version: 1", "version: 7"),
-       "line 2: field 'version': unsupported version 7; this lasercell reads version 1"},
+       "line 2: field 'version' is 7; this build reads lasercell.cell version 1"},
       {Replace(v, "version: 1", "version: one"),
        "line 2: field 'version' must be an integer (got 'one')"},
       {Replace(v, "frames: [a, b, c, d]", "frames: a"),
@@ -624,7 +625,8 @@ TEST(FrameGraphYamlTest, SaveAndLoadRoundTripThroughFiles) {
     LoadFrameGraph(path);
     FAIL() << "no exception";
   } catch (const FileError& e) {
-    EXPECT_THAT(e.what(), AllOf(StartsWith(path + ": "), HasSubstr("unsupported version 2")));
+    EXPECT_THAT(e.what(), AllOf(StartsWith(path + ": "),
+                                HasSubstr("field 'version' is 2; this build reads")));
   }
 }
 
@@ -750,7 +752,7 @@ TEST(FrameGraphYamlLaserPlanes, BadSectionsNameTheProblem) {
     std::string problem;
   } cases[] = {
       {replace("  version: 1\n  planes:", "  version: 2\n  planes:"),
-       "line 12: field 'laser_planes.version': unsupported version 2"},
+       "line 12: field 'laser_planes.version' is 2; this build reads laser_planes version 1"},
       {replace("      frame: sensor\n", "      frame: sensor\n      colour: green\n"),
        "line 16: unknown field 'laser_planes.planes.laser.colour'"},
       {replace("      frame: sensor\n", "      frame: nowhere\n"),

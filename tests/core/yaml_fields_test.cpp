@@ -86,6 +86,54 @@ TEST(YamlFields, ErrorsNameTheFileAndTheDottedField) {
             "f.yaml: line 1: field 'x' must be a finite number (got '.nan')");
 }
 
+TEST(YamlFields, RequireFormatNamesWhatWasFoundAndWhatThisBuildReads) {
+  const auto require = [](const std::string& text) {
+    return ErrorOf([&] {
+      Fields top = Fields::Parse(text, "touches.yaml");
+      top.RequireFormat("lasercell.touches", 1);
+    });
+  };
+  EXPECT_EQ(require("format: lasercell.touches\nversion: 1\n"), "(no error)");
+  EXPECT_EQ(require("version: 1\n"),
+            "touches.yaml: line 1: field 'format' is required, expected 'lasercell.touches'");
+  EXPECT_EQ(require("format: foo\nversion: 1\n"),
+            "touches.yaml: line 1: field 'format' is 'foo', expected 'lasercell.touches'");
+  EXPECT_EQ(require("format: lasercell.touches\n"),
+            "touches.yaml: line 1: field 'version' is required; this build reads "
+            "lasercell.touches version 1");
+  EXPECT_EQ(require("format: lasercell.touches\nversion: 2\n"),
+            "touches.yaml: line 2: field 'version' is 2; this build reads lasercell.touches "
+            "version 1");
+  EXPECT_EQ(require("format: lasercell.touches\nversion: one\n"),
+            "touches.yaml: line 2: field 'version' must be an integer (got 'one')");
+  // A data file's walker throws FileError with the same message.
+  try {
+    Fields top = Fields::Parse("format: foo\n", "touches.yaml", ErrorKind::kFile);
+    top.RequireFormat("lasercell.touches", 1);
+    ADD_FAILURE() << "accepted";
+  } catch (const FileError& e) {
+    EXPECT_STREQ(e.what(),
+                 "touches.yaml: line 1: field 'format' is 'foo', expected 'lasercell.touches'");
+  }
+  // A versioned section, and the optional keys of ExpectFormat.
+  EXPECT_EQ(ErrorOf([] {
+              Fields top = Fields::Parse("planes:\n  version: 3\n", "cell.yaml");
+              top.Sub("planes").RequireVersion(1, "laser_planes");
+            }),
+            "cell.yaml: line 2: field 'planes.version' is 3; this build reads laser_planes "
+            "version 1");
+  EXPECT_EQ(ErrorOf([] {
+              Fields top = Fields::Parse("version: 2\n", "thing.yaml");
+              top.ExpectFormat("lasercell.thing", 1);
+            }),
+            "thing.yaml: line 1: field 'version' is 2; this build reads lasercell.thing version 1");
+  EXPECT_EQ(ErrorOf([] {
+              Fields top = Fields::Parse("a: 1\n", "thing.yaml");
+              top.ExpectFormat("lasercell.thing", 1);
+            }),
+            "(no error)");
+}
+
 TEST(YamlFields, EveryMessageCarriesTheLineOfTheField) {
   const std::string text = "a: 1\nsub:\n  b: 2\n  tpyo: 3\nlist:\n  - {x: 1}\n  - {x: oops}\n";
   EXPECT_EQ(ErrorOf([&] {
