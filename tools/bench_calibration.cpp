@@ -245,14 +245,15 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   datasets::SimConfig config;
   config.seed = args.seed;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
-  datasets::ChessboardTarget board = config.chessboard;
-  board.dark_albedo = config.albedo.chessboard_dark;
-  board.light_albedo = config.albedo.chessboard_light;
+  datasets::ChessboardTarget target = config.chessboard;
+  target.dark_albedo = config.albedo.chessboard_dark;
+  target.light_albedo = config.albedo.chessboard_light;
+  const calib::BoardSpec& board = target.board;
   const datasets::HandEyeImageSet set =
-      datasets::PlanHandEyeImages(config, truth, board, args.seed * 7919 + 3);
+      datasets::PlanHandEyeImages(config, truth, target, args.seed * 7919 + 3);
   const calib::CameraModel& camera = truth.sensor.camera;
   const Eigen::Isometry3d x_true = truth.vision_flange_from_sensor;
-  const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
   std::mt19937_64 rng(args.seed);
   std::normal_distribution<double> noise(0.0, args.sim_noise_px);
   std::vector<calib::HandEyeView> views, nominal_views;
@@ -280,7 +281,7 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   std::snprintf(title, sizeof title,
                 "Simulated cell (seed %u): %zu views of a %dx%d-inner-corner board (%.0f mm), "
                 "true robot poses, true projections + N(0, %.2f px)",
-                args.seed, views.size(), board.squares_x - 1, board.squares_y - 1, board.square_mm,
+                args.seed, views.size(), board.cols, board.rows, board.square_mm,
                 args.sim_noise_px);
   calib::HandEyeResult ours;
   std::vector<Row> rows = RunMethods(views, camera, &ours);
@@ -356,22 +357,20 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
 
   if (args.sim_render) {
     const datasets::ImageRenderer renderer(truth.sensor.camera);
-    const calib::BoardSpec rendered_board =
-        calib::BoardSpec::Chessboard(board.squares_x - 1, board.squares_y - 1, board.square_mm);
     std::vector<calib::HandEyeView> detected;
     int flipped = 0;
     double det_ss = 0;
     int det_n = 0;
     for (std::size_t i = 0; i < set.images.size(); ++i) {
       const datasets::GrayImage img = renderer.RenderChessboard(
-          board, set.images[i].camera_from_board, config.images, args.seed * 1000 + i);
+          target, set.images[i].camera_from_board, config.images, args.seed * 1000 + i);
       const calib::TargetDetection found =
-          calib::DetectTarget({img.width, img.height, img.pixels}, rendered_board);
+          calib::DetectTarget({img.width, img.height, img.pixels}, board);
       if (!found.found()) continue;
       // The detector's corner order can differ from the board's by a reversal of rows and/or
       // columns (its own board frame); relabel to the simulator's order, chosen from truth.
       const auto& truth_px = set.images[i].corners_px;
-      const int cols = board.squares_x - 1, rows_n = board.squares_y - 1;
+      const int cols = board.cols, rows_n = board.rows;
       std::vector<Eigen::Vector2d> best;
       double best_ss = 1e300;
       int best_variant = 0;

@@ -6,7 +6,6 @@
 #include "calib/intrinsics.hpp"
 #include "calib/target_detection.hpp"
 #include "datasets/camera_images.hpp"
-#include "tests/calib/rendered_board.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -16,7 +15,7 @@ TEST(CalibrateIntrinsicsSimulatedImages, RenderedBoardsGiveIntrinsicsInsideThree
   const calib::CameraModel camera = datasets::MakeCameraModel(truth);
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
-  const BoardSpec board = BoardOf(target);
+  const BoardSpec board = target.board;
   std::vector<BoardView> views;
   const auto poses = datasets::DrawChessboardPoses(target, camera, 10, 41);
   for (std::size_t k = 0; k < poses.size(); ++k) {

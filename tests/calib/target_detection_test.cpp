@@ -9,7 +9,6 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/camera_images.hpp"
-#include "tests/calib/rendered_board.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -141,9 +140,9 @@ TEST(TargetDetection, RenderedChessboardCornersMatchTheTruth) {
   const CameraModel camera = datasets::MakeCameraModel();
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
-  const BoardSpec board = BoardOf(target);
+  const BoardSpec board = target.board;
   const auto poses = datasets::DrawChessboardPoses(target, camera, 3, 5);
-  const std::vector<Eigen::Vector3d> corners = target.InnerCorners();
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
   const int nx = board.cols, ny = board.rows;
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const TargetDetection d =
@@ -165,11 +164,11 @@ TEST(TargetDetection, SearchOnAShrunkImageRefinesAtFullResolution) {
   const CameraModel camera = datasets::MakeCameraModel();
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
-  const BoardSpec board = BoardOf(target);
+  const BoardSpec board = target.board;
   DetectionOptions options;
   options.search_downscale = 2;
   const auto poses = datasets::DrawChessboardPoses(target, camera, 3, 11);
-  const std::vector<Eigen::Vector3d> corners = target.InnerCorners();
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const TargetDetection d = DetectTarget(
         FromDatasets(renderer.RenderChessboard(target, poses[k], {}, 11 + k)), board, options);
