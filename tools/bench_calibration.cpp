@@ -449,7 +449,7 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
     throw InputError("kuka2: " + std::to_string(poses.base_from_flange.size()) + " poses but " +
                      std::to_string(det.images.size()) + " images");
   }
-  const std::vector<Eigen::Vector3d> board = det.Board().Corners();
+  const std::vector<Eigen::Vector3d> board = det.board.Corners();
   std::vector<calib::HandEyeView> views;
   for (std::size_t i = 0; i < det.images.size(); ++i) {
     views.push_back({poses.base_from_flange[i], det.corners_px[i], board});

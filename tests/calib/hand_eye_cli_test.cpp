@@ -154,9 +154,7 @@ TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
   io::WriteFileAtomically((dir_ / "record.yaml").string(),
                           datasets::HandEyeImagesRecordYaml(target, set));
   calib::ChessboardDetections det;
-  det.cols = target.board.cols;
-  det.rows = target.board.rows;
-  det.square_mm = target.board.square_mm;
+  det.board = target.board;
   det.width_px = config.sensor.camera.width_px;
   det.height_px = config.sensor.camera.height_px;
   std::mt19937_64 rng(3);
@@ -192,9 +190,7 @@ TEST_F(HandEyeCli, CreatesTheCellFileWhenAbsent) {
                           datasets::MrcalCameraModelText(config.sensor.camera));
   calib::RobotPoses poses;
   calib::ChessboardDetections det;
-  det.cols = target.board.cols;
-  det.rows = target.board.rows;
-  det.square_mm = target.board.square_mm;
+  det.board = target.board;
   det.width_px = config.sensor.camera.width_px;
   det.height_px = config.sensor.camera.height_px;
   std::mt19937_64 rng(5);

@@ -415,9 +415,10 @@ TEST(PoseIo, ReadsTheSimulatorsHandEyeImagesRecord) {
   const std::string text = datasets::HandEyeImagesRecordYaml(target, set);
   const HandEyeImagesRecord rec = ParseHandEyeImagesRecord(text, "records/hand_eye_images.yaml");
   EXPECT_EQ(rec.robot, "vision_robot");
-  EXPECT_EQ(rec.inner_cols, target.board.cols);
-  EXPECT_EQ(rec.inner_rows, target.board.rows);
-  EXPECT_EQ(rec.square_mm, target.board.square_mm);
+  EXPECT_EQ(rec.board.type, BoardType::kChessboard);
+  EXPECT_EQ(rec.board.cols, target.board.cols);
+  EXPECT_EQ(rec.board.rows, target.board.rows);
+  EXPECT_EQ(rec.board.square_mm, target.board.square_mm);
   ASSERT_EQ(rec.images.size(), set.images.size());
   for (std::size_t i = 0; i < set.images.size(); ++i) {
     EXPECT_EQ(rec.images[i], datasets::HandEyeImageFile(i));
@@ -506,7 +507,7 @@ TEST(HandEyeReal, Kuka2FromSharedImages) {
   const RobotPoses poses = LoadRobotPoses(kuka2->dir + "/RobotPosesVec.txt", "kuka");
   ASSERT_EQ(det.images.size(), 28u);
   ASSERT_EQ(poses.base_from_flange.size(), 28u);
-  const auto board = det.Board().Corners();
+  const auto board = det.board.Corners();
   std::vector<HandEyeView> views;
   std::vector<Eigen::Isometry3d> a;
   for (std::size_t i = 0; i < det.images.size(); ++i) {
