@@ -61,9 +61,9 @@ void GaussianBlur(std::vector<float>& img, int w, int h, double sigma) {
   }
 }
 
-GrayImage Quantize(const std::vector<float>& img, int w, int h, double noise_sigma,
-                   std::uint64_t seed) {
-  GrayImage out;
+Image8 Quantize(const std::vector<float>& img, int w, int h, double noise_sigma,
+                std::uint64_t seed) {
+  Image8 out;  // gray
   out.width = w;
   out.height = h;
   out.pixels.resize(img.size());
@@ -159,10 +159,10 @@ ImageRenderer::ImageRenderer(const calib::CameraModel& camera) : camera_(camera)
   }
 }
 
-GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& target,
-                                          const Eigen::Isometry3d& camera_from_board,
-                                          const ImageRenderOptions& options,
-                                          std::uint64_t seed) const {
+Image8 ImageRenderer::RenderChessboard(const ChessboardTarget& target,
+                                       const Eigen::Isometry3d& camera_from_board,
+                                       const ImageRenderOptions& options,
+                                       std::uint64_t seed) const {
   target.Check();
   options.Check();
   const int w = camera_.width_px();
@@ -242,9 +242,8 @@ GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& target,
   return Quantize(img, w, h, options.noise_sigma, seed);
 }
 
-GrayImage ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
-                                         const ImageRenderOptions& options,
-                                         std::uint64_t seed) const {
+Image8 ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
+                                      const ImageRenderOptions& options, std::uint64_t seed) const {
   options.Check();
   const int w = camera_.width_px();
   const int h = camera_.height_px();
@@ -322,8 +321,8 @@ std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& targe
   return poses;
 }
 
-std::string EncodePng(const GrayImage& image) {
-  const cv::Mat mat(image.height, image.width, CV_8UC1,
+std::string EncodePng(const Image8& image) {
+  const cv::Mat mat(image.height, image.width, CV_8UC(image.channels),
                     const_cast<std::uint8_t*>(image.pixels.data()));
   std::vector<unsigned char> buffer;
   if (!cv::imencode(".png", mat, buffer, {cv::IMWRITE_PNG_COMPRESSION, 6})) {

@@ -17,7 +17,7 @@
 // when i + j is even (as Material in scene.hpp), inner corner (i, j) at ((i+1) s, (j+1) s, 0).
 // calib::BoardSpec's chessboard frame (calib/board.hpp) has the same axes and its origin at the
 // first inner corner: ChessboardTarget::TargetFromBoard() is the one relation between the two.
-// Images are row-major 8-bit gray, width x height of the camera.
+// Images are 8-bit gray (Image8, core/image8.hpp), width x height of the camera.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "calib/board.hpp"
-#include "core/gray_image.hpp"
+#include "core/image8.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/sensor.hpp"
 
@@ -70,23 +70,21 @@ struct ImageRenderOptions {
   void Check(const std::string& what = "images") const;
 };
 
-using lasercell::GrayImage;
-
 /// Renders images through one camera. Construction unprojects every pixel corner once.
 class ImageRenderer {
  public:
   explicit ImageRenderer(const calib::CameraModel& camera);
 
   /// The chessboard at camera_from_board (target frame); noise from `seed`.
-  GrayImage RenderChessboard(const ChessboardTarget& target,
-                             const Eigen::Isometry3d& camera_from_board,
-                             const ImageRenderOptions& options, std::uint64_t seed) const;
+  Image8 RenderChessboard(const ChessboardTarget& target,
+                          const Eigen::Isometry3d& camera_from_board,
+                          const ImageRenderOptions& options, std::uint64_t seed) const;
 
   /// A raw sensor image of one exposure's laser line: per column a Gaussian stripe of the
   /// exposure's exact row, FWHM width and intensity (saturating at 255) over a dark ambient, with
   /// read noise; for peak-detector tests.
-  GrayImage RenderLaserLine(const ExposureTruth& exposure, const ImageRenderOptions& options,
-                            std::uint64_t seed) const;
+  Image8 RenderLaserLine(const ExposureTruth& exposure, const ImageRenderOptions& options,
+                         std::uint64_t seed) const;
 
   const calib::CameraModel& camera() const { return camera_; }
 
@@ -102,7 +100,7 @@ std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& targe
                                                    const calib::CameraModel& camera, int count,
                                                    std::uint64_t seed);
 
-/// PNG bytes of an image (OpenCV imgcodecs; deterministic).
-std::string EncodePng(const GrayImage& image);
+/// PNG bytes of an image, gray or BGR (OpenCV imgcodecs; deterministic).
+std::string EncodePng(const Image8& image);
 
 }  // namespace lasercell::datasets

@@ -362,10 +362,9 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
     double det_ss = 0;
     int det_n = 0;
     for (std::size_t i = 0; i < set.images.size(); ++i) {
-      const datasets::GrayImage img = renderer.RenderChessboard(
-          target, set.images[i].camera_from_board, config.images, args.seed * 1000 + i);
-      const calib::TargetDetection found =
-          calib::DetectTarget({img.width, img.height, img.pixels}, board);
+      const Image8 img = renderer.RenderChessboard(target, set.images[i].camera_from_board,
+                                                   config.images, args.seed * 1000 + i);
+      const calib::TargetDetection found = calib::DetectTarget(img, board);
       if (!found.found()) continue;
       // The detector's corner order can differ from the board's by a reversal of rows and/or
       // columns (its own board frame); relabel to the simulator's order, chosen from truth.

@@ -391,16 +391,16 @@ StripeImage RenderStripeImage(const datasets::ImageRenderer& renderer, const Cam
                               const Eigen::Isometry3d& camera_from_board,
                               const Eigen::Vector3d& laser_n, double laser_d, std::uint64_t seed) {
   datasets::ImageRenderOptions options;
-  const datasets::GrayImage gray =
-      renderer.RenderChessboard(target, camera_from_board, options, seed);
+  const Image8 gray = renderer.RenderChessboard(target, camera_from_board, options, seed);
   StripeImage image;
   image.name = "render_" + std::to_string(seed);
-  image.width_px = gray.width;
-  image.height_px = gray.height;
-  image.channels = 3;
-  image.pixels.resize(static_cast<std::size_t>(gray.width) * gray.height * 3);
+  Image8& bgr = image.image;
+  bgr.width = gray.width;
+  bgr.height = gray.height;
+  bgr.channels = 3;
+  bgr.pixels.resize(static_cast<std::size_t>(gray.width) * gray.height * 3);
   for (std::size_t k = 0; k < gray.pixels.size(); ++k) {
-    for (int c = 0; c < 3; ++c) image.pixels[3 * k + c] = gray.pixels[k];
+    for (int c = 0; c < 3; ++c) bgr.pixels[3 * k + c] = gray.pixels[k];
   }
   const Eigen::Vector3d m = camera_from_board.linear().col(2);
   const double md = -m.dot(camera_from_board.translation());
@@ -413,10 +413,9 @@ StripeImage RenderStripeImage(const datasets::ImageRenderer& renderer, const Cam
   const double sigma = 3.0 / 2.3548;
   for (const auto& [u, row] : ExactLinePixels(camera, p0, dir)) {
     for (int v = static_cast<int>(row) - 6; v <= static_cast<int>(row) + 6; ++v) {
-      if (v < 0 || v >= image.height_px) continue;
+      if (v < 0 || v >= bgr.height) continue;
       const double g = 40.0 * std::exp(-0.5 * (v - row) * (v - row) / (sigma * sigma));
-      std::uint8_t& green =
-          image.pixels[(static_cast<std::size_t>(v) * image.width_px + u) * 3 + 1];
+      std::uint8_t& green = bgr.pixels[(static_cast<std::size_t>(v) * bgr.width + u) * 3 + 1];
       green = static_cast<std::uint8_t>(std::min(255.0, green + g));
     }
   }
@@ -553,10 +552,10 @@ TEST(LaserPlaneStripes, UnreadableImageNamesTheFile) {
 TEST(LaserPlaneStripes, ImageOfAnotherCameraSizeIsRejected) {
   StripeImage image;
   image.name = "small.png";
-  image.width_px = 64;
-  image.height_px = 48;
-  image.channels = 1;
-  image.pixels.assign(64 * 48, 0);
+  image.image.width = 64;
+  image.image.height = 48;
+  image.image.channels = 1;
+  image.image.pixels.assign(64 * 48, 0);
   const CameraModel camera = SimCamera(datasets::CameraIntrinsics{});
   try {
     DetectStripe(camera, image, BoardSpec::Chessboard(8, 6, 40.0));

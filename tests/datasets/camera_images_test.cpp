@@ -18,7 +18,7 @@
 namespace lasercell::datasets {
 namespace {
 
-cv::Mat ToMat(const GrayImage& image) {
+cv::Mat ToMat(const Image8& image) {
   return cv::Mat(image.height, image.width, CV_8UC1, const_cast<std::uint8_t*>(image.pixels.data()))
       .clone();
 }
@@ -110,7 +110,7 @@ TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
   for (int samples : {16}) {
     ImageRenderOptions options = exact.options;
     options.edge_samples = samples;
-    const GrayImage image = exact.renderer.RenderChessboard(target, camera_from_board, options, 1);
+    const Image8 image = exact.renderer.RenderChessboard(target, camera_from_board, options, 1);
     const double contrast = options.exposure * (target.light_albedo - target.dark_albedo);
     const double bound = 0.5 / (samples * samples) + 0.5 / contrast + 1e-9;
     double worst = 0;
@@ -182,7 +182,7 @@ TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
   std::vector<double> view_rms;
   int mild_views = 0;
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    const GrayImage image = renderer.RenderChessboard(target, poses[k], options, 1);
+    const Image8 image = renderer.RenderChessboard(target, poses[k], options, 1);
     const cv::Mat mat = ToMat(image);
     std::vector<cv::Point2f> found;
     ASSERT_TRUE(cv::findChessboardCornersSB(mat, cv::Size(target.board.cols, target.board.rows),
@@ -328,7 +328,7 @@ TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
   std::vector<std::vector<cv::Point3f>> object_points;
   std::vector<std::vector<cv::Point2f>> image_points;
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    const GrayImage image = renderer.RenderChessboard(target, poses[k], options, 100 + k);
+    const Image8 image = renderer.RenderChessboard(target, poses[k], options, 100 + k);
     std::vector<cv::Point2f> found;
     if (!cv::findChessboardCornersSB(ToMat(image), cv::Size(target.board.cols, target.board.rows),
                                      found, cv::CALIB_CB_ACCURACY)) {
@@ -402,7 +402,7 @@ TEST(CameraImages, LaserLineImagePeaksAtTheExactRows) {
   const ExposureTruth truth = laser.RenderExact(pose);
   ImageRenderOptions options;
   options.noise_sigma = 0;
-  const GrayImage image = ImageRenderer(sensor.camera).RenderLaserLine(truth, options, 1);
+  const Image8 image = ImageRenderer(sensor.camera).RenderLaserLine(truth, options, 1);
   int checked = 0;
   for (int x = 0; x < 1024; x += 7) {
     if (std::isnan(truth.row_px[x])) continue;
