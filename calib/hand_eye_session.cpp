@@ -103,9 +103,7 @@ ChessboardDetections DetectHandEyeImages(const std::vector<std::string>& files,
                      " poses; give one pose per image, in sorted image order");
   }
   ChessboardDetections det;
-  det.cols = board.cols;
-  det.rows = board.rows;
-  det.square_mm = board.square_mm;
+  det.board = board;
   for (const std::string& f : files) {
     // The shared detector (SB, fallback, cornerSubPix sized to the squares, diagnostics).
     const TargetDetection d = DetectTargetInEncodedImage(io::ReadFileBytes(f), board);
@@ -123,7 +121,8 @@ ChessboardDetections LoadHandEyeCorners(const std::string& path, const std::stri
   ChessboardDetections det = ParseChessboardDetections(io::ReadFileBytes(path), path);
   if (!board_spec.empty()) {
     const BoardSpec b = ParseHandEyeBoard(board_spec);
-    if (b.cols != det.cols || b.rows != det.rows || b.square_mm != det.square_mm) {
+    if (b.cols != det.board.cols || b.rows != det.board.rows ||
+        b.square_mm != det.board.square_mm) {
       throw InputError("--board " + board_spec + " does not match the board of " + path);
     }
   }
@@ -152,7 +151,7 @@ HandEyeViews MatchHandEyeViews(const ChessboardDetections& det, const RobotPoses
       }
     }
   }
-  const std::vector<Eigen::Vector3d> board = det.Board().Corners();
+  const std::vector<Eigen::Vector3d> board = det.board.Corners();
   HandEyeViews out;
   for (std::size_t i = 0; i < det.images.size(); ++i) {
     if (det.corners_px[i].empty()) {

@@ -19,10 +19,8 @@ Kuka2Set LoadKuka2Set(const std::string& dir, const DetectionOptions& detection)
   Kuka2Set k;
   k.dir = dir;
   ChessboardDetections& det = k.detections;
-  det.cols = 24;
-  det.rows = 17;
-  det.square_mm = 15.0;
-  const BoardSpec spec = det.Board();
+  det.board = BoardSpec::Chessboard(24, 17, 15.0);
+  const BoardSpec& spec = det.board;
   const std::vector<Eigen::Vector3d> board = spec.Corners();
   std::vector<std::vector<cv::Point3f>> obj;
   std::vector<std::vector<cv::Point2f>> img;

@@ -35,7 +35,6 @@
 // own residuals give), so it includes the board-pose uncertainty.
 
 #include <Eigen/Core>
-#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -43,6 +42,7 @@
 #include "calib/board.hpp"
 #include "calib/camera_model.hpp"
 #include "calib/target_detection.hpp"
+#include "core/image8.hpp"
 
 namespace lasercell::calib {
 
@@ -82,13 +82,10 @@ struct HeightPlaneOptions {
   void Check() const;
 };
 
-/// One image of the stripe method (b), decoded (8-bit, 1 or 3 channels BGR, row-major).
+/// One image of the stripe method (b), decoded, with the name its messages use.
 struct StripeImage {
   std::string name;  ///< File name, for messages and reports.
-  int width_px = 0;
-  int height_px = 0;
-  int channels = 0;  ///< 1 (gray) or 3 (BGR, as OpenCV decodes).
-  std::vector<std::uint8_t> pixels;
+  Image8 image;      ///< 1 (gray) or 3 (BGR, as OpenCV decodes) channels.
 };
 
 /// Decodes an image file's bytes (JPEG, PNG, ... through OpenCV imgcodecs); throws FileError

@@ -45,11 +45,11 @@ StripeImage DecodeStripeImage(const std::string& bytes, const std::string& name)
   }
   StripeImage out;
   out.name = name;
-  out.width_px = image.cols;
-  out.height_px = image.rows;
-  out.channels = image.channels();
+  out.image.width = image.cols;
+  out.image.height = image.rows;
+  out.image.channels = image.channels();
   const cv::Mat cont = image.isContinuous() ? image : image.clone();
-  out.pixels.assign(cont.data, cont.data + cont.total() * cont.elemSize());
+  out.image.pixels.assign(cont.data, cont.data + cont.total() * cont.elemSize());
   return out;
 }
 
@@ -203,20 +203,20 @@ StripeObservation DetectStripe(const CameraModel& camera, const StripeImage& ima
                                const BoardSpec& board, const StripeOptions& options) {
   options.Check();
   CheckStripeBoard(board);
-  if (image.width_px != camera.width_px() || image.height_px != camera.height_px()) {
-    throw InputError("image '" + image.name + "' is " + std::to_string(image.width_px) + "x" +
-                     std::to_string(image.height_px) + " but the camera model is " +
+  const Image8& raster = image.image;
+  if (raster.width != camera.width_px() || raster.height != camera.height_px()) {
+    throw InputError("image '" + image.name + "' is " + std::to_string(raster.width) + "x" +
+                     std::to_string(raster.height) + " but the camera model is " +
                      std::to_string(camera.width_px()) + "x" + std::to_string(camera.height_px()) +
                      "; use the camera that took the images");
   }
-  LASERCELL_CHECK(image.pixels.size() == static_cast<std::size_t>(image.width_px) *
-                                             image.height_px * image.channels &&
-                      (image.channels == 1 || image.channels == 3),
+  LASERCELL_CHECK(raster.pixels.size() == static_cast<std::size_t>(raster.width) * raster.height *
+                                              raster.channels &&
+                      (raster.channels == 1 || raster.channels == 3),
                   "StripeImage buffer size");
   StripeObservation out;
   out.name = image.name;
-  const TargetDetection detection =
-      DetectTarget(GrayImageOf(image), board, options.board_detection);
+  const TargetDetection detection = DetectTarget(Gray8Of(raster), board, options.board_detection);
   if (!detection.found()) {
     out.note = "board: " + detection.message;
     return out;
@@ -242,7 +242,7 @@ StripeObservation DetectStripe(const CameraModel& camera, const StripeImage& ima
   }
   std::vector<cv::Point2f> hull;
   cv::convexHull(region, hull);
-  const cv::Mat laser = LaserChannel(image, options.laser_color);
+  const cv::Mat laser = LaserChannel(raster, options.laser_color);
   auto by_columns = StripePeaks(laser, hull, false, options);
   auto by_rows = StripePeaks(laser, hull, true, options);
   out.scan_along_rows = by_rows.size() > by_columns.size();

@@ -150,10 +150,11 @@ HandEyeImagesRecord ParseHandEyeImagesRecord(const std::string& text, const std:
       inner[0] < 2 || inner[1] < 2) {
     board.Fail("inner_corners", "must be [cols, rows], two integers >= 2");
   }
-  out.inner_cols = static_cast<int>(inner[0]);
-  out.inner_rows = static_cast<int>(inner[1]);
-  board.ReadRequired("square_mm", &out.square_mm);
-  if (!(out.square_mm > 0)) board.Fail("square_mm", "must be positive");
+  double square_mm = 0;
+  board.ReadRequired("square_mm", &square_mm);
+  if (!(square_mm > 0)) board.Fail("square_mm", "must be positive");
+  out.board =
+      BoardSpec::Chessboard(static_cast<int>(inner[0]), static_cast<int>(inner[1]), square_mm);
   for (yaml::Fields& im : top.List("images")) {
     im.Known({"file", "joints_rad"});
     im.Done();
@@ -180,16 +181,13 @@ std::string RobotPosesYaml(const RobotPoses& poses) {
   return o.str();
 }
 
-BoardSpec ChessboardDetections::Board() const {
-  return BoardSpec::Chessboard(cols, rows, square_mm);
-}
-
 ChessboardDetections ParseChessboardDetections(const std::string& text, const std::string& name) {
   std::istringstream in(text);
   std::string line;
   int line_no = 0;
   ChessboardDetections d;
   bool header = false;
+  bool board_seen = false;
   while (std::getline(in, line)) {
     ++line_no;
     const std::string where = "line " + std::to_string(line_no);
@@ -206,10 +204,13 @@ ChessboardDetections ParseChessboardDetections(const std::string& text, const st
     std::string key;
     ls >> key;
     if (key == "board") {
-      if (!(ls >> d.cols >> d.rows >> d.square_mm) || d.cols < 2 || d.rows < 2 ||
-          !(d.square_mm > 0)) {
+      int cols = 0, rows = 0;
+      double square_mm = 0;
+      if (!(ls >> cols >> rows >> square_mm) || cols < 2 || rows < 2 || !(square_mm > 0)) {
         throw FileError(name, where + ": expected 'board COLS ROWS SQUARE_MM'");
       }
+      d.board = BoardSpec::Chessboard(cols, rows, square_mm);
+      board_seen = true;
       continue;
     }
     if (key == "image_size") {
@@ -223,7 +224,7 @@ ChessboardDetections ParseChessboardDetections(const std::string& text, const st
     if (!(ls >> index >> u >> v) || !std::isfinite(u) || !std::isfinite(v)) {
       throw FileError(name, where + ": expected 'IMAGE CORNER_INDEX U_PX V_PX'");
     }
-    if (d.cols == 0) throw FileError(name, where + ": corner before the 'board' line");
+    if (!board_seen) throw FileError(name, where + ": corner before the 'board' line");
     if (d.images.empty() || d.images.back() != key) {
       d.images.push_back(key);
       d.corners_px.emplace_back();
@@ -236,9 +237,9 @@ ChessboardDetections ParseChessboardDetections(const std::string& text, const st
   }
   if (!header) throw FileError(name, "empty file");
   for (std::size_t i = 0; i < d.images.size(); ++i) {
-    if (d.corners_px[i].size() != static_cast<std::size_t>(d.cols * d.rows)) {
+    if (d.corners_px[i].size() != static_cast<std::size_t>(d.board.NumCorners())) {
       throw FileError(name, d.images[i] + ": " + std::to_string(d.corners_px[i].size()) +
-                                " corners, expected " + std::to_string(d.cols * d.rows));
+                                " corners, expected " + std::to_string(d.board.NumCorners()));
     }
   }
   if (d.images.empty()) throw FileError(name, "no corners");
@@ -250,7 +251,8 @@ std::string ChessboardDetectionsText(const ChessboardDetections& d, const std::s
   o << "# lasercell-chessboard-corners v1\n";
   std::istringstream c(comment);
   for (std::string l; std::getline(c, l);) o << "# " << l << "\n";
-  o << "board " << d.cols << " " << d.rows << " " << FormatDouble(d.square_mm) << "\n"
+  o << "board " << d.board.cols << " " << d.board.rows << " " << FormatDouble(d.board.square_mm)
+    << "\n"
     << "image_size " << d.width_px << " " << d.height_px << "\n";
   for (std::size_t i = 0; i < d.images.size(); ++i) {
     for (std::size_t k = 0; k < d.corners_px[i].size(); ++k) {

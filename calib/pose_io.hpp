@@ -44,8 +44,7 @@ RobotPoses ParseYamlPoses(const std::string& text, const std::string& name);
 /// records/hand_eye_images.yaml of the simulator: robot name, board and per-image joints.
 struct HandEyeImagesRecord {
   std::string robot;                            ///< e.g. "vision_robot".
-  int inner_cols = 0, inner_rows = 0;           ///< Inner corners.
-  double square_mm = 0;                         ///< Square size.
+  BoardSpec board;                              ///< The chessboard (inner corners, square_mm).
   std::vector<std::string> images;              ///< Relative file names.
   std::vector<std::vector<double>> joints_rad;  ///< Per image.
 };
@@ -69,14 +68,12 @@ void CheckPoseUnits(const std::vector<Eigen::Isometry3d>& base_from_flange,
 /// corner `IMAGE_NAME CORNER_INDEX U_PX V_PX` (corner index in OpenCV order, row by row along x;
 /// pixel (0, 0) = centre of the top-left pixel). '#' lines are comments. Images keep file order.
 struct ChessboardDetections {
-  int cols = 0, rows = 0;                                ///< Inner corners.
-  double square_mm = 0;                                  ///< Square size.
+  /// The chessboard these corners belong to (inner corners, square_mm; corner ids and
+  /// board-frame positions as board.hpp).
+  BoardSpec board;
   int width_px = 0, height_px = 0;                       ///< Image size.
   std::vector<std::string> images;                       ///< Image names, in order.
-  std::vector<std::vector<Eigen::Vector2d>> corners_px;  ///< Per image, cols * rows corners.
-
-  /// The chessboard these corners belong to (corner ids and board-frame positions, board.hpp).
-  BoardSpec Board() const;
+  std::vector<std::vector<Eigen::Vector2d>> corners_px;  ///< Per image, board.NumCorners().
 };
 /// Parses the text above; throws FileError(name, ...) naming the line.
 ChessboardDetections ParseChessboardDetections(const std::string& text, const std::string& name);

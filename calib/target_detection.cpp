@@ -259,7 +259,7 @@ void DetectionOptions::Check() const {
   }
 }
 
-std::optional<GrayImage> DecodeGrayImage(const std::string& bytes) {
+std::optional<Image8> DecodeGrayImage(const std::string& bytes) {
   if (bytes.empty()) return std::nullopt;
   cv::Mat raw(1, static_cast<int>(bytes.size()), CV_8UC1,
               const_cast<char*>(bytes.data()));  // imdecode only reads
@@ -270,7 +270,7 @@ std::optional<GrayImage> DecodeGrayImage(const std::string& bytes) {
     return std::nullopt;
   }
   if (gray.empty() || gray.type() != CV_8UC1) return std::nullopt;
-  GrayImage image;
+  Image8 image;  // one channel
   image.width = gray.cols;
   image.height = gray.rows;
   image.pixels.resize(static_cast<std::size_t>(gray.cols) * gray.rows);
@@ -281,13 +281,19 @@ std::optional<GrayImage> DecodeGrayImage(const std::string& bytes) {
   return image;
 }
 
-TargetDetection DetectTarget(const GrayImage& image, const BoardSpec& board,
+TargetDetection DetectTarget(const Image8& image, const BoardSpec& board,
                              const DetectionOptions& options) {
   board.Check();
   options.Check();
   TargetDetection out;
   out.width = image.width;
   out.height = image.height;
+  if (image.channels != 1) {
+    out.status = DetectionStatus::kUnreadable;
+    out.message =
+        "image has " + std::to_string(image.channels) + " channels; the detector takes gray";
+    return out;
+  }
   if (image.width <= 0 || image.height <= 0 ||
       image.pixels.size() != static_cast<std::size_t>(image.width) * image.height) {
     out.status = DetectionStatus::kUnreadable;
@@ -314,7 +320,7 @@ TargetDetection DetectTarget(const GrayImage& image, const BoardSpec& board,
 
 TargetDetection DetectTargetInEncodedImage(const std::string& bytes, const BoardSpec& board,
                                            const DetectionOptions& options) {
-  const std::optional<GrayImage> image = DecodeGrayImage(bytes);
+  const std::optional<Image8> image = DecodeGrayImage(bytes);
   if (!image) {
     board.Check();
     TargetDetection out;

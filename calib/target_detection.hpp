@@ -1,6 +1,6 @@
 #pragma once
-// Detection of calibration boards (calib/board.hpp) in gray images, with a diagnosis when a
-// board is not found.
+// Detection of calibration boards (calib/board.hpp) in 8-bit gray images (core/image8.hpp), with
+// a diagnosis when a board is not found.
 //
 // Chessboards: OpenCV's findChessboardCornersSB (falling back to findChessboardCorners), then
 // cornerSubPix refinement with a window derived from the board's square size in pixels (SB's own
@@ -18,15 +18,13 @@
 #include <vector>
 
 #include "calib/board.hpp"
-#include "core/gray_image.hpp"
+#include "core/image8.hpp"
 
 namespace lasercell::calib {
 
-using lasercell::GrayImage;
-
-/// Decodes PNG/JPEG/... bytes (any format OpenCV's imdecode reads) to gray; nullopt when the
-/// bytes are not a readable image.
-std::optional<GrayImage> DecodeGrayImage(const std::string& bytes);
+/// Decodes PNG/JPEG/... bytes (any format OpenCV's imdecode reads) to gray (one channel); nullopt
+/// when the bytes are not a readable image.
+std::optional<Image8> DecodeGrayImage(const std::string& bytes);
 
 enum class DetectionStatus {
   kFound,           ///< Corners detected.
@@ -79,9 +77,10 @@ struct TargetDetection {
   bool found() const { return status == DetectionStatus::kFound; }
 };
 
-/// Detects `board` in `image`. Never throws for image content (the status says what happened);
-/// throws OptionError for bad options or board.
-TargetDetection DetectTarget(const GrayImage& image, const BoardSpec& board,
+/// Detects `board` in a gray (one-channel) `image`. Never throws for image content (the status
+/// says what happened; kUnreadable for an empty or non-gray image); throws OptionError for bad
+/// options or board.
+TargetDetection DetectTarget(const Image8& image, const BoardSpec& board,
                              const DetectionOptions& options = {});
 
 /// Decodes `bytes` and detects; an undecodable image gives status kUnreadable.

@@ -298,14 +298,14 @@ std::string PoseSweepTruthYaml(const SimConfig& config, const CellTruth& truth,
 }
 
 HandEyeImageSet PlanHandEyeImages(const SimConfig& config, const CellTruth& truth,
-                                  const ChessboardTarget& board, std::uint64_t seed) {
+                                  const ChessboardTarget& target, std::uint64_t seed) {
   const HandEyeImageOptions& options = config.hand_eye_images;
   const std::string what = "SimConfig.hand_eye_images";
   options.Check(what);
-  board.Check();
+  target.Check();
   HandEyeImageSet set;
-  const Eigen::Vector3d board_center(0.5 * board.squares_x * board.square_mm,
-                                     0.5 * board.squares_y * board.square_mm, 0.0);
+  const Eigen::Vector3d board_center(0.5 * target.SquaresX() * target.board.square_mm,
+                                     0.5 * target.SquaresY() * target.board.square_mm, 0.0);
   set.cell_from_board.linear() =
       Eigen::AngleAxisd(options.board_yaw_deg * kDegToRad, Eigen::Vector3d::UnitZ())
           .toRotationMatrix();
@@ -319,7 +319,7 @@ HandEyeImageSet PlanHandEyeImages(const SimConfig& config, const CellTruth& trut
   const Eigen::Matrix3d looking_down =
       SensorLookingDown(truth.sensor.laser, Eigen::Vector3d::UnitX());
   const std::vector<std::vector<double>> seeds = Ur5Seeds();
-  const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
   const calib::CameraModel& camera = truth.sensor.camera;
   const double margin_px = 25.0;
   Rng rng(seed);
@@ -386,15 +386,15 @@ std::string HandEyeImageFile(std::size_t i) {
   return name;
 }
 
-std::string HandEyeImagesRecordYaml(const ChessboardTarget& board, const HandEyeImageSet& set) {
+std::string HandEyeImagesRecordYaml(const ChessboardTarget& target, const HandEyeImageSet& set) {
   std::ostringstream o;
   o << "format: lasercell.hand_eye_images\nversion: 1\n"
     << "# Chessboard images taken by the sensor camera on the vision robot, with the joints (rad)\n"
     << "# the controller reports for each. The board lies still in the cell. Board frame and\n"
     << "# corner order as truth/chessboard.yaml.\nrobot: vision_robot\n"
-    << "board: {squares: [" << board.squares_x << ", " << board.squares_y << "], inner_corners: ["
-    << board.squares_x - 1 << ", " << board.squares_y - 1
-    << "], square_mm: " << Num(board.square_mm) << "}\nimages:\n";
+    << "board: {squares: [" << target.SquaresX() << ", " << target.SquaresY()
+    << "], inner_corners: [" << target.board.cols << ", " << target.board.rows
+    << "], square_mm: " << Num(target.board.square_mm) << "}\nimages:\n";
   for (std::size_t i = 0; i < set.images.size(); ++i) {
     o << "  - file: " << HandEyeImageFile(i)
       << "\n    joints_rad: " << List(set.images[i].joints_rad) << "\n";

@@ -97,14 +97,15 @@ struct HandEyeImageSet {
 };
 
 /// Plans config.hand_eye_images.images poses of the vision robot whose camera sees the whole
-/// board of `board` (every inner corner >= 25 px inside the image) from the TRUE robot, the
-/// joints solved by IK on the NOMINAL robot. Throws OptionError naming
-/// SimConfig.hand_eye_images when a pose cannot be found.
+/// board of `target` (every inner corner >= 25 px inside the image) from the TRUE robot, the
+/// joints solved by IK on the NOMINAL robot. Board poses are in the target frame
+/// (camera_images.hpp). Throws OptionError naming SimConfig.hand_eye_images when a pose cannot
+/// be found.
 HandEyeImageSet PlanHandEyeImages(const SimConfig& config, const CellTruth& truth,
-                                  const ChessboardTarget& board, std::uint64_t seed);
+                                  const ChessboardTarget& target, std::uint64_t seed);
 
 /// records/hand_eye_images.yaml: image files and commanded joints; no truth.
-std::string HandEyeImagesRecordYaml(const ChessboardTarget& board, const HandEyeImageSet& set);
+std::string HandEyeImagesRecordYaml(const ChessboardTarget& target, const HandEyeImageSet& set);
 /// truth/hand_eye_images.yaml: board in cell and vision_base, true and commanded camera poses,
 /// camera_from_board and true corner pixels per image.
 std::string HandEyeImagesTruthYaml(const CellTruth& truth, const HandEyeImageSet& set);

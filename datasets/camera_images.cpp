@@ -18,7 +18,7 @@ namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
-// Cell index of a board coordinate along one axis: -2 off the plate, -1 border before the
+// Cell index of a target-frame coordinate along one axis: -2 off the plate, -1 border before the
 // pattern, 0..n-1 squares, n border after, n + 1 off the plate.
 int AxisCell(double v, int n, double square, double border) {
   if (v < -border) return -2;
@@ -29,8 +29,9 @@ int AxisCell(double v, int n, double square, double border) {
 }
 
 double CellAlbedo(int cx, int cy, const ChessboardTarget& b, double background) {
-  if (cx == -2 || cy == -2 || cx == b.squares_x + 1 || cy == b.squares_y + 1) return background;
-  if (cx == -1 || cy == -1 || cx == b.squares_x || cy == b.squares_y) return b.light_albedo;
+  const int nx = b.SquaresX(), ny = b.SquaresY();
+  if (cx == -2 || cy == -2 || cx == nx + 1 || cy == ny + 1) return background;
+  if (cx == -1 || cy == -1 || cx == nx || cy == ny) return b.light_albedo;
   return ((cx + cy) % 2 == 0) ? b.dark_albedo : b.light_albedo;
 }
 
@@ -60,9 +61,9 @@ void GaussianBlur(std::vector<float>& img, int w, int h, double sigma) {
   }
 }
 
-GrayImage Quantize(const std::vector<float>& img, int w, int h, double noise_sigma,
-                   std::uint64_t seed) {
-  GrayImage out;
+Image8 Quantize(const std::vector<float>& img, int w, int h, double noise_sigma,
+                std::uint64_t seed) {
+  Image8 out;  // gray
   out.width = w;
   out.height = h;
   out.pixels.resize(img.size());
@@ -74,22 +75,45 @@ GrayImage Quantize(const std::vector<float>& img, int w, int h, double noise_sig
   return out;
 }
 
+// The target frame from BoardSpec's chessboard frame in units of one square: BoardSpec's origin,
+// the first inner corner, is one square in from the pattern's outer corner along x and y.
+Eigen::Isometry3d TargetFromBoardInSquares() {
+  Eigen::Isometry3d target_from_board = Eigen::Isometry3d::Identity();
+  target_from_board.translation() = Eigen::Vector3d(1.0, 1.0, 0.0);
+  return target_from_board;
+}
+
 }  // namespace
 
-std::vector<Eigen::Vector3d> ChessboardTarget::InnerCorners() const {
-  std::vector<Eigen::Vector3d> corners;
-  for (int j = 1; j < squares_y; ++j) {
-    for (int i = 1; i < squares_x; ++i) corners.emplace_back(i * square_mm, j * square_mm, 0.0);
-  }
+Eigen::Isometry3d ChessboardTarget::TargetFromBoard() const {
+  Eigen::Isometry3d target_from_board = TargetFromBoardInSquares();
+  target_from_board.translation() *= board.square_mm;
+  return target_from_board;
+}
+
+std::vector<Eigen::Vector3d> ChessboardTarget::CornersInTarget() const {
+  // TargetFromBoard() * board.Corners(), evaluated in squares (small integers, exact) and then
+  // scaled, so that corner (c, r) is the correctly rounded (c + 1) * square_mm: adding square_mm
+  // to the rounded c * square_mm can differ in the last bit when the size is not a binary
+  // fraction (e.g. 25.4 mm).
+  calib::BoardSpec in_squares = board;
+  in_squares.square_mm = 1.0;
+  const Eigen::Isometry3d target_from_board_in_squares = TargetFromBoardInSquares();
+  std::vector<Eigen::Vector3d> corners = in_squares.Corners();
+  for (Eigen::Vector3d& p : corners) p = board.square_mm * (target_from_board_in_squares * p);
   return corners;
 }
 
 void ChessboardTarget::Check(const std::string& what) const {
-  if (squares_x < 3 || squares_y < 3 || squares_x > 100 || squares_y > 100) {
-    throw OptionError(what + ".squares must be in [3, 100] per axis (got " +
-                      std::to_string(squares_x) + " x " + std::to_string(squares_y) + ")");
+  if (board.type != calib::BoardType::kChessboard) {
+    throw OptionError(what + ".board.type must be chessboard (the renderer draws no markers)");
   }
-  if (!(square_mm > 0) || !(border_mm >= 0)) {
+  const int nx = SquaresX(), ny = SquaresY();
+  if (nx < 3 || ny < 3 || nx > 100 || ny > 100) {
+    throw OptionError(what + ".squares must be in [3, 100] per axis (got " + std::to_string(nx) +
+                      " x " + std::to_string(ny) + ")");
+  }
+  if (!(board.square_mm > 0) || !(border_mm >= 0)) {
     throw OptionError(what + ".square_mm must be positive and border_mm >= 0");
   }
   if (!(dark_albedo >= 0 && dark_albedo <= 1 && light_albedo >= 0 && light_albedo <= 1)) {
@@ -135,14 +159,16 @@ ImageRenderer::ImageRenderer(const calib::CameraModel& camera) : camera_(camera)
   }
 }
 
-GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& board,
-                                          const Eigen::Isometry3d& camera_from_board,
-                                          const ImageRenderOptions& options,
-                                          std::uint64_t seed) const {
-  board.Check();
+Image8 ImageRenderer::RenderChessboard(const ChessboardTarget& target,
+                                       const Eigen::Isometry3d& camera_from_board,
+                                       const ImageRenderOptions& options,
+                                       std::uint64_t seed) const {
+  target.Check();
   options.Check();
   const int w = camera_.width_px();
   const int h = camera_.height_px();
+  const int nx = target.SquaresX(), ny = target.SquaresY();
+  const double s = target.board.square_mm;
   // (x, y, 1) ~ [r1 r2 t] (bx, by, 1): the board plane's homography and its inverse.
   Eigen::Matrix3d hom;
   hom << camera_from_board.linear().col(0), camera_from_board.linear().col(1),
@@ -157,9 +183,8 @@ GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& board,
   const auto albedo_at = [&](const Eigen::Vector2d& n) {
     Eigen::Vector2d b;
     if (!to_board(n, &b)) return options.background_albedo;
-    return CellAlbedo(AxisCell(b.x(), board.squares_x, board.square_mm, board.border_mm),
-                      AxisCell(b.y(), board.squares_y, board.square_mm, board.border_mm), board,
-                      options.background_albedo);
+    return CellAlbedo(AxisCell(b.x(), nx, s, target.border_mm),
+                      AxisCell(b.y(), ny, s, target.border_mm), target, options.background_albedo);
   };
   std::vector<float> img(static_cast<std::size_t>(w) * h);
   const int ns = options.edge_samples;
@@ -176,12 +201,12 @@ GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& board,
           to_board(c11, &b[3])) {
         int cx[4], cy[4];
         for (int k = 0; k < 4; ++k) {
-          cx[k] = AxisCell(b[k].x(), board.squares_x, board.square_mm, board.border_mm);
-          cy[k] = AxisCell(b[k].y(), board.squares_y, board.square_mm, board.border_mm);
+          cx[k] = AxisCell(b[k].x(), nx, s, target.border_mm);
+          cy[k] = AxisCell(b[k].y(), ny, s, target.border_mm);
         }
         if (cx[0] == cx[1] && cx[0] == cx[2] && cx[0] == cx[3] && cy[0] == cy[1] &&
             cy[0] == cy[2] && cy[0] == cy[3]) {
-          albedo = CellAlbedo(cx[0], cy[0], board, options.background_albedo);
+          albedo = CellAlbedo(cx[0], cy[0], target, options.background_albedo);
         }
       }
       if (albedo < 0) {
@@ -217,9 +242,8 @@ GrayImage ImageRenderer::RenderChessboard(const ChessboardTarget& board,
   return Quantize(img, w, h, options.noise_sigma, seed);
 }
 
-GrayImage ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
-                                         const ImageRenderOptions& options,
-                                         std::uint64_t seed) const {
+Image8 ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
+                                      const ImageRenderOptions& options, std::uint64_t seed) const {
   options.Check();
   const int w = camera_.width_px();
   const int h = camera_.height_px();
@@ -247,18 +271,18 @@ GrayImage ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
   return Quantize(img, w, h, options.noise_sigma, seed);
 }
 
-std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board,
+std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& target,
                                                    const calib::CameraModel& camera, int count,
                                                    std::uint64_t seed) {
-  board.Check();
+  target.Check();
   Rng rng(seed);
   const int w = camera.width_px();
   const int h = camera.height_px();
-  const double sx = board.squares_x * board.square_mm;
-  const double sy = board.squares_y * board.square_mm;
+  const double sx = target.SquaresX() * target.board.square_mm;
+  const double sy = target.SquaresY() * target.board.square_mm;
   const Eigen::Vector3d center(sx / 2, sy / 2, 0);
-  const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
-  const double bx = board.border_mm;
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
+  const double bx = target.border_mm;
   const std::array<Eigen::Vector3d, 4> plate = {
       Eigen::Vector3d(-bx, -bx, 0), Eigen::Vector3d(sx + bx, -bx, 0),
       Eigen::Vector3d(sx + bx, sy + bx, 0), Eigen::Vector3d(-bx, sy + bx, 0)};
@@ -297,8 +321,8 @@ std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board
   return poses;
 }
 
-std::string EncodePng(const GrayImage& image) {
-  const cv::Mat mat(image.height, image.width, CV_8UC1,
+std::string EncodePng(const Image8& image) {
+  const cv::Mat mat(image.height, image.width, CV_8UC(image.channels),
                     const_cast<std::uint8_t*>(image.pixels.data()));
   std::vector<unsigned char> buffer;
   if (!cv::imencode(".png", mat, buffer, {cv::IMWRITE_PNG_COMPRESSION, 6})) {

@@ -11,10 +11,13 @@
 // vignetting, Gaussian optical blur, Gaussian read noise, 8-bit quantization. Gray = ambient +
 // exposure * albedo * vignetting.
 //
-// Frames: camera as in sensor.hpp; board frame: pattern in its xy plane (z = 0, +z out of the
-// printed face), square (i, j) at [i s, (i+1) s] x [j s, (j+1) s], dark when i + j is even (as
-// Material in scene.hpp), inner corner (i, j) at ((i+1) s, (j+1) s, 0). Images are row-major
-// 8-bit gray, width x height of the camera.
+// Frames: camera as in sensor.hpp; target frame (the rendered board's, of every camera_from_board
+// here and in the truth files): pattern in its xy plane (z = 0, +z out of the printed face),
+// origin at the pattern's outer corner, square (i, j) at [i s, (i+1) s] x [j s, (j+1) s], dark
+// when i + j is even (as Material in scene.hpp), inner corner (i, j) at ((i+1) s, (j+1) s, 0).
+// calib::BoardSpec's chessboard frame (calib/board.hpp) has the same axes and its origin at the
+// first inner corner: ChessboardTarget::TargetFromBoard() is the one relation between the two.
+// Images are 8-bit gray (Image8, core/image8.hpp), width x height of the camera.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -23,24 +26,33 @@
 #include <string>
 #include <vector>
 
-#include "core/gray_image.hpp"
+#include "calib/board.hpp"
+#include "core/image8.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/sensor.hpp"
 
 namespace lasercell::datasets {
 
-/// A printed chessboard on a plate.
+/// A printed chessboard on a plate: the board a calibration sees (calib::BoardSpec, inner
+/// corners) and what only the renderer needs (margin, albedos).
 struct ChessboardTarget {
-  int squares_x = 10;          ///< Squares along the board's x (inner corners: squares_x - 1).
-  int squares_y = 7;           ///< Squares along y.
-  double square_mm = 40.0;     ///< Square edge.
+  /// The chessboard: cols x rows inner corners (SquaresX() x SquaresY() squares) of square_mm.
+  calib::BoardSpec board = calib::BoardSpec::Chessboard(9, 6, 40.0);
   double border_mm = 20.0;     ///< Light margin around the pattern.
   double dark_albedo = 0.04;   ///< Dark squares.
   double light_albedo = 0.85;  ///< Light squares and border.
 
-  /// Inner corners in OpenCV order (row by row along x), board frame, mm.
-  std::vector<Eigen::Vector3d> InnerCorners() const;
-  /// Throws OptionError naming `what` and the field.
+  /// Squares along the target's x (inner corners + 1) and y.
+  int SquaresX() const { return board.cols + 1; }
+  int SquaresY() const { return board.rows + 1; }
+  /// target_from_board: BoardSpec's chessboard frame (origin at the first inner corner) in the
+  /// target frame (origin at the pattern's outer corner): same axes, translated by one square
+  /// along x and y, (square_mm, square_mm, 0).
+  Eigen::Isometry3d TargetFromBoard() const;
+  /// board.Corners() (OpenCV order, BoardSpec ids) in the target frame, mm:
+  /// TargetFromBoard() * board.Corner(id), corner (c, r) exactly at ((c+1) s, (r+1) s, 0).
+  std::vector<Eigen::Vector3d> CornersInTarget() const;
+  /// Throws OptionError naming `what` and the field (`what`.squares for the corner counts).
   void Check(const std::string& what = "chessboard") const;
 };
 
@@ -58,23 +70,21 @@ struct ImageRenderOptions {
   void Check(const std::string& what = "images") const;
 };
 
-using lasercell::GrayImage;
-
 /// Renders images through one camera. Construction unprojects every pixel corner once.
 class ImageRenderer {
  public:
   explicit ImageRenderer(const calib::CameraModel& camera);
 
-  /// The chessboard at camera_from_board; noise from `seed`.
-  GrayImage RenderChessboard(const ChessboardTarget& board,
-                             const Eigen::Isometry3d& camera_from_board,
-                             const ImageRenderOptions& options, std::uint64_t seed) const;
+  /// The chessboard at camera_from_board (target frame); noise from `seed`.
+  Image8 RenderChessboard(const ChessboardTarget& target,
+                          const Eigen::Isometry3d& camera_from_board,
+                          const ImageRenderOptions& options, std::uint64_t seed) const;
 
   /// A raw sensor image of one exposure's laser line: per column a Gaussian stripe of the
   /// exposure's exact row, FWHM width and intensity (saturating at 255) over a dark ambient, with
   /// read noise; for peak-detector tests.
-  GrayImage RenderLaserLine(const ExposureTruth& exposure, const ImageRenderOptions& options,
-                            std::uint64_t seed) const;
+  Image8 RenderLaserLine(const ExposureTruth& exposure, const ImageRenderOptions& options,
+                         std::uint64_t seed) const;
 
   const calib::CameraModel& camera() const { return camera_; }
 
@@ -83,13 +93,14 @@ class ImageRenderer {
   std::vector<Eigen::Vector2d> corner_rays_;  // normalized (x/z, y/z) at pixel corners
 };
 
-/// `count` varied board poses (distance 550..850 mm, tilt 5..40 deg, any yaw, spread over the
-/// image) with the whole plate in view and every inner corner >= 25 px inside the image.
-std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& board,
+/// `count` varied camera_from_board poses (target frame; distance 550..850 mm, tilt 5..40 deg,
+/// any yaw, spread over the image) with the whole plate in view and every inner corner >= 25 px
+/// inside the image.
+std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& target,
                                                    const calib::CameraModel& camera, int count,
                                                    std::uint64_t seed);
 
-/// PNG bytes of an image (OpenCV imgcodecs; deterministic).
-std::string EncodePng(const GrayImage& image);
+/// PNG bytes of an image, gray or BGR (OpenCV imgcodecs; deterministic).
+std::string EncodePng(const Image8& image);
 
 }  // namespace lasercell::datasets

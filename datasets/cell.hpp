@@ -85,8 +85,8 @@ Scene MakePlaneScene(const CellLayout& layout, double height_mm,
                      const Eigen::Vector2d& size_mm = {800, 600});
 Scene MakeSphereScene(const CellLayout& layout, const SphereTargets& spheres);
 /// Chessboard plate: `squares` (x, y) of `square_mm`, 5 mm thick, a 20 mm light border;
-/// `cell_from_board` places the pattern's first inner corner region origin (board frame: pattern
-/// in its xy plane at z = 0, +z out of the printed face).
+/// `cell_from_board` places the target frame of camera_images.hpp (origin at the pattern's outer
+/// corner, pattern in its xy plane at z = 0, +z out of the printed face).
 Scene MakeChessboardScene(const CellLayout& layout, const Eigen::Isometry3d& cell_from_board,
                           const std::array<int, 2>& squares, double square_mm);
 

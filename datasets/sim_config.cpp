@@ -432,14 +432,15 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
   {
     Fields b = top.Sub("chessboard");
     b.Read("images", &c.chessboard_images);
-    Eigen::Vector2d squares(c.chessboard.squares_x, c.chessboard.squares_y);
+    Eigen::Vector2d squares(c.chessboard.SquaresX(), c.chessboard.SquaresY());
     b.Read("squares", &squares);
     if (squares.x() != std::round(squares.x()) || squares.y() != std::round(squares.y())) {
       throw OptionError(name + ": field 'chessboard.squares' must hold two integers");
     }
-    c.chessboard.squares_x = static_cast<int>(squares.x());
-    c.chessboard.squares_y = static_cast<int>(squares.y());
-    b.Read("square_mm", &c.chessboard.square_mm);
+    // The file counts squares (as printed); the held BoardSpec counts inner corners.
+    c.chessboard.board.cols = static_cast<int>(squares.x()) - 1;
+    c.chessboard.board.rows = static_cast<int>(squares.y()) - 1;
+    b.Read("square_mm", &c.chessboard.board.square_mm);
     b.Read("border_mm", &c.chessboard.border_mm);
     b.Done();
   }
@@ -586,8 +587,8 @@ std::string SimConfigToYaml(const SimConfig& c) {
   o << "trajectory: {arc_radius_mm: " << Num(c.arc_radius_mm)
     << ", arc_angle_deg: " << Num(c.arc_angle_deg) << ", waypoints: " << c.arc_waypoints << "}\n";
   const auto b = [](bool v) { return v ? "true" : "false"; };
-  o << "chessboard: {images: " << c.chessboard_images << ", squares: [" << c.chessboard.squares_x
-    << ", " << c.chessboard.squares_y << "], square_mm: " << Num(c.chessboard.square_mm)
+  o << "chessboard: {images: " << c.chessboard_images << ", squares: [" << c.chessboard.SquaresX()
+    << ", " << c.chessboard.SquaresY() << "], square_mm: " << Num(c.chessboard.board.square_mm)
     << ", border_mm: " << Num(c.chessboard.border_mm) << "}\n";
   o << "images: {exposure: " << Num(c.images.exposure) << ", ambient: " << Num(c.images.ambient)
     << ", background_albedo: " << Num(c.images.background_albedo)

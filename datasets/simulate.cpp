@@ -185,26 +185,26 @@ void RunSeats(const SimConfig& config, const CellTruth& truth,
   }
 }
 
-ChessboardTarget BoardOf(const SimConfig& config) {
-  ChessboardTarget board = config.chessboard;
-  board.dark_albedo = config.albedo.chessboard_dark;
-  board.light_albedo = config.albedo.chessboard_light;
-  return board;
+ChessboardTarget TargetOf(const SimConfig& config) {
+  ChessboardTarget target = config.chessboard;
+  target.dark_albedo = config.albedo.chessboard_dark;
+  target.light_albedo = config.albedo.chessboard_light;
+  return target;
 }
 
 void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output& out,
                          int threads) {
-  const ChessboardTarget board = BoardOf(config);
+  const ChessboardTarget target = TargetOf(config);
   const calib::CameraModel& camera = truth.sensor.camera;
   const ImageRenderer renderer(camera);
   const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(
-      board, camera, config.chessboard_images, StreamSeed(config.seed, kChessboardStream));
+      target, camera, config.chessboard_images, StreamSeed(config.seed, kChessboardStream));
   std::vector<std::string> pngs(poses.size());
   // One image per index (its own noise stream): the same files for any thread count.
   ParallelForChunks(threads, poses.size(), 1, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       pngs[i] = EncodePng(renderer.RenderChessboard(
-          board, poses[i], config.images, StreamSeed(config.seed, kChessboardStream + 1 + i)));
+          target, poses[i], config.images, StreamSeed(config.seed, kChessboardStream + 1 + i)));
     }
   });
   std::ostringstream o;
@@ -213,11 +213,11 @@ void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output
     << "# dark when i + j is even; inner corner (i, j) at ((i+1) s, (j+1) s, 0), listed row by "
        "row\n"
     << "# along x (OpenCV order). Pixel coordinates: centre of the top-left pixel is (0, 0).\n"
-    << "board: {squares: [" << board.squares_x << ", " << board.squares_y << "], inner_corners: ["
-    << board.squares_x - 1 << ", " << board.squares_y - 1
-    << "], square_mm: " << Num(board.square_mm) << ", border_mm: " << Num(board.border_mm)
-    << ", dark_albedo: " << Num(board.dark_albedo) << ", light_albedo: " << Num(board.light_albedo)
-    << "}\nimages:\n";
+    << "board: {squares: [" << target.SquaresX() << ", " << target.SquaresY()
+    << "], inner_corners: [" << target.board.cols << ", " << target.board.rows
+    << "], square_mm: " << Num(target.board.square_mm) << ", border_mm: " << Num(target.border_mm)
+    << ", dark_albedo: " << Num(target.dark_albedo)
+    << ", light_albedo: " << Num(target.light_albedo) << "}\nimages:\n";
   for (std::size_t i = 0; i < poses.size(); ++i) {
     char name[48];
     std::snprintf(name, sizeof(name), "images/chessboard_%03zu.png", i);
@@ -225,7 +225,7 @@ void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output
     o << "  - file: " << name << "\n    camera_from_board: " << Pose(poses[i])
       << "\n    corners_px: [";
     bool first = true;
-    for (const Eigen::Vector3d& p : board.InnerCorners()) {
+    for (const Eigen::Vector3d& p : target.CornersInTarget()) {
       const auto q = ProjectInView(camera, poses[i] * p);
       o << (first ? "" : ", ") << "[" << Num(q->x()) << ", " << Num(q->y()) << "]";
       first = false;
@@ -236,20 +236,20 @@ void RunChessboardImages(const SimConfig& config, const CellTruth& truth, Output
 }
 
 void RunHandEyeImages(const SimConfig& config, const CellTruth& truth, Output& out, int threads) {
-  const ChessboardTarget board = BoardOf(config);
+  const ChessboardTarget target = TargetOf(config);
   const HandEyeImageSet set =
-      PlanHandEyeImages(config, truth, board, StreamSeed(config.seed, kHandEyeImageStream));
+      PlanHandEyeImages(config, truth, target, StreamSeed(config.seed, kHandEyeImageStream));
   const ImageRenderer renderer(truth.sensor.camera);
   std::vector<std::string> pngs(set.images.size());
   ParallelForChunks(threads, set.images.size(), 1, [&](std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) {
       pngs[i] = EncodePng(renderer.RenderChessboard(
-          board, set.images[i].camera_from_board, config.images,
+          target, set.images[i].camera_from_board, config.images,
           StreamSeed(config.seed, kHandEyeImageStream + 1 + static_cast<std::uint64_t>(i))));
     }
   });
   for (std::size_t i = 0; i < pngs.size(); ++i) out.Write(HandEyeImageFile(i), pngs[i]);
-  out.Write("records/hand_eye_images.yaml", HandEyeImagesRecordYaml(board, set));
+  out.Write("records/hand_eye_images.yaml", HandEyeImagesRecordYaml(target, set));
   out.Write("truth/hand_eye_images.yaml", HandEyeImagesTruthYaml(truth, set));
 }
 
@@ -267,11 +267,12 @@ void RunLaserLineImages(const SimConfig& config, const CellTruth& truth, const L
   const Eigen::Isometry3d pose = sweep.At(mid);
   // The stripe on the white plane (first height) and on a chessboard lying flat under the
   // sweep's midpoint, pattern up.
-  const ChessboardTarget board = BoardOf(config);
-  Eigen::Isometry3d cell_from_board = Eigen::Isometry3d::Identity();
+  const ChessboardTarget target = TargetOf(config);
+  const double s = target.board.square_mm;
+  Eigen::Isometry3d cell_from_board = Eigen::Isometry3d::Identity();  // target frame
   cell_from_board.translation() =
-      Eigen::Vector3d(config.sweep_center_xy_mm.x() - board.squares_x * board.square_mm / 2,
-                      config.sweep_center_xy_mm.y() - board.squares_y * board.square_mm / 2,
+      Eigen::Vector3d(config.sweep_center_xy_mm.x() - target.SquaresX() * s / 2,
+                      config.sweep_center_xy_mm.y() - target.SquaresY() * s / 2,
                       config.plane_heights_mm.empty() ? 150.0 : config.plane_heights_mm.front());
   struct Case {
     std::string name;
@@ -281,9 +282,9 @@ void RunLaserLineImages(const SimConfig& config, const CellTruth& truth, const L
   cases.push_back(
       {"laser_line_plane",
        MakePlaneScene(truth.layout, cell_from_board.translation().z(), config.plane_size_mm)});
-  cases.push_back({"laser_line_chessboard",
-                   MakeChessboardScene(truth.layout, cell_from_board,
-                                       {board.squares_x, board.squares_y}, board.square_mm)});
+  cases.push_back(
+      {"laser_line_chessboard", MakeChessboardScene(truth.layout, cell_from_board,
+                                                    {target.SquaresX(), target.SquaresY()}, s)});
   const ImageRenderer images(truth.sensor.camera);
   std::ostringstream o;
   o << "format: lasercell.sim_laser_lines\nversion: 1\n"

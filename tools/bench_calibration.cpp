@@ -361,28 +361,26 @@ int RelabelCorners(const std::vector<Eigen::Vector2d>& found_px,
 // found.
 nlohmann::json RunRendered(const CalibrationBenchArgs& args, const datasets::SimConfig& config,
                            const datasets::CellTruth& truth,
-                           const datasets::ChessboardTarget& board,
+                           const datasets::ChessboardTarget& target,
                            const datasets::HandEyeImageSet& set,
                            const std::vector<calib::HandEyeView>& views,
                            const Eigen::Isometry3d& x_true) {
   const calib::CameraModel& camera = truth.sensor.camera;
   const datasets::ImageRenderer renderer(truth.sensor.camera);
-  const calib::BoardSpec rendered_board =
-      calib::BoardSpec::Chessboard(board.squares_x - 1, board.squares_y - 1, board.square_mm);
+  const calib::BoardSpec& board = target.board;
   std::vector<calib::HandEyeView> detected;
   int flipped = 0;
   double det_ss = 0;
   int det_n = 0;
   for (std::size_t i = 0; i < set.images.size(); ++i) {
-    const datasets::GrayImage img = renderer.RenderChessboard(
-        board, set.images[i].camera_from_board, config.images, args.seed * 1000 + i);
-    const calib::TargetDetection found =
-        calib::DetectTarget({img.width, img.height, img.pixels}, rendered_board);
+    const Image8 img = renderer.RenderChessboard(target, set.images[i].camera_from_board,
+                                                 config.images, args.seed * 1000 + i);
+    const calib::TargetDetection found = calib::DetectTarget(img, board);
     if (!found.found()) continue;
     std::vector<Eigen::Vector2d> best;
     double best_ss = 0;
-    const int variant = RelabelCorners(found.corners_px, set.images[i].corners_px,
-                                       board.squares_x - 1, board.squares_y - 1, &best, &best_ss);
+    const int variant = RelabelCorners(found.corners_px, set.images[i].corners_px, board.cols,
+                                       board.rows, &best, &best_ss);
     if (variant != 0) ++flipped;
     det_ss += best_ss;
     det_n += static_cast<int>(best.size());
@@ -408,14 +406,15 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   datasets::SimConfig config;
   config.seed = args.seed;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
-  datasets::ChessboardTarget board = config.chessboard;
-  board.dark_albedo = config.albedo.chessboard_dark;
-  board.light_albedo = config.albedo.chessboard_light;
+  datasets::ChessboardTarget target = config.chessboard;
+  target.dark_albedo = config.albedo.chessboard_dark;
+  target.light_albedo = config.albedo.chessboard_light;
+  const calib::BoardSpec& board = target.board;
   const datasets::HandEyeImageSet set =
-      datasets::PlanHandEyeImages(config, truth, board, args.seed * 7919 + 3);
+      datasets::PlanHandEyeImages(config, truth, target, args.seed * 7919 + 3);
   const calib::CameraModel& camera = truth.sensor.camera;
   const Eigen::Isometry3d x_true = truth.vision_flange_from_sensor;
-  const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
   std::mt19937_64 rng(args.seed);
   std::normal_distribution<double> noise(0.0, args.sim_noise_px);
   std::vector<calib::HandEyeView> views, nominal_views;
@@ -435,7 +434,7 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   std::snprintf(title, sizeof title,
                 "Simulated cell (seed %u): %zu views of a %dx%d-inner-corner board (%.0f mm), "
                 "true robot poses, true projections + N(0, %.2f px)",
-                args.seed, views.size(), board.squares_x - 1, board.squares_y - 1, board.square_mm,
+                args.seed, views.size(), board.cols, board.rows, board.square_mm,
                 args.sim_noise_px);
   calib::HandEyeResult ours;
   std::vector<Row> rows = RunMethods(views, camera, &ours);
@@ -444,7 +443,7 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
     out["monte_carlo"] = RunMonteCarlo(args, views, set, camera, x_true, rng, noise);
   }
   if (args.sim_render) {
-    nlohmann::json rendered = RunRendered(args, config, truth, board, set, views, x_true);
+    nlohmann::json rendered = RunRendered(args, config, truth, target, set, views, x_true);
     if (!rendered.is_null()) out["rendered"] = std::move(rendered);
   }
   // What the controller reports: nominal kinematics at the commanded joints.
@@ -485,7 +484,7 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
     throw InputError("kuka2: " + std::to_string(poses.base_from_flange.size()) + " poses but " +
                      std::to_string(det.images.size()) + " images");
   }
-  const std::vector<Eigen::Vector3d> board = det.Board().Corners();
+  const std::vector<Eigen::Vector3d> board = det.board.Corners();
   std::vector<calib::HandEyeView> views;
   for (std::size_t i = 0; i < det.images.size(); ++i) {
     views.push_back({poses.base_from_flange[i], det.corners_px[i], board});

@@ -68,7 +68,7 @@ void RunPeaksBench(const PeaksBenchArgs& args) {
       }
       datasets::ImageRenderOptions io;
       io.noise_sigma = args.noise;
-      const datasets::GrayImage img = renderer.RenderLaserLine(
+      const Image8 img = renderer.RenderLaserLine(
           ex, io,
           args.seed * 1000003ULL + image * 7919ULL + static_cast<std::uint64_t>(snr * 1000));
       for (int e = 0; e < 3; ++e) {

@@ -12,15 +12,14 @@ namespace lasercell::calib::internal {
 
 namespace {
 
-cv::Mat Wrap(const StripeImage& image) {
+cv::Mat Wrap(const Image8& image) {
   const int type = image.channels == 3 ? CV_8UC3 : CV_8UC1;
-  return cv::Mat(image.height_px, image.width_px, type,
-                 const_cast<std::uint8_t*>(image.pixels.data()));
+  return cv::Mat(image.height, image.width, type, const_cast<std::uint8_t*>(image.pixels.data()));
 }
 
 }  // namespace
 
-cv::Mat GrayOf(const StripeImage& image) {
+cv::Mat GrayOf(const Image8& image) {
   cv::Mat wrapped = Wrap(image);
   if (image.channels == 1) return wrapped.clone();
   cv::Mat gray;
@@ -28,7 +27,7 @@ cv::Mat GrayOf(const StripeImage& image) {
   return gray;
 }
 
-cv::Mat LaserChannel(const StripeImage& image, const std::string& color) {
+cv::Mat LaserChannel(const Image8& image, const std::string& color) {
   cv::Mat wrapped = Wrap(image);
   cv::Mat out;
   if (image.channels == 1 || color == "gray") {
@@ -47,9 +46,9 @@ cv::Mat LaserChannel(const StripeImage& image, const std::string& color) {
   return out;
 }
 
-GrayImage GrayImageOf(const StripeImage& image) {
+Image8 Gray8Of(const Image8& image) {
   const cv::Mat gray = GrayOf(image);  // continuous: a clone or cvtColor's output
-  GrayImage out;
+  Image8 out;
   out.width = gray.cols;
   out.height = gray.rows;
   out.pixels.assign(gray.data, gray.data + gray.total());

@@ -13,6 +13,7 @@
 #include "calib/camera_model.hpp"
 #include "calib/laser_plane.hpp"
 #include "calib/target_detection.hpp"
+#include "core/image8.hpp"
 
 namespace lasercell::calib::internal {
 
@@ -30,11 +31,11 @@ std::vector<Eigen::Vector2d> StripePeaks(const cv::Mat& laser,
                                          const std::vector<cv::Point2f>& region, bool along_rows,
                                          const StripeOptions& options);
 
-/// The laser channel (CV_32F) of an image for the configured colour.
-cv::Mat LaserChannel(const StripeImage& image, const std::string& color);
+/// The laser channel (CV_32F) of a gray or BGR image for the configured colour.
+cv::Mat LaserChannel(const Image8& image, const std::string& color);
 /// The image as 8-bit gray.
-cv::Mat GrayOf(const StripeImage& image);
-/// The same, as the board detector's image type.
-GrayImage GrayImageOf(const StripeImage& image);
+cv::Mat GrayOf(const Image8& image);
+/// The same as a one-channel Image8, the board detector's input.
+Image8 Gray8Of(const Image8& image);
 
 }  // namespace lasercell::calib::internal

@@ -145,18 +145,16 @@ TEST_F(HandEyeCli, PosesInMetresGivenAsYamlAreRejected) {
 TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
-  const datasets::ChessboardTarget board = config.chessboard;
-  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
+  const datasets::ChessboardTarget target = config.chessboard;
+  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, target, 11);
   const std::string cell = (dir_ / "cell.yaml").string();
   io::WriteFileAtomically(cell, FrameGraphToYaml(truth.Graph()));
   io::WriteFileAtomically((dir_ / "camera.cameramodel").string(),
                           datasets::MrcalCameraModelText(config.sensor.camera));
   io::WriteFileAtomically((dir_ / "record.yaml").string(),
-                          datasets::HandEyeImagesRecordYaml(board, set));
+                          datasets::HandEyeImagesRecordYaml(target, set));
   calib::ChessboardDetections det;
-  det.cols = board.squares_x - 1;
-  det.rows = board.squares_y - 1;
-  det.square_mm = board.square_mm;
+  det.board = target.board;
   det.width_px = config.sensor.camera.width_px;
   det.height_px = config.sensor.camera.height_px;
   std::mt19937_64 rng(3);
@@ -186,15 +184,13 @@ TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
 TEST_F(HandEyeCli, CreatesTheCellFileWhenAbsent) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
-  const datasets::ChessboardTarget board = config.chessboard;
-  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
+  const datasets::ChessboardTarget target = config.chessboard;
+  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, target, 11);
   io::WriteFileAtomically((dir_ / "camera.cameramodel").string(),
                           datasets::MrcalCameraModelText(config.sensor.camera));
   calib::RobotPoses poses;
   calib::ChessboardDetections det;
-  det.cols = board.squares_x - 1;
-  det.rows = board.squares_y - 1;
-  det.square_mm = board.square_mm;
+  det.board = target.board;
   det.width_px = config.sensor.camera.width_px;
   det.height_px = config.sensor.camera.height_px;
   std::mt19937_64 rng(5);
@@ -244,10 +240,10 @@ TEST_F(HandEyeCli, SimulatedImagesThroughTheSharedDetector) {
   datasets::SimulateCell(config, sim.string(), {}, 2);
   const std::string cell = (dir_ / "images_cell.yaml").string();
   fs::copy_file(sim / "truth/cell.yaml", cell, fs::copy_options::overwrite_existing);
-  const datasets::ChessboardTarget board;
-  const std::string spec = "chessboard:" + std::to_string(board.squares_x - 1) + "x" +
-                           std::to_string(board.squares_y - 1) + ":" +
-                           std::to_string(static_cast<int>(board.square_mm));
+  const datasets::ChessboardTarget target;
+  const std::string spec = "chessboard:" + std::to_string(target.board.cols) + "x" +
+                           std::to_string(target.board.rows) + ":" +
+                           std::to_string(static_cast<int>(target.board.square_mm));
   const CommandResult r =
       RunCliMerged("calibrate handeye --cell " + cell + " --camera " +
                    (sim / "truth/camera.cameramodel").string() + " --images '" +

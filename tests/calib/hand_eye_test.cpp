@@ -410,14 +410,15 @@ TEST(PoseIo, MetresInYamlAndMixedUnitsAreRejected) {
 TEST(PoseIo, ReadsTheSimulatorsHandEyeImagesRecord) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
-  const datasets::ChessboardTarget board = config.chessboard;
-  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
-  const std::string text = datasets::HandEyeImagesRecordYaml(board, set);
+  const datasets::ChessboardTarget target = config.chessboard;
+  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, target, 11);
+  const std::string text = datasets::HandEyeImagesRecordYaml(target, set);
   const HandEyeImagesRecord rec = ParseHandEyeImagesRecord(text, "records/hand_eye_images.yaml");
   EXPECT_EQ(rec.robot, "vision_robot");
-  EXPECT_EQ(rec.inner_cols, board.squares_x - 1);
-  EXPECT_EQ(rec.inner_rows, board.squares_y - 1);
-  EXPECT_EQ(rec.square_mm, board.square_mm);
+  EXPECT_EQ(rec.board.type, BoardType::kChessboard);
+  EXPECT_EQ(rec.board.cols, target.board.cols);
+  EXPECT_EQ(rec.board.rows, target.board.rows);
+  EXPECT_EQ(rec.board.square_mm, target.board.square_mm);
   ASSERT_EQ(rec.images.size(), set.images.size());
   for (std::size_t i = 0; i < set.images.size(); ++i) {
     EXPECT_EQ(rec.images[i], datasets::HandEyeImageFile(i));
@@ -506,7 +507,7 @@ TEST(HandEyeReal, Kuka2FromSharedImages) {
   const RobotPoses poses = LoadRobotPoses(kuka2->dir + "/RobotPosesVec.txt", "kuka");
   ASSERT_EQ(det.images.size(), 28u);
   ASSERT_EQ(poses.base_from_flange.size(), 28u);
-  const auto board = det.Board().Corners();
+  const auto board = det.board.Corners();
   std::vector<HandEyeView> views;
   std::vector<Eigen::Isometry3d> a;
   for (std::size_t i = 0; i < det.images.size(); ++i) {
@@ -554,8 +555,8 @@ namespace {
 TEST(HandEyeSim, SimulatorPlanWithinTarget) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
-  datasets::ChessboardTarget board = config.chessboard;
-  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, board, 11);
+  datasets::ChessboardTarget target = config.chessboard;
+  const datasets::HandEyeImageSet set = datasets::PlanHandEyeImages(config, truth, target, 11);
   const CameraModel& camera = truth.sensor.camera;
   std::mt19937_64 rng(5);
   std::normal_distribution<double> noise(0.0, 0.03);
@@ -563,7 +564,7 @@ TEST(HandEyeSim, SimulatorPlanWithinTarget) {
   for (const auto& im : set.images) {
     HandEyeView v;
     v.base_from_flange = truth.true_vision_robot.BaseFromFlange(im.joints_rad);
-    v.corners_in_board = board.InnerCorners();
+    v.corners_in_board = target.CornersInTarget();
     for (const auto& q : im.corners_px) {
       v.corners_px.push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
     }

@@ -6,7 +6,6 @@
 #include "calib/intrinsics.hpp"
 #include "calib/target_detection.hpp"
 #include "datasets/camera_images.hpp"
-#include "tests/calib/rendered_board.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -16,15 +15,11 @@ TEST(CalibrateIntrinsicsSimulatedImages, RenderedBoardsGiveIntrinsicsInsideThree
   const calib::CameraModel camera = datasets::MakeCameraModel(truth);
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
-  const BoardSpec board = BoardOf(target);
+  const BoardSpec board = target.board;
   std::vector<BoardView> views;
   const auto poses = datasets::DrawChessboardPoses(target, camera, 10, 41);
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    const datasets::GrayImage rendered = renderer.RenderChessboard(target, poses[k], {}, 70 + k);
-    GrayImage image;
-    image.width = rendered.width;
-    image.height = rendered.height;
-    image.pixels = rendered.pixels;
+    const Image8 image = renderer.RenderChessboard(target, poses[k], {}, 70 + k);
     const TargetDetection d = DetectTarget(image, board);
     ASSERT_TRUE(d.found()) << "view " << k << ": " << d.message;
     views.push_back({"view" + std::to_string(k), d.corners_px, d.corner_ids});

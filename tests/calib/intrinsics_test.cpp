@@ -10,7 +10,6 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/camera_images.hpp"
-#include "tests/calib/rendered_board.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -28,11 +27,10 @@ Synthetic MakeSynthetic(int num_views, std::uint64_t seed) {
   Synthetic s;
   const calib::CameraModel camera = datasets::MakeCameraModel(s.truth);
   const datasets::ChessboardTarget target;
-  s.board = BoardOf(target);
-  const Eigen::Vector3d offset(target.square_mm, target.square_mm, 0);  // target -> BoardSpec
-  for (const Eigen::Isometry3d& pose :
+  s.board = target.board;
+  for (const Eigen::Isometry3d& camera_from_target :
        datasets::DrawChessboardPoses(target, camera, num_views, seed)) {
-    s.camera_from_board.push_back(pose * Eigen::Translation3d(offset));
+    s.camera_from_board.push_back(camera_from_target * target.TargetFromBoard());
     std::vector<Eigen::Vector2d> q;
     for (const Eigen::Vector3d& c : s.board.Corners()) {
       q.push_back(*datasets::ProjectInView(camera, s.camera_from_board.back() * c));

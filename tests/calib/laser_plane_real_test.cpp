@@ -39,12 +39,12 @@ CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images,
   std::vector<std::vector<cv::Point3f>> object;
   std::vector<std::vector<cv::Point2f>> image_points;
   for (const auto& image : images) {
-    cv::Mat bgr(image.height_px, image.width_px, CV_8UC3,
-                const_cast<std::uint8_t*>(image.pixels.data()));
+    cv::Mat bgr(image.image.height, image.image.width, CV_8UC3,
+                const_cast<std::uint8_t*>(image.image.pixels.data()));
     cv::Mat gray;
     cv::cvtColor(bgr, gray, cv::COLOR_BGR2GRAY);
     const TargetDetection found = DetectTarget(
-        {gray.cols, gray.rows, std::vector<std::uint8_t>(gray.data, gray.data + gray.total())},
+        {gray.cols, gray.rows, 1, std::vector<std::uint8_t>(gray.data, gray.data + gray.total())},
         board, detection);
     if (!found.found()) continue;
     std::vector<cv::Point2f> corners;
@@ -64,14 +64,14 @@ CameraModel CalibrateIntrinsics(const std::vector<StripeImage>& images,
   }
   cv::Mat K, dist;
   std::vector<cv::Mat> rvecs, tvecs;
-  *rms_px =
-      cv::calibrateCamera(object, image_points, cv::Size(images[0].width_px, images[0].height_px),
-                          K, dist, rvecs, tvecs, cv::CALIB_FIX_K3);
+  *rms_px = cv::calibrateCamera(object, image_points,
+                                cv::Size(images[0].image.width, images[0].image.height), K, dist,
+                                rvecs, tvecs, cv::CALIB_FIX_K3);
   return CameraModel(
       "LENSMODEL_OPENCV4",
       {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2),
        dist.at<double>(0), dist.at<double>(1), dist.at<double>(2), dist.at<double>(3)},
-      images[0].width_px, images[0].height_px);
+      images[0].image.width, images[0].image.height);
 }
 
 void ExpectConsistentPlane(const LaserPlaneResult& r) {

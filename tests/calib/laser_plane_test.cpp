@@ -387,20 +387,20 @@ TEST(LaserPlaneHeights, OptionsAreChecked) {
 /// saturation on the light squares) to the green channel at
 /// the exact projection of laser ∩ board, per image column.
 StripeImage RenderStripeImage(const datasets::ImageRenderer& renderer, const CameraModel& camera,
-                              const datasets::ChessboardTarget& board,
+                              const datasets::ChessboardTarget& target,
                               const Eigen::Isometry3d& camera_from_board,
                               const Eigen::Vector3d& laser_n, double laser_d, std::uint64_t seed) {
   datasets::ImageRenderOptions options;
-  const datasets::GrayImage gray =
-      renderer.RenderChessboard(board, camera_from_board, options, seed);
+  const Image8 gray = renderer.RenderChessboard(target, camera_from_board, options, seed);
   StripeImage image;
   image.name = "render_" + std::to_string(seed);
-  image.width_px = gray.width;
-  image.height_px = gray.height;
-  image.channels = 3;
-  image.pixels.resize(static_cast<std::size_t>(gray.width) * gray.height * 3);
+  Image8& bgr = image.image;
+  bgr.width = gray.width;
+  bgr.height = gray.height;
+  bgr.channels = 3;
+  bgr.pixels.resize(static_cast<std::size_t>(gray.width) * gray.height * 3);
   for (std::size_t k = 0; k < gray.pixels.size(); ++k) {
-    for (int c = 0; c < 3; ++c) image.pixels[3 * k + c] = gray.pixels[k];
+    for (int c = 0; c < 3; ++c) bgr.pixels[3 * k + c] = gray.pixels[k];
   }
   const Eigen::Vector3d m = camera_from_board.linear().col(2);
   const double md = -m.dot(camera_from_board.translation());
@@ -413,10 +413,9 @@ StripeImage RenderStripeImage(const datasets::ImageRenderer& renderer, const Cam
   const double sigma = 3.0 / 2.3548;
   for (const auto& [u, row] : ExactLinePixels(camera, p0, dir)) {
     for (int v = static_cast<int>(row) - 6; v <= static_cast<int>(row) + 6; ++v) {
-      if (v < 0 || v >= image.height_px) continue;
+      if (v < 0 || v >= bgr.height) continue;
       const double g = 40.0 * std::exp(-0.5 * (v - row) * (v - row) / (sigma * sigma));
-      std::uint8_t& green =
-          image.pixels[(static_cast<std::size_t>(v) * image.width_px + u) * 3 + 1];
+      std::uint8_t& green = bgr.pixels[(static_cast<std::size_t>(v) * bgr.width + u) * 3 + 1];
       green = static_cast<std::uint8_t>(std::min(255.0, green + g));
     }
   }
@@ -426,7 +425,7 @@ StripeImage RenderStripeImage(const datasets::ImageRenderer& renderer, const Cam
 struct StripeScene {
   datasets::CameraIntrinsics intrinsics;
   CameraModel camera = SimCamera(intrinsics);
-  datasets::ChessboardTarget board;
+  datasets::ChessboardTarget target;
   Eigen::Vector3d laser_n;
   double laser_d = 0;
   std::vector<StripeImage> images;
@@ -438,9 +437,9 @@ StripeScene MakeStripeScene(int count, std::uint64_t seed) {
   TruthPlane(truth.sensor.laser, &scene.laser_n, &scene.laser_d);
   const CameraModel sim_camera = datasets::MakeCameraModel(scene.intrinsics);
   const datasets::ImageRenderer renderer(sim_camera);
-  const auto poses = datasets::DrawChessboardPoses(scene.board, sim_camera, count, seed);
+  const auto poses = datasets::DrawChessboardPoses(scene.target, sim_camera, count, seed);
   for (int i = 0; i < count; ++i) {
-    scene.images.push_back(RenderStripeImage(renderer, scene.camera, scene.board,
+    scene.images.push_back(RenderStripeImage(renderer, scene.camera, scene.target,
                                              poses[static_cast<std::size_t>(i)], scene.laser_n,
                                              scene.laser_d, seed + static_cast<std::uint64_t>(i)));
   }
@@ -453,14 +452,10 @@ const StripeScene& SharedScene() {
   return scene;
 }
 
-BoardSpec SpecOf(const datasets::ChessboardTarget& board) {
-  return BoardSpec::Chessboard(board.squares_x - 1, board.squares_y - 1, board.square_mm);
-}
-
 TEST(LaserPlaneStripes, RenderedBoardsGiveTheTruePlane) {
   const StripeScene& scene = SharedScene();
   const LaserPlaneResult r =
-      CalibrateLaserPlaneFromStripes(scene.camera, scene.images, SpecOf(scene.board));
+      CalibrateLaserPlaneFromStripes(scene.camera, scene.images, scene.target.board);
   ASSERT_TRUE(r.converged) << r.Summary();
   std::printf(
       "detected corners: normal %.5f deg, d %.4f mm, rms %.4f mm, 1-sigma %.5f deg / %.4f mm\n",
@@ -489,18 +484,19 @@ TEST(LaserPlaneStripes, WithExactCornersOnlyTheStripePeaksLimitThePlane) {
   // is the stripe peaks (8-bit Gaussian stripe, three-point estimator) and the fit.
   const StripeScene& scene = SharedScene();
   const CameraModel sim_camera = datasets::MakeCameraModel(scene.intrinsics);
-  const auto poses = datasets::DrawChessboardPoses(scene.board, sim_camera, 4, 31);
-  const auto corners_board = scene.board.InnerCorners();
+  const auto poses = datasets::DrawChessboardPoses(scene.target, sim_camera, 4, 31);
+  const auto corners_in_target = scene.target.CornersInTarget();
   std::vector<StripeObservation> observations;
   for (std::size_t i = 0; i < scene.images.size(); ++i) {
-    StripeObservation o = DetectStripe(scene.camera, scene.images[i], SpecOf(scene.board));
+    StripeObservation o = DetectStripe(scene.camera, scene.images[i], scene.target.board);
     ASSERT_FALSE(o.stripe_px.empty()) << o.note;
     o.corners_px.clear();
-    for (const auto& c : corners_board) o.corners_px.push_back(scene.camera.Project(poses[i] * c));
+    for (const auto& c : corners_in_target)
+      o.corners_px.push_back(scene.camera.Project(poses[i] * c));
     observations.push_back(o);
   }
   const LaserPlaneResult r =
-      CalibrateLaserPlaneFromStripeObservations(scene.camera, observations, SpecOf(scene.board));
+      CalibrateLaserPlaneFromStripeObservations(scene.camera, observations, scene.target.board);
   std::printf("exact corners: normal %.5f deg, d %.4f mm, rms %.4f mm\n",
               AngleDeg(r.normal, scene.laser_n), r.offset_mm - scene.laser_d, r.rms_mm);
   EXPECT_LT(AngleDeg(r.normal, scene.laser_n), 0.005) << r.Summary();
@@ -509,7 +505,7 @@ TEST(LaserPlaneStripes, WithExactCornersOnlyTheStripePeaksLimitThePlane) {
 
 TEST(LaserPlaneStripes, WrongBoardLeavesTooFewUsableImages) {
   const StripeScene& scene = SharedScene();
-  BoardSpec wrong = SpecOf(scene.board);
+  BoardSpec wrong = scene.target.board;
   wrong.cols += 2;
   try {
     CalibrateLaserPlaneFromStripes(scene.camera, {scene.images[0], scene.images[1]}, wrong);
@@ -518,7 +514,7 @@ TEST(LaserPlaneStripes, WrongBoardLeavesTooFewUsableImages) {
     const std::string what = e.what();
     EXPECT_NE(what.find("fewer than 2 usable stripe images"), std::string::npos) << what;
     // The detector names the board it does see.
-    const BoardSpec right = SpecOf(scene.board);
+    const BoardSpec right = scene.target.board;
     EXPECT_NE(what.find("but a " + std::to_string(right.cols) + "x" + std::to_string(right.rows) +
                         " one (inner corners) is visible: wrong board size"),
               std::string::npos)
@@ -528,12 +524,12 @@ TEST(LaserPlaneStripes, WrongBoardLeavesTooFewUsableImages) {
 
 TEST(LaserPlaneStripes, OneUsableImageIsRejected) {
   const StripeScene& scene = SharedScene();
-  StripeObservation good = DetectStripe(scene.camera, scene.images[0], SpecOf(scene.board));
+  StripeObservation good = DetectStripe(scene.camera, scene.images[0], scene.target.board);
   ASSERT_FALSE(good.stripe_px.empty()) << good.note;
-  StripeObservation no_stripe = DetectStripe(scene.camera, scene.images[1], SpecOf(scene.board));
+  StripeObservation no_stripe = DetectStripe(scene.camera, scene.images[1], scene.target.board);
   no_stripe.stripe_px.clear();
   try {
-    CalibrateLaserPlaneFromStripeObservations(scene.camera, {good, no_stripe}, SpecOf(scene.board));
+    CalibrateLaserPlaneFromStripeObservations(scene.camera, {good, no_stripe}, scene.target.board);
     FAIL() << "expected InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("fewer than 2 usable stripe images (1 of 2)"),
@@ -556,10 +552,10 @@ TEST(LaserPlaneStripes, UnreadableImageNamesTheFile) {
 TEST(LaserPlaneStripes, ImageOfAnotherCameraSizeIsRejected) {
   StripeImage image;
   image.name = "small.png";
-  image.width_px = 64;
-  image.height_px = 48;
-  image.channels = 1;
-  image.pixels.assign(64 * 48, 0);
+  image.image.width = 64;
+  image.image.height = 48;
+  image.image.channels = 1;
+  image.image.pixels.assign(64 * 48, 0);
   const CameraModel camera = SimCamera(datasets::CameraIntrinsics{});
   try {
     DetectStripe(camera, image, BoardSpec::Chessboard(8, 6, 40.0));
@@ -576,14 +572,14 @@ TEST(LaserPlaneStripes, PlaneThroughTheCameraCentreIsFlagged) {
   const CameraModel camera = SimCamera(datasets::CameraIntrinsics{});
   const Eigen::Vector3d n = Eigen::Vector3d(0, -1, 0.02).normalized();
   std::vector<StripeObservation> observations;
-  const datasets::ChessboardTarget board;
+  const datasets::ChessboardTarget target;
   const CameraModel sim_camera = datasets::MakeCameraModel();
-  const auto poses = datasets::DrawChessboardPoses(board, sim_camera, 3, 61);
-  const auto corners_board = board.InnerCorners();
+  const auto poses = datasets::DrawChessboardPoses(target, sim_camera, 3, 61);
+  const auto corners_in_target = target.CornersInTarget();
   for (const auto& pose : poses) {
     StripeObservation o;
     o.name = "synthetic";
-    for (const auto& c : corners_board) o.corners_px.push_back(camera.Project(pose * c));
+    for (const auto& c : corners_in_target) o.corners_px.push_back(camera.Project(pose * c));
     // Stripe: laser plane ∩ board plane, projected at many points.
     const Eigen::Vector3d m = pose.linear().col(2);
     const double md = -m.dot(pose.translation());
@@ -600,7 +596,7 @@ TEST(LaserPlaneStripes, PlaneThroughTheCameraCentreIsFlagged) {
     observations.push_back(o);
   }
   const LaserPlaneResult r =
-      CalibrateLaserPlaneFromStripeObservations(camera, observations, SpecOf(board));
+      CalibrateLaserPlaneFromStripeObservations(camera, observations, target.board);
   EXPECT_TRUE(r.ill_conditioned);
   ASSERT_FALSE(r.warnings.empty());
   bool found = false;
@@ -643,16 +639,16 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
   // 1 sigma of d over 100 draws.
   const datasets::CameraIntrinsics intrinsics;
   const CameraModel camera = SimCamera(intrinsics);
-  const datasets::ChessboardTarget board;
+  const datasets::ChessboardTarget target;
   const CameraModel sim_camera = datasets::MakeCameraModel(intrinsics);
   Eigen::Vector3d n;
   double d = 0;
   TruthPlane(datasets::MakeCellTruth(datasets::SimConfig{}).sensor.laser, &n, &d);
-  const auto poses = datasets::DrawChessboardPoses(board, sim_camera, 6, 71);
-  const auto corners_board = board.InnerCorners();
+  const auto poses = datasets::DrawChessboardPoses(target, sim_camera, 6, 71);
+  const auto corners_in_target = target.CornersInTarget();
   std::vector<std::vector<Eigen::Vector2d>> corners(poses.size()), stripes(poses.size());
   for (std::size_t i = 0; i < poses.size(); ++i) {
-    for (const auto& c : corners_board) corners[i].push_back(camera.Project(poses[i] * c));
+    for (const auto& c : corners_in_target) corners[i].push_back(camera.Project(poses[i] * c));
     const Eigen::Vector3d m = poses[i].linear().col(2);
     const double md = -m.dot(poses[i].translation());
     Eigen::Matrix<double, 2, 3> A;
@@ -660,15 +656,16 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
     A.row(1) = m.transpose();
     const Eigen::Vector3d p0 =
         A.transpose() * (A * A.transpose()).inverse() * Eigen::Vector2d(-d, -md);
-    const Eigen::Isometry3d board_from_camera = poses[i].inverse();
+    const Eigen::Isometry3d target_from_camera = poses[i].inverse();
     for (const auto& [u, row] : ExactLinePixels(camera, p0, n.cross(m).normalized())) {
       if (u % 3 != 0) continue;  // every third column: keeps the 100 draws fast
       // Keep the pixels whose board point lies inside the inner-corner grid.
       const Eigen::Vector3d ray = camera.Unproject(Eigen::Vector2d(u, row));
       const Eigen::Vector3d p = ray * (-md / m.dot(ray));
-      const Eigen::Vector3d b = board_from_camera * p;
-      if (b.x() > board.square_mm && b.x() < (board.squares_x - 1) * board.square_mm &&
-          b.y() > board.square_mm && b.y() < (board.squares_y - 1) * board.square_mm) {
+      const Eigen::Vector3d b = target_from_camera * p;
+      const double s = target.board.square_mm;
+      if (b.x() > s && b.x() < (target.SquaresX() - 1) * s && b.y() > s &&
+          b.y() < (target.SquaresY() - 1) * s) {
         stripes[i].emplace_back(u, row);
       }
     }
@@ -689,7 +686,7 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
       observations.push_back(o);
     }
     const LaserPlaneResult r =
-        CalibrateLaserPlaneFromStripeObservations(camera, observations, SpecOf(board));
+        CalibrateLaserPlaneFromStripeObservations(camera, observations, target.board);
     if (std::abs(r.offset_mm - d) <= r.offset_sigma_mm) ++inside_d;
     if (AngleDeg(r.normal, n) <= r.normal_sigma_deg) ++inside_n;
   }

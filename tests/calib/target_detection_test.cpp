@@ -9,7 +9,6 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/camera_images.hpp"
-#include "tests/calib/rendered_board.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -17,14 +16,6 @@ namespace {
 std::string OpenCvImage(const std::string& name) {
   return io::ReadFileBytes(std::string(LASERCELL_SOURCE_DIR) + "/datasets/real/opencv_chessboard/" +
                            name);
-}
-
-GrayImage FromDatasets(const datasets::GrayImage& in) {
-  GrayImage out;
-  out.width = in.width;
-  out.height = in.height;
-  out.pixels = in.pixels;
-  return out;
 }
 
 TEST(BoardSpec, ParsesChessboardAndCharucoForms) {
@@ -64,7 +55,7 @@ TEST(TargetDetection, FindsTheOpenCvSampleBoardAgreeingWithOpenCvsPipeline) {
   EXPECT_GE(d.refine_half_window_px, 5);
   EXPECT_GT(d.square_px, 15);
   // OpenCV's sample pipeline: findChessboardCorners + cornerSubPix(11x11).
-  const std::optional<GrayImage> image = DecodeGrayImage(bytes);
+  const std::optional<Image8> image = DecodeGrayImage(bytes);
   ASSERT_TRUE(image);
   const cv::Mat mat(image->height, image->width, CV_8UC1,
                     const_cast<std::uint8_t*>(image->pixels.data()));
@@ -103,13 +94,25 @@ TEST(TargetDetection, WrongBoardSizeIsDiagnosed) {
 }
 
 TEST(TargetDetection, BlankImageIsNotFound) {
-  GrayImage blank;
+  Image8 blank;
   blank.width = 320;
   blank.height = 240;
   blank.pixels.assign(320 * 240, 128);
   const TargetDetection d = DetectTarget(blank, ParseBoardSpec("chessboard:9x6:25"));
   EXPECT_EQ(d.status, DetectionStatus::kNotFound);
   EXPECT_NE(d.message.find("no 9x6 chessboard"), std::string::npos) << d.message;
+}
+
+// The detector takes gray images: a BGR Image8 is reported, not misread as a wider gray one.
+TEST(TargetDetection, ColourImageIsUnreadable) {
+  Image8 bgr;
+  bgr.width = 320;
+  bgr.height = 240;
+  bgr.channels = 3;
+  bgr.pixels.assign(320 * 240 * 3, 128);
+  const TargetDetection d = DetectTarget(bgr, ParseBoardSpec("chessboard:9x6:25"));
+  EXPECT_EQ(d.status, DetectionStatus::kUnreadable);
+  EXPECT_NE(d.message.find("3 channels"), std::string::npos) << d.message;
 }
 
 // RMS distance of detected corners from the true projections, in the best of the 4 orderings:
@@ -141,13 +144,13 @@ TEST(TargetDetection, RenderedChessboardCornersMatchTheTruth) {
   const CameraModel camera = datasets::MakeCameraModel();
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
-  const BoardSpec board = BoardOf(target);
+  const BoardSpec board = target.board;
   const auto poses = datasets::DrawChessboardPoses(target, camera, 3, 5);
-  const std::vector<Eigen::Vector3d> corners = target.InnerCorners();
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
   const int nx = board.cols, ny = board.rows;
   for (std::size_t k = 0; k < poses.size(); ++k) {
     const TargetDetection d =
-        DetectTarget(FromDatasets(renderer.RenderChessboard(target, poses[k], {}, 3 + k)), board);
+        DetectTarget(renderer.RenderChessboard(target, poses[k], {}, 3 + k), board);
     ASSERT_TRUE(d.found()) << d.message;
     ASSERT_EQ(d.corners_px.size(), corners.size());
     // The grid must be right-handed in the image (see DetectChessboard).
@@ -165,14 +168,14 @@ TEST(TargetDetection, SearchOnAShrunkImageRefinesAtFullResolution) {
   const CameraModel camera = datasets::MakeCameraModel();
   const datasets::ImageRenderer renderer(camera);
   const datasets::ChessboardTarget target;
-  const BoardSpec board = BoardOf(target);
+  const BoardSpec board = target.board;
   DetectionOptions options;
   options.search_downscale = 2;
   const auto poses = datasets::DrawChessboardPoses(target, camera, 3, 11);
-  const std::vector<Eigen::Vector3d> corners = target.InnerCorners();
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    const TargetDetection d = DetectTarget(
-        FromDatasets(renderer.RenderChessboard(target, poses[k], {}, 11 + k)), board, options);
+    const TargetDetection d =
+        DetectTarget(renderer.RenderChessboard(target, poses[k], {}, 11 + k), board, options);
     ASSERT_TRUE(d.found()) << d.message;
     ASSERT_EQ(d.corners_px.size(), corners.size());
     EXPECT_EQ(d.width, camera.width_px());
@@ -213,7 +216,7 @@ TEST(TargetDetection, FindsChArUcoCornersWithTheirIds) {
   cv::Mat image;
   cv::warpPerspective(padded, image, h, cv::Size(640, 640), cv::INTER_AREA, cv::BORDER_CONSTANT,
                       cv::Scalar(255));
-  GrayImage gray;
+  Image8 gray;
   gray.width = image.cols;
   gray.height = image.rows;
   gray.pixels.assign(image.data, image.data + image.total());
@@ -236,7 +239,7 @@ TEST(TargetDetection, ChArUcoWithTheWrongDictionaryIsNotFound) {
       5, 7, 40.f, 28.f, cv::aruco::getPredefinedDictionary(cv::aruco::DICT_4X4_50));
   cv::Mat flat;
   charuco->draw(cv::Size(300, 420), flat, 20, 1);
-  GrayImage gray;
+  Image8 gray;
   gray.width = flat.cols;
   gray.height = flat.rows;
   gray.pixels.assign(flat.data, flat.data + flat.total());
@@ -247,7 +250,7 @@ TEST(TargetDetection, ChArUcoWithTheWrongDictionaryIsNotFound) {
 
 TEST(TargetDetection, UnknownDictionaryIsAnOptionError) {
   BoardSpec board = ParseBoardSpec("charuco:5x7:40:28:DICT_9X9_7");
-  GrayImage gray;
+  Image8 gray;
   gray.width = 10;
   gray.height = 10;
   gray.pixels.assign(100, 0);

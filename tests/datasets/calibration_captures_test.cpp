@@ -264,10 +264,10 @@ TEST(PoseSweeps, JointPoseSetIsLargeVariedAndEverySweepSeesItsSphereOnTheTruth) 
 TEST(HandEyeImages, TruthIsTheTrueChainAndPosesRotateAboutSeveralAxes) {
   const SimConfig config;
   const CellTruth truth = MakeCellTruth(config);
-  ChessboardTarget board = config.chessboard;
-  const HandEyeImageSet set = PlanHandEyeImages(config, truth, board, 99);
+  ChessboardTarget target = config.chessboard;
+  const HandEyeImageSet set = PlanHandEyeImages(config, truth, target, 99);
   ASSERT_EQ(set.images.size(), 15u);
-  const std::vector<Eigen::Vector3d> corners = board.InnerCorners();
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
   std::vector<Eigen::Isometry3d> flanges;
   double worst_px = 0, worst_commanded_mm = 0, largest_offset_effect_px = 0;
   for (const HandEyeImage& im : set.images) {
@@ -347,7 +347,7 @@ TEST(HandEyeImages, CaptureWritesRecordsAndTruth) {
   ASSERT_FALSE(image.empty());
   std::vector<cv::Point2f> found;
   EXPECT_TRUE(cv::findChessboardCornersSB(
-      image, cv::Size(config.chessboard.squares_x - 1, config.chessboard.squares_y - 1), found));
+      image, cv::Size(config.chessboard.board.cols, config.chessboard.board.rows), found));
 }
 
 }  // namespace

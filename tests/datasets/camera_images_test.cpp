@@ -18,16 +18,16 @@
 namespace lasercell::datasets {
 namespace {
 
-cv::Mat ToMat(const GrayImage& image) {
+cv::Mat ToMat(const Image8& image) {
   return cv::Mat(image.height, image.width, CV_8UC1, const_cast<std::uint8_t*>(image.pixels.data()))
       .clone();
 }
 
-std::vector<cv::Point2f> TrueCorners(const ChessboardTarget& board,
+std::vector<cv::Point2f> TrueCorners(const ChessboardTarget& target,
                                      const calib::CameraModel& camera,
                                      const Eigen::Isometry3d& camera_from_board) {
   std::vector<cv::Point2f> out;
-  for (const Eigen::Vector3d& p : board.InnerCorners()) {
+  for (const Eigen::Vector3d& p : target.CornersInTarget()) {
     const auto q = ProjectInView(camera, camera_from_board * p);
     out.emplace_back(static_cast<float>(q->x()), static_cast<float>(q->y()));
   }
@@ -84,7 +84,7 @@ struct ExactRendering {
   }();
   calib::CameraModel camera = MakeCameraModel(intrinsics);
   ImageRenderer renderer{camera};
-  ChessboardTarget board;
+  ChessboardTarget target;
   ImageRenderOptions options = [] {
     ImageRenderOptions o;
     o.noise_sigma = 0;
@@ -103,15 +103,15 @@ struct ExactRendering {
 TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
   const ExactRendering exact;
   const calib::CameraModel& camera = exact.camera;
-  const ChessboardTarget& board = exact.board;
+  const ChessboardTarget& target = exact.target;
   Eigen::Isometry3d camera_from_board = Eigen::Isometry3d::Identity();
   camera_from_board.translation() = Eigen::Vector3d(-183.3, -121.7, 700.0);
   // The default 16 samples (64 gives 0.0024 px, bound 0.0026, but takes 25 s under ASan).
   for (int samples : {16}) {
     ImageRenderOptions options = exact.options;
     options.edge_samples = samples;
-    const GrayImage image = exact.renderer.RenderChessboard(board, camera_from_board, options, 1);
-    const double contrast = options.exposure * (board.light_albedo - board.dark_albedo);
+    const Image8 image = exact.renderer.RenderChessboard(target, camera_from_board, options, 1);
+    const double contrast = options.exposure * (target.light_albedo - target.dark_albedo);
     const double bound = 0.5 / (samples * samples) + 0.5 / contrast + 1e-9;
     double worst = 0;
     int edges = 0;
@@ -121,11 +121,12 @@ TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
     // Vertical edges (board x = i s) crossed by the middle row of each square row, and
     // horizontal edges (board y = j s) crossed by the middle column of each square column.
     for (int axis = 0; axis < 2; ++axis) {
-      const int n_edges = axis == 0 ? board.squares_x : board.squares_y;
-      const int n_cells = axis == 0 ? board.squares_y : board.squares_x;
+      const int n_edges = axis == 0 ? target.SquaresX() : target.SquaresY();
+      const int n_cells = axis == 0 ? target.SquaresY() : target.SquaresX();
       for (int i = 1; i < n_edges; ++i) {
         for (int j = 0; j < n_cells; ++j) {
-          const double along = i * board.square_mm, across = (j + 0.5) * board.square_mm;
+          const double along = i * target.board.square_mm,
+                       across = (j + 0.5) * target.board.square_mm;
           const Eigen::Vector2d e = axis == 0 ? project(along, across) : project(across, along);
           const double edge = axis == 0 ? e.x() : e.y();
           const int px = static_cast<int>(std::lround(axis == 0 ? e.x() : e.y()));
@@ -133,8 +134,8 @@ TEST(CameraImages, EdgePixelsHoldTheExactCoveredArea) {
           const double gray = axis == 0 ? image.at(px, other) : image.at(other, px);
           // Cell before the edge is (i - 1, j), after it (i, j); dark when the sum is even.
           const bool before_dark = (i - 1 + j) % 2 == 0;
-          const double a_before = before_dark ? board.dark_albedo : board.light_albedo;
-          const double a_after = before_dark ? board.light_albedo : board.dark_albedo;
+          const double a_before = before_dark ? target.dark_albedo : target.light_albedo;
+          const double a_after = before_dark ? target.light_albedo : target.dark_albedo;
           // gray = ambient + exposure * (a_before * f + a_after * (1 - f)), f = covered part.
           const double f = (gray - options.ambient - options.exposure * a_after) /
                            (options.exposure * (a_before - a_after));
@@ -174,22 +175,22 @@ TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
   constexpr double kSbExactTiltDeg = 26.0;
   const calib::CameraModel camera = MakeCameraModel();
   const ImageRenderer renderer(camera);
-  const ChessboardTarget board;
+  const ChessboardTarget target;
   ImageRenderOptions options;
   options.noise_sigma = 0;
-  const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(board, camera, 8, 17);
+  const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(target, camera, 8, 17);
   std::vector<double> view_rms;
   int mild_views = 0;
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    const GrayImage image = renderer.RenderChessboard(board, poses[k], options, 1);
+    const Image8 image = renderer.RenderChessboard(target, poses[k], options, 1);
     const cv::Mat mat = ToMat(image);
     std::vector<cv::Point2f> found;
-    ASSERT_TRUE(cv::findChessboardCornersSB(mat, cv::Size(board.squares_x - 1, board.squares_y - 1),
+    ASSERT_TRUE(cv::findChessboardCornersSB(mat, cv::Size(target.board.cols, target.board.rows),
                                             found, cv::CALIB_CB_ACCURACY))
         << "view " << k;
-    const auto truth = TrueCorners(board, camera, poses[k]);
+    const auto truth = TrueCorners(target, camera, poses[k]);
     ASSERT_EQ(found.size(), truth.size());
-    found = AlignToTruth(found, truth, board.squares_x - 1, board.squares_y - 1);
+    found = AlignToTruth(found, truth, target.board.cols, target.board.rows);
     double rms = 0;
     const double worst = MaxCornerError(found, truth, &rms);
     view_rms.push_back(rms);
@@ -217,21 +218,21 @@ TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
 // A second renderer, written independently of ImageRenderer for this test: a plain pinhole ray
 // through each of S x S sub-pixel points, intersected with the board plane, albedo looked up
 // and averaged (no mrcal, no adaptive edge sampling). Only the board's bounding box is sampled.
-cv::Mat RenderPinholeBySupersampling(const ChessboardTarget& board, const CameraIntrinsics& k,
+cv::Mat RenderPinholeBySupersampling(const ChessboardTarget& target, const CameraIntrinsics& k,
                                      const Eigen::Isometry3d& camera_from_board,
                                      const ImageRenderOptions& options, int s,
                                      const std::vector<cv::Point2f>& corners) {
   cv::Rect box = cv::boundingRect(corners);
-  const int pad =
-      2 *
-      static_cast<int>(std::ceil(board.square_mm * k.fx_px / camera_from_board.translation().z()));
+  const int pad = 2 * static_cast<int>(std::ceil(target.board.square_mm * k.fx_px /
+                                                 camera_from_board.translation().z()));
   box = cv::Rect(box.x - pad, box.y - pad, box.width + 2 * pad, box.height + 2 * pad) &
         cv::Rect(0, 0, k.width_px, k.height_px);
   cv::Mat image(k.height_px, k.width_px, CV_8UC1,
                 cv::Scalar(options.ambient + options.exposure * options.background_albedo));
   const Eigen::Isometry3d board_from_camera = camera_from_board.inverse();
   const Eigen::Vector3d origin = board_from_camera.translation();
-  const double sx = board.squares_x * board.square_mm, sy = board.squares_y * board.square_mm;
+  const double sx = target.SquaresX() * target.board.square_mm,
+               sy = target.SquaresY() * target.board.square_mm;
   for (int y = box.y; y < box.y + box.height; ++y) {
     for (int x = box.x; x < box.x + box.width; ++x) {
       double sum = 0;
@@ -244,13 +245,13 @@ cv::Mat RenderPinholeBySupersampling(const ChessboardTarget& board, const Camera
               Eigen::Vector3d((u - k.cx_px) / k.fx_px, (v - k.cy_px) / k.fy_px, 1.0);
           const Eigen::Vector3d p = origin - (origin.z() / ray.z()) * ray;
           double albedo = options.background_albedo;
-          if (p.x() >= -board.border_mm && p.x() <= sx + board.border_mm &&
-              p.y() >= -board.border_mm && p.y() <= sy + board.border_mm) {
-            albedo = board.light_albedo;
+          if (p.x() >= -target.border_mm && p.x() <= sx + target.border_mm &&
+              p.y() >= -target.border_mm && p.y() <= sy + target.border_mm) {
+            albedo = target.light_albedo;
             if (p.x() >= 0 && p.x() < sx && p.y() >= 0 && p.y() < sy) {
-              const int cx = static_cast<int>(std::floor(p.x() / board.square_mm));
-              const int cy = static_cast<int>(std::floor(p.y() / board.square_mm));
-              if ((cx + cy) % 2 == 0) albedo = board.dark_albedo;
+              const int cx = static_cast<int>(std::floor(p.x() / target.board.square_mm));
+              const int cy = static_cast<int>(std::floor(p.y() / target.board.square_mm));
+              if ((cx + cy) % 2 == 0) albedo = target.dark_albedo;
             }
           }
           sum += albedo;
@@ -276,15 +277,16 @@ TEST(CameraImages, AnIndependentRendererGivesFindChessboardCornersSbTheSameCorne
   const CameraIntrinsics& intrinsics = exact.intrinsics;
   const calib::CameraModel& camera = exact.camera;
   const ImageRenderer& renderer = exact.renderer;
-  const ChessboardTarget& board = exact.board;
+  const ChessboardTarget& target = exact.target;
   const ImageRenderOptions& options = exact.options;
-  const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(board, MakeCameraModel(), 8, 17);
-  const cv::Size pattern(board.squares_x - 1, board.squares_y - 1);
+  const std::vector<Eigen::Isometry3d> poses =
+      DrawChessboardPoses(target, MakeCameraModel(), 8, 17);
+  const cv::Size pattern(target.board.cols, target.board.rows);
   for (const std::size_t k : {std::size_t{3}, std::size_t{7}, std::size_t{2}}) {
-    const auto truth = TrueCorners(board, camera, poses[k]);
-    const cv::Mat ours = ToMat(renderer.RenderChessboard(board, poses[k], options, 1));
+    const auto truth = TrueCorners(target, camera, poses[k]);
+    const cv::Mat ours = ToMat(renderer.RenderChessboard(target, poses[k], options, 1));
     const cv::Mat independent =
-        RenderPinholeBySupersampling(board, intrinsics, poses[k], options, 8, truth);
+        RenderPinholeBySupersampling(target, intrinsics, poses[k], options, 8, truth);
     std::vector<cv::Point2f> in_ours, in_independent;
     ASSERT_TRUE(cv::findChessboardCornersSB(ours, pattern, in_ours, cv::CALIB_CB_ACCURACY));
     ASSERT_TRUE(
@@ -320,25 +322,24 @@ TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
   const CameraIntrinsics intrinsics;
   const calib::CameraModel camera = MakeCameraModel(intrinsics);
   const ImageRenderer renderer(camera);
-  const ChessboardTarget board;
+  const ChessboardTarget target;
   const ImageRenderOptions options;  // blur, noise, vignetting on
-  const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(board, camera, 16, 23);
+  const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(target, camera, 16, 23);
   std::vector<std::vector<cv::Point3f>> object_points;
   std::vector<std::vector<cv::Point2f>> image_points;
   for (std::size_t k = 0; k < poses.size(); ++k) {
-    const GrayImage image = renderer.RenderChessboard(board, poses[k], options, 100 + k);
+    const Image8 image = renderer.RenderChessboard(target, poses[k], options, 100 + k);
     std::vector<cv::Point2f> found;
-    if (!cv::findChessboardCornersSB(ToMat(image),
-                                     cv::Size(board.squares_x - 1, board.squares_y - 1), found,
-                                     cv::CALIB_CB_ACCURACY)) {
+    if (!cv::findChessboardCornersSB(ToMat(image), cv::Size(target.board.cols, target.board.rows),
+                                     found, cv::CALIB_CB_ACCURACY)) {
       continue;
     }
     std::vector<cv::Point3f> obj;
-    for (const Eigen::Vector3d& p : board.InnerCorners()) {
+    for (const Eigen::Vector3d& p : target.CornersInTarget()) {
       obj.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), 0.0f);
     }
-    found = AlignToTruth(found, TrueCorners(board, camera, poses[k]), board.squares_x - 1,
-                         board.squares_y - 1);
+    found = AlignToTruth(found, TrueCorners(target, camera, poses[k]), target.board.cols,
+                         target.board.rows);
     object_points.push_back(obj);
     image_points.push_back(found);
   }
@@ -354,14 +355,35 @@ TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
   EXPECT_NEAR(k.at<double>(1, 2), intrinsics.cy_px, 2.0);
 }
 
+// The target frame (origin at the pattern's outer corner) and BoardSpec's (origin at the first
+// inner corner) differ by one square along x and y; the corners in the target frame are the
+// BoardSpec corners through TargetFromBoard(), each an exact multiple of the square, also for a
+// square size that is not a binary fraction.
+TEST(CameraImages, TargetFrameIsBoardSpecFrameShiftedByOneSquare) {
+  ChessboardTarget target;
+  target.board = calib::BoardSpec::Chessboard(8, 7, 25.4);
+  EXPECT_EQ(target.SquaresX(), 9);
+  EXPECT_EQ(target.SquaresY(), 8);
+  const Eigen::Isometry3d target_from_board = target.TargetFromBoard();
+  EXPECT_TRUE(target_from_board.linear().isIdentity(0.0));
+  EXPECT_EQ(target_from_board.translation(), Eigen::Vector3d(25.4, 25.4, 0.0));
+  const std::vector<Eigen::Vector3d> corners = target.CornersInTarget();
+  ASSERT_EQ(static_cast<int>(corners.size()), target.board.NumCorners());
+  for (int id = 0; id < target.board.NumCorners(); ++id) {
+    const int c = id % 8, r = id / 8;
+    EXPECT_EQ(corners[id], Eigen::Vector3d((c + 1) * 25.4, (r + 1) * 25.4, 0.0)) << id;
+    EXPECT_LT((corners[id] - target_from_board * target.board.Corner(id)).norm(), 1e-12) << id;
+  }
+}
+
 TEST(CameraImages, PngsAreDeterministicAndDecodable) {
   const calib::CameraModel camera = MakeCameraModel();
   const ImageRenderer renderer(camera);
-  const ChessboardTarget board;
-  const auto pose = DrawChessboardPoses(board, camera, 1, 5).front();
-  const std::string a = EncodePng(renderer.RenderChessboard(board, pose, {}, 9));
-  const std::string b = EncodePng(renderer.RenderChessboard(board, pose, {}, 9));
-  const std::string c = EncodePng(renderer.RenderChessboard(board, pose, {}, 10));
+  const ChessboardTarget target;
+  const auto pose = DrawChessboardPoses(target, camera, 1, 5).front();
+  const std::string a = EncodePng(renderer.RenderChessboard(target, pose, {}, 9));
+  const std::string b = EncodePng(renderer.RenderChessboard(target, pose, {}, 9));
+  const std::string c = EncodePng(renderer.RenderChessboard(target, pose, {}, 10));
   EXPECT_EQ(a, b);
   EXPECT_NE(a, c);
   const cv::Mat decoded =
@@ -380,7 +402,7 @@ TEST(CameraImages, LaserLineImagePeaksAtTheExactRows) {
   const ExposureTruth truth = laser.RenderExact(pose);
   ImageRenderOptions options;
   options.noise_sigma = 0;
-  const GrayImage image = ImageRenderer(sensor.camera).RenderLaserLine(truth, options, 1);
+  const Image8 image = ImageRenderer(sensor.camera).RenderLaserLine(truth, options, 1);
   int checked = 0;
   for (int x = 0; x < 1024; x += 7) {
     if (std::isnan(truth.row_px[x])) continue;

@@ -31,7 +31,7 @@ TEST(ImageToPoints, RawImageOfThePlaneTriangulatesOntoThePlane) {
   for (double& i : ex.intensity) i = std::min(i, 120.0 / 255.0);
   datasets::ImageRenderOptions io;
   const datasets::ImageRenderer images(truth.sensor.camera);
-  const datasets::GrayImage img = images.RenderLaserLine(ex, io, 11);
+  const Image8 img = images.RenderLaserLine(ex, io, 11);
   PeakDetectionOptions po;
   po.estimator = PeakEstimator::kBlaisRioux;
   const PeakDetectionResult peaks =

@@ -89,14 +89,14 @@ TEST(PeakDetection, SimulatedStripeImagesScatterNearTheCramerRaoBound) {
   const double s = 3.0 * kFwhmToSigma;
   const double sigma_n = std::sqrt(io.noise_sigma * io.noise_sigma + 1.0 / 12);
   const double crb = sigma_n / 100.0 * std::sqrt(2 * s / std::sqrt(std::numbers::pi));
-  std::vector<datasets::GrayImage> images;
+  std::vector<Image8> images;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     images.push_back(renderer.RenderLaserLine(ex, io, seed));
   }
   for (const PeakEstimator e : kAll) {
     double sum = 0, sum2 = 0;
     int n = 0;
-    for (const datasets::GrayImage& img : images) {
+    for (const Image8& img : images) {
       PeakDetectionOptions o;
       o.estimator = e;
       const PeakDetectionResult r = DetectPeaks(ImageView8{img.pixels.data(), w, img.height, 0}, o);
