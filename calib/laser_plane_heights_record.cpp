@@ -26,7 +26,7 @@ std::string PlaneHeightsYaml(const PlaneHeightsRecord& record) {
 
 PlaneHeightsRecord ParsePlaneHeightsYaml(const std::string& text, const std::string& name) {
   yaml::Fields fields = yaml::Fields::Parse(text, name);
-  fields.ExpectFormat("lasercell.plane_heights", 1);
+  fields.RequireFormat("lasercell.plane_heights", 1);
   PlaneHeightsRecord record;
   fields.ReadRequired("heights_mm", &record.heights_mm);
   fields.ReadRequired("plate_normal_in_sensor", &record.plate_normal_in_sensor);

@@ -68,6 +68,16 @@ TEST(LaserPlaneHeightsRecord, BadRecordsNameTheField) {
   EXPECT_THROW(calib::ParsePlaneHeightsYaml(
                    ok + "heights_mm: []\nplate_normal_in_sensor: [0, 0, -1]\n", "p.yaml"),
                InputError);
+  try {  // a record says what it is
+    calib::ParsePlaneHeightsYaml("heights_mm: [1, 2]\nplate_normal_in_sensor: [0, 0, -1]\n",
+                                 "p.yaml");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(
+                  "field 'format' is required, expected 'lasercell.plane_heights'"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 triangulation::ProfileSet SmallSet(std::uint32_t width, std::uint32_t height) {

@@ -8,11 +8,11 @@
 #include <numbers>
 #include <string>
 
+#include "calib/laser_plane_heights_record.hpp"
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
-#include "core/yaml_fields.hpp"
 #include "datasets/robots.hpp"
 #include "datasets/sim_config.hpp"
 #include "datasets/simulate_records.hpp"
@@ -345,13 +345,11 @@ TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
   EXPECT_EQ(sensor.LaserPlane(), truth.sensor.laser.Coefficients());
   ASSERT_TRUE(sensor.laser_point_in_sensor_mm.has_value());
   EXPECT_EQ(*sensor.laser_point_in_sensor_mm, truth.sensor.laser.origin_in_sensor);
-  yaml::Fields planes = yaml::Fields::Load(dir + "/records/planes.yaml");
-  planes.ExpectFormat("lasercell.plane_heights", 1);
-  std::vector<double> heights;
-  Eigen::Vector3d normal = Eigen::Vector3d::Zero();
-  planes.ReadRequired("heights_mm", &heights);
-  planes.ReadRequired("plate_normal_in_sensor", &normal);
-  planes.Done();
+  // records/planes.yaml through its reader.
+  const calib::PlaneHeightsRecord planes =
+      calib::ReadPlaneHeightsYaml(dir + "/records/planes.yaml");
+  const std::vector<double>& heights = planes.heights_mm;
+  const Eigen::Vector3d& normal = planes.plate_normal_in_sensor;
   EXPECT_EQ(heights, config.plane_heights_mm);
   EXPECT_NEAR(normal.norm(), 1.0, 1e-12);
   // It points up, towards the sensor (which looks down).
