@@ -29,6 +29,13 @@ int LineOf(const YAML::Node& n) {
   return n.Mark().line + 1;
 }
 
+std::string HintTail(const std::string& hint) { return hint.empty() ? "" : " (" + hint + ")"; }
+
+std::string FormatMismatch(const std::string& found, const std::string& expected,
+                           const std::string& hint) {
+  return "is '" + found + "', expected '" + expected + "'" + HintTail(hint);
+}
+
 std::string ReadsVersion(const std::string& what, int version) {
   return "this build reads " + what + " version " + std::to_string(version);
 }
@@ -83,25 +90,20 @@ Fields::Fields(YAML::Node node, std::string path, std::string file, ErrorKind er
 }
 
 void Fields::ExpectFormat(const std::string& format, int version) {
+  // Both keys optional; a present one is checked as RequireFormat checks it.
   std::string f = format;
-  int v = version;
   Read("format", &f);
-  Read("version", &v);
-  if (f != format) Fail("format", "is '" + f + "', expected '" + format + "'");
-  if (v != version)
-    Fail("version", "is " + std::to_string(v) + "; " + ReadsVersion(format, version));
+  if (f != format) Fail("format", FormatMismatch(f, format, ""));
+  if (Has("version")) RequireVersion(version, format);
 }
 
 void Fields::RequireFormat(const std::string& expected_format, int version,
                            const std::string& hint) {
-  const std::string tail = hint.empty() ? "" : " (" + hint + ")";
   std::string format;
   if (!Read("format", &format)) {
-    Fail("format", "is required, expected '" + expected_format + "'" + tail);
+    Fail("format", "is required, expected '" + expected_format + "'" + HintTail(hint));
   }
-  if (format != expected_format) {
-    Fail("format", "is '" + format + "', expected '" + expected_format + "'" + tail);
-  }
+  if (format != expected_format) Fail("format", FormatMismatch(format, expected_format, hint));
   RequireVersion(version, expected_format);
 }
 
