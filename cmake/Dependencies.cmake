@@ -18,3 +18,11 @@ find_library(MRCAL_LIBRARY mrcal REQUIRED)
 # OpenCV: image IO, chessboard/ChArUco detection (calib/), peer comparisons (tools/ only).
 find_package(OpenCV 4 REQUIRED COMPONENTS core imgproc calib3d imgcodecs aruco)
 set(LASERCELL_OPENCV_CALIB_LIBS opencv_core opencv_imgproc opencv_calib3d opencv_imgcodecs opencv_aruco)
+# OpenCASCADE 7.6: STEP/IGES part models (localize/cad_import, localize/cad_export) only; its
+# headers stay out of localize's public headers.
+find_package(OpenCASCADE REQUIRED)
+set(LASERCELL_OCCT_LIBS
+  TKSTEP TKIGES TKXSBase      # STEP and IGES readers/writers, data-exchange settings
+  TKMesh                      # tessellation (BRepMesh)
+  TKPrim TKBO                 # primitives and Boolean operations (cad_export)
+  TKTopAlgo TKBRep TKGeomBase TKG3d TKG2d TKMath TKernel)
