@@ -25,4 +25,5 @@ set(LASERCELL_OCCT_LIBS
   TKSTEP TKIGES TKXSBase      # STEP and IGES readers/writers, data-exchange settings
   TKMesh                      # tessellation (BRepMesh)
   TKPrim TKBO                 # primitives and Boolean operations (cad_export)
+  TKShHealing                 # loose IGES faces -> oriented solids (ShapeFix_Solid)
   TKTopAlgo TKBRep TKGeomBase TKG3d TKG2d TKMath TKernel)

@@ -1,6 +1,7 @@
 #include "localize/cad_import.hpp"
 
 #include <BRepAdaptor_Surface.hxx>
+#include <BRepBuilderAPI_Sewing.hxx>
 #include <BRepGProp.hxx>
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRepTools.hxx>
@@ -13,15 +14,21 @@
 #include <IGESData_IGESModel.hxx>
 #include <Poly_Triangulation.hxx>
 #include <STEPControl_Reader.hxx>
+#include <ShapeFix_Solid.hxx>
 #include <Standard_Failure.hxx>
 #include <TColStd_SequenceOfAsciiString.hxx>
 #include <TCollection_HAsciiString.hxx>
 #include <TopExp.hxx>
+#include <TopExp_Explorer.hxx>
 #include <TopLoc_Location.hxx>
 #include <TopTools_IndexedMapOfShape.hxx>
 #include <TopoDS.hxx>
+#include <TopoDS_Builder.hxx>
+#include <TopoDS_Compound.hxx>
 #include <TopoDS_Face.hxx>
 #include <TopoDS_Shape.hxx>
+#include <TopoDS_Shell.hxx>
+#include <TopoDS_Solid.hxx>
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -250,6 +257,42 @@ LoadedShape LoadIges(const std::string& path) {
   return loaded;
 }
 
+// Gap between neighbouring faces that sewing closes, mm: exporters write trimmed surfaces
+// whose edges meet to about 1e-3..1e-2 mm.
+constexpr double kSewingToleranceMm = 0.01;
+
+// IGES files from most CAD systems hold loose trimmed surfaces (entity 144), not solids: their
+// face orientations follow each surface's parametrization, so "outward" is undefined until the
+// faces are sewn into shells and each closed shell is made a solid oriented by its enclosed
+// volume (ShapeFix_Solid::SolidFromShell). Open shells stay as sewn (consistently oriented, but
+// the side is the file's). Shapes that already are solids are returned unchanged.
+TopoDS_Shape SolidsFromLooseFaces(const TopoDS_Shape& shape) {
+  if (TopExp_Explorer(shape, TopAbs_SOLID).More() || !TopExp_Explorer(shape, TopAbs_FACE).More()) {
+    return shape;
+  }
+  BRepBuilderAPI_Sewing sewing(kSewingToleranceMm);
+  sewing.Add(shape);
+  sewing.Perform();
+  const TopoDS_Shape sewn = sewing.SewedShape();
+  if (sewn.IsNull()) return shape;
+  TopoDS_Compound result;
+  TopoDS_Builder builder;
+  builder.MakeCompound(result);
+  for (TopExp_Explorer it(sewn, TopAbs_SHELL); it.More(); it.Next()) {
+    const TopoDS_Shell& shell = TopoDS::Shell(it.Current());
+    if (BRep_Tool::IsClosed(shell)) {
+      ShapeFix_Solid fix;
+      builder.Add(result, fix.SolidFromShell(shell));
+    } else {
+      builder.Add(result, shell);
+    }
+  }
+  for (TopExp_Explorer it(sewn, TopAbs_FACE, TopAbs_SHELL); it.More(); it.Next()) {
+    builder.Add(result, it.Current());  // faces sewing left alone
+  }
+  return result;
+}
+
 // Outward unit normal of `face` at (u, v), or false where the parametrization degenerates
 // (apex of a cone, pole of a sphere). Geom surfaces are oriented by dS/du x dS/dv; a face
 // that uses its surface REVERSED has the opposite material side.
@@ -429,7 +472,7 @@ CadModel ReadCadModel(const std::string& path, const CadImportOptions& options) 
                        ": holds no surfaces (nothing could be translated): export the "
                        "part as a solid");
     }
-    CadModel model = BuildModel(loaded.shape, options, path);
+    CadModel model = BuildModel(SolidsFromLooseFaces(loaded.shape), options, path);
     model.format = format == CadFormat::kStep ? "step" : "iges";
     model.source_unit = loaded.unit;
     model.scale_to_mm = loaded.scale_to_mm;

@@ -50,20 +50,23 @@ struct CadModel {
   /// Millimetres per file unit, the factor applied to the file's coordinates (of the first root
   /// when the roots differ; OpenCASCADE converts each root with its own unit).
   double scale_to_mm = 1.0;
-  std::size_t solids = 0;  ///< Solids in the file's shape.
-  std::size_t shells = 0;  ///< Shells (closed or open) in the file's shape.
-  std::size_t faces = 0;   ///< Faces in the file's shape.
+  // Topology of the part as read; a file of loose faces (IGES trimmed surfaces, the usual IGES
+  // export) is first sewn into shells, and each closed shell made a solid, so its normals can be
+  // oriented outward.
+  std::size_t solids = 0;  ///< Solids in the part.
+  std::size_t shells = 0;  ///< Shells (closed or open) in the part.
+  std::size_t faces = 0;   ///< Faces in the part.
   /// Area of all faces on the exact surfaces (Gauss integration, not the mesh), mm^2.
   double surface_area_mm2 = 0;
 };
 
 /// Reads a STEP (.step, .stp) or IGES (.iges, .igs) file, chosen by the extension
-/// (case-insensitive), converts it to millimetres, tessellates it and samples oriented points on
-/// its faces. Throws FileError when the file is missing or unreadable; InputError when the
-/// extension is neither STEP nor IGES, the content is not a readable file of that format (with
-/// the reader's status), the file declares an unknown length unit, it holds no faces (e.g. only
-/// curves or points), or OpenCASCADE fails on it; OptionError for bad options. Every message
-/// names the file and says what to do.
+/// (case-insensitive), converts it to millimetres, sews loose faces into solids (see `solids`),
+/// tessellates it and samples oriented points on its faces. Throws FileError when the file is
+/// missing or unreadable; InputError when the extension is neither STEP nor IGES, the content is
+/// not a readable file of that format (with the reader's status), the file declares an unknown
+/// length unit, it holds no faces (e.g. only curves or points), or OpenCASCADE fails on it;
+/// OptionError for bad options. Every message names the file and says what to do.
 CadModel ReadCadModel(const std::string& path, const CadImportOptions& options = {});
 
 }  // namespace lasercell::localize
