@@ -227,13 +227,25 @@ const char* const kViewScript = R"JS(
     sprite.renderOrder = 1;
     return sprite;
   }
+  // An arrow along +y of `length` from the origin: a shaft and a cone, unlit so that the axis
+  // colours stay exact.
+  function arrow(length, colour) {
+    var material = new THREE.MeshBasicMaterial({color: colour}), head = 0.22 * length;
+    var shaft = new THREE.CylinderBufferGeometry(0.025 * length, 0.025 * length, length - head, 8);
+    shaft.translate(0, (length - head) / 2, 0);
+    var cone = new THREE.ConeBufferGeometry(0.07 * length, head, 12);
+    cone.translate(0, length - head / 2, 0);
+    var group = new THREE.Group();
+    group.add(new THREE.Mesh(shaft, material));
+    group.add(new THREE.Mesh(cone, material));
+    return group;
+  }
   function frameObject(f) {
-    var group = new THREE.Group(), origin = new THREE.Vector3(0, 0, 0), L = f.length;
-    var axes = [[1, 0, 0, 0xd62728], [0, 1, 0, 0x2ca02c], [0, 0, 1, 0x1f5fd6]];
-    axes.forEach(function (a) {
-      group.add(new THREE.ArrowHelper(new THREE.Vector3(a[0], a[1], a[2]), origin, L, a[3],
-                                      0.2 * L, 0.1 * L));
-    });
+    var group = new THREE.Group(), L = f.length;
+    var x = arrow(L, 0xd62728), y = arrow(L, 0x2ca02c), z = arrow(L, 0x1f5fd6);
+    x.rotation.z = -Math.PI / 2;  // +y onto +x
+    z.rotation.x = Math.PI / 2;  // +y onto +z
+    group.add(x, y, z);
     if (f.name) group.add(label(f.name, 0.25 * L));
     return posed(group, f.matrix);
   }
@@ -500,7 +512,8 @@ std::string Scene3dHtml(const Scene3d& scene, int index) {
        EscapeHtml(scene.units) + ". " + std::to_string(shown) + " of " + std::to_string(total) +
        " points shown.</figcaption></figure>\n";
   s += "<script type='application/json' id='" + id + "-data'>" +
-       ScriptSafe(SceneJson(scene).dump()) + "</script>\n";
+       ScriptSafe(SceneJson(scene).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)) +
+       "</script>\n";
   return s;
 }
 
