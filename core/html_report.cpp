@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/html_scene3d.hpp"
 #include "core/io/file_util.hpp"
 
 namespace lasercell::report {
@@ -20,7 +21,9 @@ constexpr double kBottom = 50.0;
 const char* const kPalette[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e",
                                 "#9467bd", "#8c564b", "#e377c2", "#17becf"};
 
-std::string Escape(const std::string& text) {
+}  // namespace
+
+std::string EscapeHtml(const std::string& text) {
   std::string out;
   out.reserve(text.size());
   for (char c : text) {
@@ -46,6 +49,8 @@ std::string Escape(const std::string& text) {
   }
   return out;
 }
+
+namespace {
 
 // Short numbers for coordinates and tick labels (no locale).
 std::string Num(double v, int precision = 4) {
@@ -131,9 +136,9 @@ class Frame {
            "' text-anchor='end' class='tick'>" + Num(t) + "</text>";
     }
     s += "<text x='" + Num(kLeft + w_ / 2) + "' y='" + Num(kTop + h_ + 40) +
-         "' text-anchor='middle' class='label'>" + Escape(x_label) + "</text>";
+         "' text-anchor='middle' class='label'>" + EscapeHtml(x_label) + "</text>";
     s += "<text transform='translate(16," + Num(kTop + h_ / 2) +
-         ") rotate(-90)' text-anchor='middle' class='label'>" + Escape(y_label) + "</text>";
+         ") rotate(-90)' text-anchor='middle' class='label'>" + EscapeHtml(y_label) + "</text>";
     return s;
   }
 
@@ -144,15 +149,15 @@ class Frame {
 };
 
 std::string OpenSvg(const std::string& title, double height = kHeight) {
-  return "<figure><svg class='lc-plot' data-plot='" + Escape(title) +
+  return "<figure><svg class='lc-plot' data-plot='" + EscapeHtml(title) +
          "' xmlns='http://www.w3.org/2000/svg' width='" + Num(kWidth + 90) + "' height='" +
          Num(height) + "' viewBox='0 0 " + Num(kWidth + 90) + " " + Num(height) + "'>" +
-         "<text x='" + Num(kLeft) + "' y='18' class='title'>" + Escape(title) + "</text>";
+         "<text x='" + Num(kLeft) + "' y='18' class='title'>" + EscapeHtml(title) + "</text>";
 }
 
 std::string CloseSvg(const std::string& caption = "") {
   std::string s = "</svg>";
-  if (!caption.empty()) s += "<figcaption>" + Escape(caption) + "</figcaption>";
+  if (!caption.empty()) s += "<figcaption>" + EscapeHtml(caption) + "</figcaption>";
   return s + "</figure>\n";
 }
 
@@ -175,18 +180,22 @@ std::string Colour(double t) {
 
 HtmlReport::HtmlReport(std::string title) : title_(std::move(title)) {}
 
-void HtmlReport::AddHeading(const std::string& text) { body_ += "<h2>" + Escape(text) + "</h2>\n"; }
+void HtmlReport::AddHeading(const std::string& text) {
+  body_ += "<h2>" + EscapeHtml(text) + "</h2>\n";
+}
 
-void HtmlReport::AddParagraph(const std::string& text) { body_ += "<p>" + Escape(text) + "</p>\n"; }
+void HtmlReport::AddParagraph(const std::string& text) {
+  body_ += "<p>" + EscapeHtml(text) + "</p>\n";
+}
 
 void HtmlReport::AddWarning(const std::string& text) {
-  body_ += "<p class='warning'>&#9888; " + Escape(text) + "</p>\n";
+  body_ += "<p class='warning'>&#9888; " + EscapeHtml(text) + "</p>\n";
 }
 
 void HtmlReport::AddKeyValues(const std::vector<std::pair<std::string, std::string>>& rows) {
   body_ += "<table class='kv'>";
   for (const auto& [key, value] : rows) {
-    body_ += "<tr><th>" + Escape(key) + "</th><td>" + Escape(value) + "</td></tr>";
+    body_ += "<tr><th>" + EscapeHtml(key) + "</th><td>" + EscapeHtml(value) + "</td></tr>";
   }
   body_ += "</table>\n";
 }
@@ -194,12 +203,12 @@ void HtmlReport::AddKeyValues(const std::vector<std::pair<std::string, std::stri
 void HtmlReport::AddTable(const std::vector<std::string>& header,
                           const std::vector<std::vector<std::string>>& rows) {
   body_ += "<table><tr>";
-  for (const auto& h : header) body_ += "<th>" + Escape(h) + "</th>";
+  for (const auto& h : header) body_ += "<th>" + EscapeHtml(h) + "</th>";
   body_ += "</tr>";
   for (std::size_t r = 0; r < rows.size(); ++r) {
     LASERCELL_CHECK(rows[r].size() == header.size(), "report table row has the wrong cell count");
     body_ += "<tr>";
-    for (const auto& cell : rows[r]) body_ += "<td>" + Escape(cell) + "</td>";
+    for (const auto& cell : rows[r]) body_ += "<td>" + EscapeHtml(cell) + "</td>";
     body_ += "</tr>";
   }
   body_ += "</table>\n";
@@ -254,11 +263,11 @@ void HtmlReport::AddBars(const std::string& title, const std::vector<std::string
     const double v = std::isfinite(values[i]) ? values[i] : 0.0;
     const double y0 = frame.Y(std::min(0.0, v)), y1 = frame.Y(std::max(0.0, v));
     s += "<rect x='" + Num(x0) + "' y='" + Num(y1) + "' width='" + Num(x1 - x0) + "' height='" +
-         Num(y0 - y1) + "' fill='#1f77b4'><title>" + Escape(labels[i]) + ": " + Num(values[i]) +
+         Num(y0 - y1) + "' fill='#1f77b4'><title>" + EscapeHtml(labels[i]) + ": " + Num(values[i]) +
          "</title></rect>";
     if (values.size() <= 60) {
       s += "<text transform='translate(" + Num((x0 + x1) / 2) + "," + Num(kHeight - kBottom + 12) +
-           ") rotate(60)' class='tick'>" + Escape(labels[i]) + "</text>";
+           ") rotate(60)' class='tick'>" + EscapeHtml(labels[i]) + "</text>";
     }
   }
   s += frame.Axes("", y_label, /*x_ticks=*/false);
@@ -305,7 +314,7 @@ void HtmlReport::AddScatter(const std::string& title, const std::vector<Series>&
     }
     s += "<rect x='" + Num(kWidth - kRight + 5) + "' y='" + Num(kTop + 16.0 * k) +
          "' width='10' height='10' fill='" + colour + "'/><text x='" + Num(kWidth - kRight + 18) +
-         "' y='" + Num(kTop + 9 + 16.0 * k) + "' class='tick'>" + Escape(ser.name) + "</text>";
+         "' y='" + Num(kTop + 9 + 16.0 * k) + "' class='tick'>" + EscapeHtml(ser.name) + "</text>";
   }
   s += frame.Axes(options.x_label, options.y_label);
   body_ += s + CloseSvg();
@@ -378,10 +387,18 @@ void HtmlReport::AddHeatmap(const std::string& title, const Eigen::MatrixXd& val
   ++num_plots_;
 }
 
+void HtmlReport::Add3dView(const Scene3d& scene, const std::string& three_js_path) {
+  body_ += Scene3dHtml(scene, num_views3d_);
+  three_js_path_ = ThreeJsPath(three_js_path);
+  ++num_views3d_;
+}
+
 std::string HtmlReport::Html() const {
+  // Read first: a missing three.js is an error, not a page without its views.
+  const std::string scripts3d = num_views3d_ > 0 ? Scene3dScripts(three_js_path_) : "";
   std::string page;
   page += "<!DOCTYPE html>\n<html lang='en'><head><meta charset='utf-8'>\n<title>" +
-          Escape(title_) + "</title>\n";
+          EscapeHtml(title_) + "</title>\n";
   // First script: record any later script error in the DOM, for headless checks.
   page +=
       "<script>window.addEventListener('error',function(e){var b=document.body;"
@@ -392,8 +409,9 @@ std::string HtmlReport::Html() const {
       "text-align:right}th{background:#eee}table.kv th{text-align:left}"
       ".warning{color:#a00;font-weight:bold}svg .tick{font-size:11px;fill:#333}"
       "svg .label{font-size:12px;fill:#222}svg .title{font-size:14px;font-weight:bold}"
-      "figure{margin:1em 0}figcaption{font-size:12px;color:#555}</style>\n</head>\n<body>\n";
-  page += "<h1>" + Escape(title_) + "</h1>\n" + body_;
+      "figure{margin:1em 0}figcaption{font-size:12px;color:#555}</style>\n";
+  if (num_views3d_ > 0) page += Scene3dStyle();
+  page += "</head>\n<body>\n<h1>" + EscapeHtml(title_) + "</h1>\n" + body_ + scripts3d;
   page +=
       "<script>document.body.dataset.plots=String(document.querySelectorAll('svg.lc-plot')."
       "length);document.body.dataset.reportReady='1';</script>\n</body></html>\n";

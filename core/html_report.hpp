@@ -1,6 +1,7 @@
 #pragma once
 // Self-contained HTML reports for calibrations and localizations: one file, no network, plots as
-// inline SVG drawn here (no JavaScript library). Every plot is an
+// inline SVG drawn here (no JavaScript library); 3D views drawn by an inlined three.js
+// (core/html_scene3d.hpp). Every plot is an
 // <svg class="lc-plot" data-plot="TITLE">; a small inline script marks the page
 // <body data-report-ready="1" data-plots="N"> after load and records script errors in
 // data-report-errors, so a headless browser test can check "page loads, no script errors, plots
@@ -16,6 +17,11 @@
 #include <vector>
 
 namespace lasercell::report {
+
+struct Scene3d;  // core/html_scene3d.hpp
+
+/// `text` with & < > " ' replaced by HTML entities, safe in element text and quoted attributes.
+std::string EscapeHtml(const std::string& text);
 
 /// One named set of (x, y) points in a scatter/line plot.
 struct Series {
@@ -69,8 +75,16 @@ class HtmlReport {
   void AddHeatmap(const std::string& title, const Eigen::MatrixXd& values, double width,
                   double height, const std::string& value_label);
 
+  /// An interactive 3D view of `scene` (core/html_scene3d.hpp); throws InputError when the scene
+  /// fails Scene3d::Check. three.js is read from ThreeJsPath(three_js_path) when the page is
+  /// made (the path of the last call wins), so Html and WriteHtmlReport throw FileError when
+  /// libjs-three is missing rather than write a page without the view.
+  void Add3dView(const Scene3d& scene, const std::string& three_js_path = "");
+
   /// Number of plots added so far.
   int NumPlots() const { return num_plots_; }
+  /// Number of 3D views added so far.
+  int NumViews3d() const { return num_views3d_; }
   /// The complete, self-contained page.
   std::string Html() const;
 
@@ -78,6 +92,8 @@ class HtmlReport {
   std::string title_;
   std::string body_;
   int num_plots_ = 0;
+  int num_views3d_ = 0;
+  std::string three_js_path_;  // resolved by the last Add3dView
 };
 
 /// Writes the report atomically (temp file + rename); throws FileError when it cannot.

@@ -110,13 +110,19 @@ inline CommandResult RunCliMerged(const std::string& args) {
   return RunCommand(std::string(LASERCELL_CLI) + " " + args + " 2>&1");
 }
 
-/// Loads the HTML page at `path` in Debian's headless chromium and returns the DOM after its
+/// Loads the HTML page at `path` in Debian's headless chromium started with the extra command
+/// line `flags` (e.g. "--use-angle=swiftshader --enable-unsafe-swiftshader --screenshot=FILE
+/// --window-size=1000,800" for WebGL and a PNG of the window) and returns the DOM after its
 /// scripts ran; "" when chromium did not run (scripts/install-deps installs it).
-inline std::string HeadlessChromiumDom(const std::string& path) {
-  const std::string command =
-      "chromium --headless --no-sandbox --disable-gpu --disable-dev-shm-usage --dump-dom 'file://" +
-      path + "' 2>/dev/null";
+inline std::string HeadlessChromium(const std::string& path, const std::string& flags) {
+  const std::string command = "chromium --headless --no-sandbox --disable-dev-shm-usage " + flags +
+                              " --dump-dom 'file://" + path + "' 2>/dev/null";
   return RunCommand(command).out;
+}
+
+/// HeadlessChromium without a GPU: the DOM of the page at `path` after its scripts ran.
+inline std::string HeadlessChromiumDom(const std::string& path) {
+  return HeadlessChromium(path, "--disable-gpu");
 }
 
 /// A fresh, empty folder <tmp>/lasercell_<tag>_<test name>_<pid> for the running test (without
