@@ -24,7 +24,10 @@
 // Assumptions: first order in xi; independent residuals of zero mean at the true pose. Not in
 // the covariance: spatially correlated scan errors (the ICP source is thinned, which weakens but
 // does not remove them), and the bias of point-to-plane against a point-sampled curved model
-// (curvature x spacing^2 / 2 per residual): both make it optimistic.
+// (curvature x spacing^2 / 2 per residual): both make it optimistic. Point-to-point is far
+// more so: its tangential residuals come from the model's sampling, not from noise, and its
+// slow convergence stops short; in the point-to-plane coverage test's setting its sigmas were
+// 2-6x too small. Use point-to-plane where the covariance matters.
 // Unobservable directions (a plane, a cylinder, a sphere: eigenvalues of A below 1e-9 of the
 // largest) get the variance kIcpUnobservableVariance instead of an inverse, and
 // covariance_valid is false; so do fits with m <= 6 scalar residuals. The matrix stays finite.
