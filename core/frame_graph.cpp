@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/pose_covariance.hpp"
 
 namespace lasercell {
 
@@ -317,6 +318,52 @@ Eigen::Isometry3d FrameGraph::Transform(const std::string& to, const std::string
     to_from_from = to_from_from * (step.forward ? parent_from_child : parent_from_child.inverse());
   }
   return to_from_from;
+}
+
+TransformWithCovarianceResult FrameGraph::TransformWithCovariance(const std::string& to,
+                                                                  const std::string& from,
+                                                                  const JointValues& joints) const {
+  TransformWithCovarianceResult result;
+  // Transform checks the frames and the joint values and gives the pose; the walk below
+  // repeats its products to know, at each edge, the prefix to_from_parent that moves the
+  // edge's perturbation into the `to` frame.
+  result.to_from_from = Transform(to, from, joints);
+  Eigen::Isometry3d to_from_here = Eigen::Isometry3d::Identity();
+  for (const Step& step : Path(to, from)) {
+    Eigen::Isometry3d parent_from_child;
+    if (step.is_static) {
+      const StaticEdge& edge = static_edges_[step.index];
+      parent_from_child = edge.ParentFromChild();
+      if (edge.covariance) {
+        // Forward the edge maps into the frame where we stand; backward we apply its inverse.
+        const Matrix6d cov = step.forward ? *edge.covariance
+                                          : InverseCovariance(parent_from_child, *edge.covariance);
+        result.covariance = ComposeCovariance(to_from_here, result.covariance, cov);
+      } else {
+        result.edges_without_covariance.push_back(edge.parent + " <- " + edge.child);
+      }
+    } else {
+      const DynamicEdge& edge = dynamic_edges_[step.index];
+      parent_from_child = Transform(edge.parent, edge.child, joints);  // the one-edge path
+      result.crosses_dynamic_edge = true;
+      result.robots_on_path.push_back(edge.robot);
+    }
+    to_from_here = to_from_here * (step.forward ? parent_from_child : parent_from_child.inverse());
+  }
+  return result;
+}
+
+std::string TransformWithCovarianceResult::Summary() const {
+  if (Complete()) return "covariance covers every edge on the path";
+  std::string out;
+  for (const std::string& edge : edges_without_covariance) {
+    out += (out.empty() ? "" : "; ") + ("static edge " + edge + " (no covariance)");
+  }
+  for (const std::string& robot : robots_on_path) {
+    out += (out.empty() ? "" : "; ") +
+           ("robot " + robot + " (joint and kinematic uncertainty not modelled)");
+  }
+  return "covariance omits: " + out;
 }
 
 std::vector<std::string> FrameGraph::RobotsOnPath(const std::string& to,

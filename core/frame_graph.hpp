@@ -108,6 +108,34 @@ struct LaserPlaneEntry {
 /// Joint values (rad) per robot name.
 using JointValues = std::map<std::string, std::vector<double>>;
 
+/// FrameGraph::TransformWithCovariance: a transform, its first-order covariance from the static
+/// edges' covariances, and what that covariance leaves out.
+struct TransformWithCovarianceResult {
+  /// The transform, exactly as FrameGraph::Transform returns it.
+  Eigen::Isometry3d to_from_from = Eigen::Isometry3d::Identity();
+  /// Covariance of to_from_from over [rotation vector (rad); translation (mm)], left
+  /// perturbation in the `to` frame (to_from_from_true = Exp(xi) * to_from_from), composed to
+  /// first order from the static edges on the path that carry a covariance, edges assumed
+  /// independent (core/pose_covariance.hpp). Zero when none does.
+  Matrix6d covariance = Matrix6d::Zero();
+  /// Static edges on the path without a covariance ("parent <- child", in path order from
+  /// `to`): counted as exact, so `covariance` understates the uncertainty by their share.
+  std::vector<std::string> edges_without_covariance;
+  /// True when the path passes through a dynamic (robot) edge. Its joint-reading and
+  /// kinematic-model uncertainty is not modelled: the robot edge counts as exact.
+  bool crosses_dynamic_edge = false;
+  /// The robots of those dynamic edges, in path order from `to`.
+  std::vector<std::string> robots_on_path;
+
+  /// True when every edge on the path contributed its uncertainty (no edge without covariance,
+  /// no robot edge).
+  bool Complete() const { return edges_without_covariance.empty() && !crosses_dynamic_edge; }
+  /// One line naming what the covariance leaves out, e.g. "covariance omits: static edge
+  /// cell <- handling_base (no covariance); robot vision_robot (joint and kinematic uncertainty
+  /// not modelled)", or "covariance covers every edge on the path".
+  std::string Summary() const;
+};
+
 /// Named frames joined by static and dynamic edges; a forest without cycles.
 class FrameGraph {
  public:
@@ -158,6 +186,13 @@ class FrameGraph {
   /// (or the wrong number of) joint values in `joints`.
   Eigen::Isometry3d Transform(const std::string& to, const std::string& from,
                               const JointValues& joints = {}) const;
+  /// Transform(to, from, joints) with the first-order covariance of to_from_from composed from
+  /// the covariances of the static edges on the path (an edge walked child -> parent
+  /// contributes the covariance of its inverse, InverseCovariance), and the list of what is not
+  /// modelled (edges without covariance, robot edges). Throws what Transform throws.
+  TransformWithCovarianceResult TransformWithCovariance(const std::string& to,
+                                                        const std::string& from,
+                                                        const JointValues& joints = {}) const;
   /// Robots whose dynamic edges lie on the path from `from` to `to`.
   std::vector<std::string> RobotsOnPath(const std::string& to, const std::string& from) const;
   /// True when a path exists.

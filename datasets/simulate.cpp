@@ -10,6 +10,7 @@
 #include "calib/laser_plane_heights_record.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
+#include "core/io/mesh_io.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/parallel.hpp"
 #include "core/se3.hpp"
@@ -19,7 +20,7 @@
 #include "datasets/rng.hpp"
 #include "datasets/robots.hpp"
 #include "datasets/simulate_records.hpp"
-#include "datasets/stl.hpp"
+#include "localize/part.hpp"
 #include "triangulation/profile_io.hpp"
 #include "triangulation/sphere_sweeps.hpp"
 
@@ -97,7 +98,7 @@ class Output {
   void WriteMesh(const std::string& name, const TriangleMesh& mesh) {
     io::WritePlyMesh(Path("models/" + name + ".ply"), mesh);
     files_.push_back("models/" + name + ".ply");
-    WriteStlMesh(Path("models/" + name + ".stl"), mesh);
+    io::WriteStlMesh(Path("models/" + name + ".stl"), mesh);
     files_.push_back("models/" + name + ".stl");
   }
   std::string Path(const std::string& relative) const {
@@ -342,6 +343,26 @@ void RunPoseSweeps(const SimConfig& config, const CellTruth& truth, const PoseSw
   }
 }
 
+// The seat's part file: its STL, the hole as grasp frame (z along the hole axis, out of the
+// boss: the gripper approaches along -z).
+localize::PartDefinition SeatPartDefinition(const ChairSeat& seat) {
+  localize::PartDefinition part;
+  part.name = "seat";
+  part.model = "seat.stl";
+  part.units = "mm";
+  localize::GraspFrame hole;
+  hole.name = "hole";
+  hole.description = "3-finger gripper into the 27 mm hole of the boss, approach along -z";
+  Eigen::Isometry3d part_from_hole = Eigen::Isometry3d::Identity();
+  part_from_hole.linear() =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), seat.hole_axis_in_part)
+          .toRotationMatrix();
+  part_from_hole.translation() = seat.hole_center_in_part;
+  hole.part_from_grasp = QuaternionPose::FromIsometry(part_from_hole);
+  part.grasps.push_back(hole);
+  return part;
+}
+
 void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
                       const std::vector<SeatCapture>& seats, Output& out) {
   FrameGraph graph = truth.Graph();
@@ -357,6 +378,7 @@ void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
   out.Write("truth/sim_config.yaml", SimConfigToYaml(config));
   if (config.write_meshes) {
     out.WriteMesh("seat", truth.seat.part.mesh);
+    out.Write("models/seat.part.yaml", localize::PartFileYaml(SeatPartDefinition(truth.seat)));
     out.WriteMesh("pallet", MakePallet().mesh);
     out.WriteMesh("sphere_targets", SphereTargetsMesh(truth, config));
   }

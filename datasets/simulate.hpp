@@ -23,7 +23,7 @@
 //                                 camera_from_board and true inner-corner pixels per image)
 //   images/laser_line_*.png       raw laser-line images (truth/laser_lines.yaml: exact rows)
 //   models/seat.ply, models/pallet.ply, models/sphere_targets.ply   meshes (PLY, mm), and the
-//                                 same as .stl (binary STL, datasets/stl.hpp)
+//                                 same as .stl (binary STL, core/io/mesh_io.hpp)
 //   profiles/eye_in_hand_NN.lcp, profiles/joint_pose_NNN.lcp   short sphere sweeps of the vision
 //                                 robot from many poses, commanded joints in every profile
 //                                 (datasets/calibration_captures.hpp)

@@ -10,15 +10,13 @@
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
+#include "core/pose_covariance.hpp"
 #include "core/se3.hpp"
 
 namespace lasercell::registration {
 namespace {
 
 constexpr std::size_t kChunk = 256;  // fixed chunking: sums do not depend on the thread count
-
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
-using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 // One source point's correspondence at the current pose.
 struct Match {
@@ -221,6 +219,117 @@ void ReportFit(IcpProblem& p, IcpResult& result) {
   }
 }
 
+// psi'(r) = d(w(r) r)/dr, the slope of the kernel's influence function (Huber 1981, sec. 7.6):
+// the estimator's Hessian weight, where IRLS uses w(r).
+double InfluenceSlope(RobustKernel kernel, double r, double sigma) {
+  const double a = std::abs(r);
+  switch (kernel) {
+    case RobustKernel::kNone:
+      return 1.0;
+    case RobustKernel::kHuber:
+      return a <= 1.345 * sigma ? 1.0 : 0.0;
+    case RobustKernel::kTukey: {
+      const double c = 4.685 * sigma;
+      if (a >= c) return 0.0;
+      const double u2 = (r / c) * (r / c);
+      return (1.0 - u2) * (1.0 - 5.0 * u2);
+    }
+    case RobustKernel::kGemanMcClure: {
+      const double s2 = sigma * sigma, d = s2 + r * r;
+      return s2 * s2 * (s2 - 3.0 * r * r) / (d * d * d);
+    }
+  }
+  return 1.0;
+}
+
+// Sums of the sandwich estimator (file comment of icp.hpp) about the matched centroid c.
+struct Sandwich {
+  Matrix6d a = Matrix6d::Zero();  // sum J^T psi'(r) J: the estimator's Hessian
+  Matrix6d b = Matrix6d::Zero();  // sum J^T psi(r) psi(r)^T J: the scatter of its gradient
+  double weighted_sq = 0.0;       // sum w r^2
+  std::size_t residuals = 0;      // scalar residuals m
+};
+
+Sandwich AccumulateSandwich(const IcpProblem& p, double sigma, const Eigen::Vector3d& c) {
+  const auto& target_points = p.target.points();
+  Sandwich s;
+  for (std::size_t i = 0; i < p.source.size(); ++i) {
+    const Match& m = p.matches[i];
+    if (!m.valid) continue;
+    const double w = Weight(p.options.kernel, m.residual, sigma);
+    if (w <= 0.0) continue;
+    const double slope = InfluenceSlope(p.options.kernel, m.residual, sigma);
+    const Eigen::Vector3d a = p.moved[i] - c;
+    if (p.plane) {
+      const Eigen::Vector3d& nq = p.target_normals[m.target];
+      Vector6d j;
+      j << a.cross(nq), nq;
+      s.a.noalias() += slope * j * j.transpose();
+      s.b.noalias() += (w * m.residual) * (w * m.residual) * j * j.transpose();
+      s.weighted_sq += w * m.residual * m.residual;
+      s.residuals += 1;
+    } else {
+      // e = T s - q, de/dxi = [-[a]x, I]; psi(e) = w(|e|) e has the Jacobian
+      // w I + (psi'(|e|) - w) e e^T / |e|^2 (the kernel acts on the distance |e|).
+      const Eigen::Vector3d e = p.moved[i] - target_points[m.target];
+      Eigen::Matrix<double, 3, 6> j;
+      j << -Skew(a), Eigen::Matrix3d::Identity();
+      Eigen::Matrix3d d_psi = w * Eigen::Matrix3d::Identity();
+      if (e.squaredNorm() > 0.0) d_psi += (slope - w) * e * e.transpose() / e.squaredNorm();
+      s.a.noalias() += j.transpose() * d_psi * j;
+      const Eigen::Matrix<double, 6, 1> g = j.transpose() * (w * e);
+      s.b.noalias() += g * g.transpose();
+      s.weighted_sq += w * e.squaredNorm();
+      s.residuals += 3;
+    }
+  }
+  return s;
+}
+
+// Pose covariance at the returned pose (file comment of icp.hpp), from the matches ReportFit
+// left in `p` (associated at the returned pose) and its kernel scale.
+void EstimateCovariance(const IcpProblem& p, IcpResult& result) {
+  result.covariance = Matrix6d::Identity() * kIcpUnobservableVariance;
+  result.covariance_valid = false;
+  if (result.correspondences == 0) return;
+  // Linearized about the matched centroid c (as the steps are), for conditioning; moved to the
+  // target origin at the end.
+  const Eigen::Vector3d c = MatchedCentroid(p);
+  const Sandwich s = AccumulateSandwich(p, result.kernel_scale_mm, c);
+  if (s.residuals <= 6) return;
+  const double dof = static_cast<double>(s.residuals - 6);
+  result.residual_sigma_mm = std::sqrt(s.weighted_sq / dof);
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(s.a);
+  const double max_eig = eig.eigenvalues().maxCoeff();
+  if (!(max_eig > 0.0)) return;
+  // A^-1 B A^-1 in A's eigenbasis, times the HC1 small-sample factor m / (m - 6) (MacKinnon &
+  // White 1985); directions A does not determine get only the placeholder variance.
+  const Matrix6d& v = eig.eigenvectors();
+  const Vector6d lambda = eig.eigenvalues();
+  const double hc1 = static_cast<double>(s.residuals) / dof;
+  const Matrix6d scatter = v.transpose() * s.b * v;
+  Matrix6d middle = Matrix6d::Zero();
+  bool observable = true;
+  for (int k = 0; k < 6; ++k) {
+    if (!(lambda(k) > 1e-9 * max_eig)) {
+      middle(k, k) = kIcpUnobservableVariance;
+      observable = false;
+      continue;
+    }
+    for (int l = 0; l < 6; ++l) {
+      if (lambda(l) > 1e-9 * max_eig) middle(k, l) = hc1 * scatter(k, l) / (lambda(k) * lambda(l));
+    }
+  }
+  const Matrix6d about_c = v * middle * v.transpose();
+  // A perturbation about c, p -> c + Exp(w)(p - c) + u, is Exp([w; u + c x w]) about the
+  // origin: the adjoint of the translation by c.
+  Eigen::Isometry3d at_c = Eigen::Isometry3d::Identity();
+  at_c.translation() = c;
+  result.covariance = ComposeCovariance(at_c, Matrix6d::Zero(), about_c);
+  result.covariance_valid =
+      observable && result.termination != IcpTermination::kTooFewCorrespondences;
+}
+
 }  // namespace
 
 void IcpOptions::Check() const {
@@ -257,7 +366,8 @@ std::string IcpResult::Summary() const {
   std::ostringstream s;
   s << ToString(termination) << " after " << iterations << " iterations: rmse " << rmse_mm
     << " mm (point " << point_rmse_mm << " mm), " << inliers << "/" << correspondences
-    << " inliers, sigma " << kernel_scale_mm << " mm" << (degenerate ? ", degenerate" : "");
+    << " inliers, sigma " << kernel_scale_mm << " mm" << (degenerate ? ", degenerate" : "")
+    << (covariance_valid ? "" : ", no covariance");
   return s.str();
 }
 
@@ -318,6 +428,7 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
   }
   result.converged = result.termination == IcpTermination::kConverged;
   ReportFit(problem, result);
+  EstimateCovariance(problem, result);
   return result;
 }
 

@@ -5,15 +5,48 @@
 // is below tolerance. As in the seed (Skotheim IV-G) the scene is the source and the model the
 // target: the result is target_from_source (= model_from_scene). Units: mm, rad.
 // Deterministic for any thread count: partial sums are per fixed chunk, merged in chunk order.
+//
+// Pose covariance (IcpResult::covariance), evaluated once at the returned pose over the
+// correspondences with a positive kernel weight, with the final kernel scale. J_i is the
+// residual's Jacobian w.r.t. a left perturbation xi = [w (rad); u (mm)] of target_from_source
+// (core/pose_covariance.hpp); r_i the residual (point-to-plane: n.(T s - q); point-to-point: the
+// vector T s - q, the kernel acting on its length); psi(r) = w(r) r the kernel's influence and
+// psi'(r) its slope. The M-estimator's sandwich (Huber 1967; Huber 1981, sec. 7.6):
+//   cov = m / (m - 6) * A^-1 B A^-1,  A = sum_i J_i^T psi'(r_i) J_i,  B = sum_i J_i^T psi_i psi_i^T
+//   J_i
+// with m the number of scalar residuals (HC1 factor, MacKinnon & White 1985). For least squares
+// this is White's (1980) heteroscedasticity-consistent covariance; it reduces to
+// s^2 (J^T W J)^-1, s^2 = sum w r^2 / (m - 6), when every residual has the same variance and
+// w = 1. That plain form is not used because a laser scanner's noise lies along the line of
+// sight: projected on the surface normal it scales with cos(incidence), so faces seen at
+// different angles have different residual variances, and one pooled s^2 gave some directions
+// a sigma 1.5x too small and others one 2x too large (tests/registration/icp_covariance_test.cpp).
+// Assumptions: first order in xi; independent residuals of zero mean at the true pose. Not in
+// the covariance: spatially correlated scan errors (the ICP source is thinned, which weakens but
+// does not remove them), and the bias of point-to-plane against a point-sampled curved model
+// (curvature x spacing^2 / 2 per residual): both make it optimistic. Point-to-point is far
+// more so: its tangential residuals come from the model's sampling, not from noise, and its
+// slow convergence stops short; in the point-to-plane coverage test's setting its sigmas were
+// 2-6x too small. Use point-to-plane where the covariance matters.
+// Unobservable directions (a plane, a cylinder, a sphere: eigenvalues of A below 1e-9 of the
+// largest) get the variance kIcpUnobservableVariance instead of an inverse, and
+// covariance_valid is false; so do fits with m <= 6 scalar residuals. The matrix stays finite.
+// IcpResult::residual_sigma_mm reports s above (the pooled residual scale) for information.
 
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <span>
 #include <string>
 
+#include "core/se3.hpp"
 #include "registration/kdtree.hpp"
 
 namespace lasercell::registration {
+
+/// Variance given to unobservable directions of the ICP covariance: rad^2 / mm^2 along the
+/// free eigenvectors (sigma 1e5), large against any real pose uncertainty, yet finite so that
+/// propagating it (InverseCovariance, ComposeCovariance) keeps the matrix free of NaN.
+inline constexpr double kIcpUnobservableVariance = 1e10;
 
 /// Error metric.
 enum class IcpMetric {
@@ -64,6 +97,17 @@ struct IcpResult {
   double point_rmse_mm = 0.0;       ///< RMS nearest-neighbour distance over inliers.
   double kernel_scale_mm = 0.0;     ///< Final sigma.
   bool degenerate = false;          ///< The last step was rank-deficient (e.g. a plane).
+  /// Covariance of target_from_source over [rotation vector (rad); translation (mm)], left
+  /// perturbation in the target frame (target_from_source_true = Exp(xi) * target_from_source);
+  /// see the file comment for the estimator. Finite; meaningful only when covariance_valid.
+  Matrix6d covariance = Matrix6d::Identity() * kIcpUnobservableVariance;
+  /// False when the covariance could not be estimated: unobservable directions at the final
+  /// pose (they carry kIcpUnobservableVariance), at most 6 scalar residuals, or too few
+  /// correspondences.
+  bool covariance_valid = false;
+  /// Pooled residual scale s = sqrt(sum w r^2 / (m - 6)), mm (for information; the covariance
+  /// uses each residual's own scatter, see the file comment).
+  double residual_sigma_mm = 0.0;
   /// One line, e.g. "converged after 7 iterations: rmse 0.41 mm, 812/903 inliers".
   std::string Summary() const;
 };

@@ -11,6 +11,9 @@ nlohmann::json LocalizationCandidateJson(const LocalizationCandidate& c) {
   j["rank"] = c.rank;
   j["scene_from_model"] = json::Pose(c.scene_from_model);
   j["scene_from_model_matrix"] = json::MatrixRows(c.scene_from_model);
+  // The fit's covariance of scene_from_model (left perturbation in the scene frame), or null.
+  j["scene_from_model_covariance"] =
+      c.covariance_valid ? json::Covariance(c.covariance) : nlohmann::json();
   j["votes"] = c.votes;
   j["score"] = c.score;
   j["support"] = c.verification.support;

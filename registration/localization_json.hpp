@@ -21,8 +21,9 @@ struct LocalizationInputNames {
 };
 
 /// One candidate: rank, scene_from_model {translation_mm, rotation_wxyz},
-/// scene_from_model_matrix (4 rows), votes, score, support, coarse_support, icp (or null) and
-/// rejection_reason when rejected.
+/// scene_from_model_matrix (4 rows), scene_from_model_covariance (json::Covariance: order,
+/// 6 rows, sigma_rotation_deg, sigma_translation_mm; null unless covariance_valid), votes, score,
+/// support, coarse_support, icp (or null) and rejection_reason when rejected.
 nlohmann::json LocalizationCandidateJson(const LocalizationCandidate& candidate);
 
 /// The result file: format, version, model, scene, found (+ message), ambiguous (+ reason),

@@ -10,6 +10,7 @@
 #include <unordered_set>
 
 #include "core/error.hpp"
+#include "core/pose_covariance.hpp"
 #include "core/se3.hpp"
 
 namespace lasercell::registration {
@@ -146,6 +147,14 @@ void Refine(const RefineContext& ctx, std::vector<std::uint32_t> overlap,
         candidate->icp.target_from_source.inverse() * model.model_from_centered().inverse();
   }
   candidate->icp.iterations = iterations;
+  // The pose is the inverse of ICP's target_from_source (times the exact model_from_centered,
+  // on the right, which leaves a left perturbation in the scene frame as it is). A last round
+  // that lost its correspondences left the pose of the round before: no covariance for it.
+  if (candidate->icp.termination != IcpTermination::kTooFewCorrespondences) {
+    candidate->covariance =
+        InverseCovariance(candidate->icp.target_from_source, candidate->icp.covariance);
+    candidate->covariance_valid = candidate->icp.covariance_valid;
+  }
   const auto t = Clock::now();
   candidate->verification =
       VerifyPose(ctx.points, model, candidate->scene_from_model, options.viewpoint, ctx.refined);

@@ -119,6 +119,14 @@ struct LocalizationCandidate {
   VerificationResult verification;         ///< After ICP (the coarse one when ICP did not run).
   bool icp_run = false;
   IcpResult icp;  ///< Last ICP round (iterations summed over rounds); valid when icp_run.
+  /// Covariance of scene_from_model over [rotation vector (rad); translation (mm)], left
+  /// perturbation in the scene frame (scene_from_model_true = Exp(xi) * scene_from_model): the
+  /// last ICP round's covariance of model_from_scene, inverted (InverseCovariance,
+  /// core/pose_covariance.hpp). It holds the fit's share only (see icp.hpp for the estimator and
+  /// what it assumes). Finite; meaningful only when covariance_valid.
+  Matrix6d covariance = Matrix6d::Identity() * kIcpUnobservableVariance;
+  /// True when ICP ran and its covariance is valid (IcpResult::covariance_valid).
+  bool covariance_valid = false;
   std::string rejection_reason;  ///< Why it was rejected; empty for ranked candidates.
 };
 

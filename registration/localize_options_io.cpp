@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/frame_graph.hpp"  // FormatDouble
 #include "core/se3.hpp"
 #include "core/yaml_fields.hpp"
 
@@ -101,16 +102,7 @@ constexpr std::pair<std::string_view, RobustKernel> kKernels[] = {
 
 void ReadModel(yaml::Fields& f, PpfModelOptions* m) {
   yaml::Fields s = f.Sub("model");
-  s.Read("sampling_step_relative", &m->sampling_step_relative);
-  s.Read("sampling_step_mm", &m->sampling_step_mm);
-  s.Read("distance_step_relative", &m->distance_step_relative);
-  s.Read("distance_step_mm", &m->distance_step_mm);
-  s.Read("angle_step_rad", &m->angle_step_rad);
-  s.Read("refinement_step_relative", &m->refinement_step_relative);
-  ReadEnum(s, "normal_mode", kNormalModes, &m->normal_mode);
-  s.Read("max_model_points", &m->max_model_points);
-  ReadNormals(s, "normals", &m->normals);
-  s.Done();
+  ReadPpfModelOptionFields(s, m);
 }
 
 // Steps 1-3: region of interest, small clusters, normals, subsampling.
@@ -206,7 +198,46 @@ void ReadIcp(yaml::Fields& r, LocalizeOptions* o) {
   r.Read("extra_refined_min_relative_support", &o->extra_refined_min_relative_support);
 }
 
-LocalizeSettings FromFields(yaml::Fields r) {
+}  // namespace
+
+void ReadPpfModelOptionFields(yaml::Fields& s, PpfModelOptions* m) {
+  s.Read("sampling_step_relative", &m->sampling_step_relative);
+  s.Read("sampling_step_mm", &m->sampling_step_mm);
+  s.Read("distance_step_relative", &m->distance_step_relative);
+  s.Read("distance_step_mm", &m->distance_step_mm);
+  s.Read("angle_step_rad", &m->angle_step_rad);
+  s.Read("refinement_step_relative", &m->refinement_step_relative);
+  ReadEnum(s, "normal_mode", kNormalModes, &m->normal_mode);
+  s.Read("max_model_points", &m->max_model_points);
+  ReadNormals(s, "normals", &m->normals);
+  s.Done();
+}
+
+std::string PpfModelOptionsYaml(const PpfModelOptions& m, const std::string& indent) {
+  std::string normal_mode;
+  for (const auto& [name, value] : kNormalModes) {
+    if (value == m.normal_mode) normal_mode = name;
+  }
+  const auto line = [&](const char* key, const std::string& value) {
+    return indent + key + ": " + value + "\n";
+  };
+  const auto num = [](double v) { return FormatDouble(v); };
+  return line("sampling_step_relative", num(m.sampling_step_relative)) +
+         line("sampling_step_mm", num(m.sampling_step_mm)) +
+         line("distance_step_relative", num(m.distance_step_relative)) +
+         line("distance_step_mm", num(m.distance_step_mm)) +
+         line("angle_step_rad", num(m.angle_step_rad)) +
+         line("refinement_step_relative", num(m.refinement_step_relative)) +
+         line("normal_mode", normal_mode) +
+         line("max_model_points", std::to_string(m.max_model_points)) + indent + "normals:\n" +
+         line("  k", std::to_string(m.normals.k)) + line("  radius_mm", num(m.normals.radius_mm)) +
+         line("  use_grid_when_organized", m.normals.use_grid_when_organized ? "true" : "false") +
+         line("  grid_window", std::to_string(m.normals.grid_window)) +
+         line("  grid_max_distance_mm", num(m.normals.grid_max_distance_mm)) +
+         line("  min_neighbors", std::to_string(m.normals.min_neighbors));
+}
+
+LocalizeSettings LocalizeSettingsFromFields(yaml::Fields r) {
   LocalizeSettings settings;
   LocalizeOptions& o = settings.localize;
   r.ExpectFormat("lasercell.localize_options", 1);
@@ -231,14 +262,12 @@ LocalizeSettings FromFields(yaml::Fields r) {
   return settings;
 }
 
-}  // namespace
-
 LocalizeSettings ParseLocalizeOptions(const std::string& text, const std::string& name) {
-  return FromFields(yaml::Fields::Parse(text, name));
+  return LocalizeSettingsFromFields(yaml::Fields::Parse(text, name));
 }
 
 LocalizeSettings ReadLocalizeOptions(const std::string& path) {
-  return FromFields(yaml::Fields::Load(path));
+  return LocalizeSettingsFromFields(yaml::Fields::Load(path));
 }
 
 }  // namespace lasercell::registration

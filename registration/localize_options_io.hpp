@@ -12,6 +12,7 @@
 
 #include <string>
 
+#include "core/yaml_fields.hpp"
 #include "registration/localize_in_cloud.hpp"
 #include "registration/ppf_model.hpp"
 
@@ -31,5 +32,15 @@ LocalizeSettings ParseLocalizeOptions(const std::string& text, const std::string
 
 /// Reads and parses an options file (FileError when it cannot be read).
 LocalizeSettings ReadLocalizeOptions(const std::string& path);
+
+/// The options of a map already open in a larger file (a job's `localize:` section): the same
+/// keys as an options file, `format`/`version` optional.
+LocalizeSettings LocalizeSettingsFromFields(yaml::Fields fields);
+/// The PpfModelOptions keys of the map `fields` (an options file's `model:`, a part file's
+/// `model_options:`); unknown keys are rejected (fields.Done()).
+void ReadPpfModelOptionFields(yaml::Fields& fields, PpfModelOptions* out);
+/// Every PpfModelOptions key as YAML lines, each starting with `indent`; reads back through
+/// ReadPpfModelOptionFields to the same options.
+std::string PpfModelOptionsYaml(const PpfModelOptions& options, const std::string& indent);
 
 }  // namespace lasercell::registration

@@ -18,6 +18,8 @@ int main(int argc, char** argv) {
   lasercell::tools::AddCloudCommands(app);
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
+  lasercell::tools::AddJobCommands(app);
+  lasercell::tools::AddModelCommands(app);
   lasercell::tools::AddSimulateCommands(app);
   lasercell::tools::AddScanCommands(app);
   CLI::App* calibrate = app.add_subcommand(

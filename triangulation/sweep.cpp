@@ -97,6 +97,7 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
   // Per profile: points in the sweep frame (NaN where rejected), counts.
   std::vector<std::vector<Eigen::Vector3d>> points(count);
   std::vector<TriangulationCounts> counts(count);
+  std::vector<Eigen::Isometry3d> frame_from_sensor(count, Eigen::Isometry3d::Identity());
   const auto work = [&](std::size_t i) {
     const Profile& p = set.profiles[i];
     points[i].resize(p.row_px.size());
@@ -115,6 +116,7 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
     if (placed) {
       for (Eigen::Vector3d& q : points[i]) q = target_from_sensor * q;
     }
+    frame_from_sensor[i] = placed ? target_from_sensor * sweep_from_sensor : sweep_from_sensor;
   };
   // Per profile into its own slots: the result does not depend on the thread count.
   ParallelForChunks(options.threads, count, 1, [&](std::size_t begin, std::size_t end) {
@@ -125,6 +127,7 @@ SweepResult AssembleSweep(const ProfileSet& set, const Triangulator& triangulato
   result.profiles = count;
   result.motion = options.motion;
   result.frame = options.motion == SweepMotion::kRobot || placed ? options.target_frame : "sensor";
+  result.frame_from_sensor = std::move(frame_from_sensor);
   for (std::size_t i = 0; i < count; ++i) {
     result.counts += counts[i];
     if (i > 0 && set.profiles[i].sequence > set.profiles[i - 1].sequence + 1) {

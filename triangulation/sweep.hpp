@@ -23,9 +23,11 @@
 // Units mm, s, rad.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "core/frame_graph.hpp"
 #include "core/point_cloud.hpp"
@@ -67,6 +69,10 @@ struct SweepResult {
   std::size_t profiles = 0;       ///< Profiles read.
   TriangulationCounts counts;     ///< Over all profiles.
   std::size_t sequence_gaps = 0;  ///< Lost profiles detected from sequence-number jumps.
+  /// Per profile (file order, = cloud.profile): the sensor pose when it was exposed, in the sweep
+  /// frame (frame <- sensor). Its translation is the camera centre, from which the line of sight
+  /// of every point of that profile starts (normal orientation, visibility).
+  std::vector<Eigen::Isometry3d> frame_from_sensor;
 
   /// One line: profiles, points, rejections, frame.
   std::string Summary() const;

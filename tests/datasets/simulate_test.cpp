@@ -12,11 +12,11 @@
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "core/io/mesh_io.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "datasets/robots.hpp"
 #include "datasets/sim_config.hpp"
 #include "datasets/simulate_records.hpp"
-#include "datasets/stl.hpp"
 #include "tests/cli_util.hpp"
 #include "triangulation/linear_sweep.hpp"
 #include "triangulation/profile_io.hpp"
@@ -419,7 +419,8 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   const TriangleMesh seat = io::ReadPlyMesh(dir + "/models/seat.ply");
   EXPECT_EQ(seat.faces.size(), truth.seat.part.mesh.faces.size());
   // ... and the same mesh as binary STL.
-  EXPECT_EQ(ReadStlMesh(dir + "/models/seat.stl").faces.size(), truth.seat.part.mesh.faces.size());
+  EXPECT_EQ(io::ReadStlMesh(dir + "/models/seat.stl").faces.size(),
+            truth.seat.part.mesh.faces.size());
   // The config written back reproduces the same config.
   EXPECT_EQ(SimConfigToYaml(LoadSimConfig(dir + "/truth/sim_config.yaml")),
             SimConfigToYaml(config));

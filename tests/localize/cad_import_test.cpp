@@ -12,6 +12,7 @@
 #include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -348,7 +349,7 @@ TEST(CadImport, FilesInInchesAndMetresReadBackInMillimetres) {
   }
 }
 
-TEST(CadImport, ExtensionIsCaseInsensitiveAndSamplingIsDeterministic) {
+TEST(CadImport, ExtensionIsCaseInsensitiveAndReadsAreDeterministicAndThreadSafe) {
   const test::TestDir dir("cad_import");
   const std::string path = dir.File("PLATE.STP");
   WriteCadSolid(path, PlateWithHole(Eigen::Isometry3d::Identity()));
@@ -361,6 +362,31 @@ TEST(CadImport, ExtensionIsCaseInsensitiveAndSamplingIsDeterministic) {
   EXPECT_EQ(a.samples.positions, b.samples.positions);
   EXPECT_EQ(a.samples.normals, b.samples.normals);
   EXPECT_EQ(a.mesh.faces, b.mesh.faces);
+  // Concurrent reads and writes (OpenCASCADE's settings are process-wide) give the same model.
+  std::vector<CadModel> models(2);
+  std::vector<std::string> errors(2);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < models.size(); ++t) {
+    threads.emplace_back([&, t] {
+      try {
+        WriteCadSolid(dir.File("thread" + std::to_string(t) + ".igs"),
+                      PlateWithBoss(Eigen::Isometry3d::Identity()), t == 0 ? "inch" : "m");
+        models[t] = ReadCadModel(path, options);
+      } catch (const std::exception& e) {
+        errors[t] = e.what();
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  EXPECT_EQ(errors, std::vector<std::string>(2));
+  for (const CadModel& model : models) EXPECT_EQ(model.samples.positions, a.samples.positions);
+  // Each concurrent write kept its own unit (the unit is a process-wide OpenCASCADE setting).
+  const CadModel inch = ReadCadModel(dir.File("thread0.igs"), options);
+  const CadModel metre = ReadCadModel(dir.File("thread1.igs"), options);
+  EXPECT_EQ(inch.source_unit, "inch");
+  EXPECT_EQ(metre.source_unit, "m");
+  EXPECT_EQ(inch.faces, 8u);
+  EXPECT_NEAR(metre.surface_area_mm2, AnalyticArea(true), 1e-3 * AnalyticArea(true));
   // A coarser step gives proportionally fewer points.
   const double expected = AnalyticArea(false) / 4;
   EXPECT_GE(static_cast<double>(a.samples.size()), 0.97 * expected);

@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "tests/cli_util.hpp"
+#include "triangulation/profile_source.hpp"
 
 namespace lasercell::triangulation {
 namespace {
@@ -101,6 +102,21 @@ TEST(ProfileIo, RoundTripThroughFileWithoutJoints) {
   ExpectBitIdentical(set, back);
   EXPECT_EQ(back.profiles[0].ValidCount(), 1024u - 147u);  // c % 7 == 0 has no peak
   EXPECT_TRUE(std::isnan(back.profiles[0].row_px[0]));
+}
+
+TEST(ProfileIo, AFileSourceDeliversTheFileAsOneSweepThenNothing) {
+  const ProfileSet set = MakeSet(64, 6, 5);
+  const test::TestDir dir("profile_source");
+  const std::string path = dir.File("sweep.lcp");
+  WriteProfiles(path, set);
+  FileProfileSource source(path);
+  EXPECT_EQ(source.Describe(), "file " + path);
+  const std::optional<ProfileSet> sweep = source.NextSweep();
+  ASSERT_TRUE(sweep.has_value());
+  ExpectBitIdentical(set, *sweep);
+  EXPECT_FALSE(source.NextSweep().has_value());
+  FileProfileSource missing(dir.File("missing.lcp"));
+  EXPECT_THROW(missing.NextSweep(), FileError);
 }
 
 TEST(ProfileIo, EmptySetRoundTrips) {

@@ -142,6 +142,14 @@ TEST(Sweep, RobotSweepThroughTheFrameGraphLandsOnThePlaneInTheCell) {
               PlaneTolMm(s.tri, m, c, p.row_px[c], s.config.render.row_sigma_px))
         << "point " << k;
   }
+  // Each profile's sensor pose is the truth's at its joints (line of sight from there).
+  ASSERT_EQ(result.frame_from_sensor.size(), r.profiles.profiles.size());
+  for (std::size_t i = 0; i < r.profiles.profiles.size(); ++i) {
+    const Eigen::Isometry3d truth =
+        datasets::TrueCellFromSensor(s.truth, r.profiles.profiles[i].joints_rad);
+    EXPECT_LT((result.frame_from_sensor[i].translation() - truth.translation()).norm(), 1e-6);
+    EXPECT_LT((result.frame_from_sensor[i].linear() - truth.linear()).norm(), 1e-9);
+  }
   // The exact path gives the same cloud within the fast path's tolerance.
   o.path = TriangulationPath::kExact;
   const SweepResult exact = AssembleSweep(r.profiles, s.tri, o, &graph);
@@ -206,6 +214,15 @@ TEST(Sweep, LinearSweepPlacedInACellFrameIsTheSensorSweepMovedThroughStaticEdges
     ASSERT_EQ(placed.cloud.positions[k], cell_from_sensor * at_t0.cloud.positions[k]) << k;
   }
   EXPECT_EQ(placed.cloud.timestamp_s, at_t0.cloud.timestamp_s);
+  // The sensor of profile i is where the axis carried it: cell <- sensor(t0) * t_i * velocity.
+  ASSERT_EQ(placed.frame_from_sensor.size(), r.profiles.profiles.size());
+  for (std::size_t i = 0; i < placed.frame_from_sensor.size(); ++i) {
+    const double t =
+        static_cast<double>(r.profiles.profiles[i].timestamp_ns - timing.start_ns) * 1e-9;
+    const Eigen::Vector3d centre = cell_from_sensor * (o.velocity_mm_s * t);
+    EXPECT_LT((placed.frame_from_sensor[i].translation() - centre).norm(), 1e-9) << i;
+    EXPECT_LT((at_t0.frame_from_sensor[i].translation() - o.velocity_mm_s * t).norm(), 1e-12);
+  }
   // The cell has no plane: ScanSetupFromCell takes the given one and checks the frame first.
   LaserPlaneSource source;
   source.plane = s.truth.sensor.laser.Coefficients();

@@ -1,0 +1,267 @@
+#include "localize/job_run.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+
+#include "calib/camera_model.hpp"
+#include "core/error.hpp"
+#include "core/json_io.hpp"
+#include "core/provenance.hpp"
+#include "registration/localization_json.hpp"
+#include "triangulation/linear_sweep.hpp"
+#include "triangulation/triangulator.hpp"
+
+namespace lasercell::localize {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+triangulation::SweepOptions SweepOptionsOf(const Job& job, int threads) {
+  triangulation::SweepOptions o;
+  if (!job.linear_record.empty()) {
+    o = triangulation::ReadLinearSweepRecord(job.linear_record).Options();
+  } else {
+    o.motion = triangulation::SweepMotion::kRobot;
+    o.robot = job.robot;
+  }
+  o.target_frame = job.target_frame;
+  o.threads = threads;
+  return o;
+}
+
+// Static edges on the target <- sensor path without a covariance.
+std::vector<std::string> EdgesWithoutCovariance(const FrameGraph& cell, const std::string& target) {
+  std::vector<std::string> notes;
+  if (!cell.RobotsOnPath(target, "sensor").empty()) {
+    notes.push_back("the path " + target +
+                    " <- sensor passes a robot: joint and kinematic uncertainty are not in the "
+                    "pose covariances");
+  }
+  return notes;
+}
+
+LocalizePartsOptions PartsOptionsOf(const Job& job, int threads) {
+  LocalizePartsOptions o;
+  o.use_roi = job.use_roi;
+  o.roi = job.roi;
+  o.support = job.support;
+  o.localize = job.settings.localize;
+  o.grasp_tolerance_mm = job.grasp_tolerance_mm;
+  o.scan_noise_mm = job.scan_noise_mm;
+  o.max_rmse_factor = job.max_rmse_factor;
+  o.threads = threads;
+  return o;
+}
+
+nlohmann::json GraspJson(const GraspPose& g, const std::string& target) {
+  return {{"name", g.name},
+          {target + "_from_grasp", json::Pose(g.target_from_grasp)},
+          {"matrix", json::MatrixRows(g.target_from_grasp)},
+          {"covariance", json::Covariance(g.covariance)},
+          {"position_sigma_mm", g.position_sigma_mm},
+          {"within_tolerance", g.within_tolerance}};
+}
+
+nlohmann::json InstanceJson(const PartInstance& inst, const std::string& target) {
+  nlohmann::json j;
+  j["part"] = inst.part;
+  j["frame"] = inst.frame;
+  j[target + "_from_part"] = json::Pose(inst.target_from_part);
+  j["matrix"] = json::MatrixRows(inst.target_from_part);
+  j["covariance_valid"] = inst.covariance_valid;
+  j["covariance"] = inst.covariance_valid ? json::Covariance(inst.covariance) : nlohmann::json();
+  j["grasps"] = nlohmann::json::array();
+  for (const GraspPose& g : inst.grasps) j["grasps"].push_back(GraspJson(g, target));
+  j["graspable"] = inst.graspable;
+  if (!inst.graspable) j["not_graspable_reason"] = inst.not_graspable_reason;
+  j["ambiguous"] = inst.ambiguous;
+  if (inst.ambiguous) j["ambiguity_reason"] = inst.ambiguity_reason;
+  j["support"] = inst.candidate.verification.support;
+  j["coarse_support"] = inst.candidate.coarse_verification.support;
+  j["icp_rmse_mm"] =
+      inst.candidate.icp_run ? nlohmann::json(inst.candidate.icp.rmse_mm) : nlohmann::json();
+  j["candidate"] = registration::LocalizationCandidateJson(inst.candidate);
+  j["search_ms"] = inst.search_ms;
+  return j;
+}
+
+nlohmann::json ModelJson(const PartModel& m) {
+  return {{"part", m.part.name},
+          {"part_file", m.part.file},
+          {"model", m.part.model_path},
+          {"format", m.source_format},
+          {"unit", m.source_unit},
+          {"digest", m.digest},
+          {"cache_file", m.cache_file},
+          {"from_cache", m.from_cache},
+          {"cache_note", m.cache_note},
+          {"load_ms", m.load_ms},
+          {"model_points", m.ppf.points().size()},
+          {"diameter_mm", m.ppf.diameter_mm()},
+          {"sampling_step_mm", m.ppf.sampling_step_mm()}};
+}
+
+}  // namespace
+
+std::string JobResult::Summary() const {
+  int requested = 0, found = 0, graspable = 0;
+  for (const PartSearch& s : parts.searches) {
+    requested += s.requested;
+    found += s.found;
+  }
+  for (const PartInstance& i : parts.instances) graspable += i.graspable ? 1 : 0;
+  char buf[200];
+  std::snprintf(buf, sizeof buf,
+                "%d of %d instances found, %d graspable; %zu sweep points; %.1f ms", found,
+                requested, graspable, parts.sweep_points, timings.total_ms);
+  return buf;
+}
+
+JobResult RunJob(const Job& job, const JobRunOptions& options) {
+  job.Check();
+  const auto start = Clock::now();
+  const int threads = options.threads >= 0 ? options.threads : job.threads;
+  JobResult result;
+  result.job = job;
+
+  const FrameGraph cell = LoadFrameGraph(job.cell);
+  triangulation::LaserPlaneSource plane_source;
+  plane_source.laser = job.laser;
+  const triangulation::ScanSetup setup =
+      triangulation::ScanSetupFromCell(&cell, job.cell, plane_source, SweepOptionsOf(job, threads));
+  result.laser_plane_source = setup.laser_plane_source;
+  const triangulation::Triangulator triangulator(calib::LoadCameraModel(job.camera),
+                                                 setup.laser_plane);
+  result.notes = EdgesWithoutCovariance(cell, job.target_frame);
+  result.timings.setup_ms = MsSince(start);
+
+  const auto models_start = Clock::now();
+  PartModelOptions model_options;
+  model_options.cache_dir = job.model_cache;
+  model_options.load_mesh = options.load_meshes;
+  model_options.threads = threads;
+  for (const JobPart& p : job.parts) result.models.push_back(LoadPartModel(p.part, model_options));
+  result.timings.models_ms = MsSince(models_start);
+  if (options.progress) options.progress("models", 1.0);
+
+  const auto profiles_start = Clock::now();
+  std::shared_ptr<triangulation::ProfileSource> source = options.source;
+  if (!source) source = std::make_shared<triangulation::FileProfileSource>(job.profiles);
+  result.source = source->Describe();
+  std::optional<triangulation::ProfileSet> profiles = source->NextSweep();
+  if (!profiles) throw InputError(result.source + ": the source delivered no sweep");
+  result.timings.profiles_ms = MsSince(profiles_start);
+  if (options.progress) options.progress("profiles", 1.0);
+
+  const auto tri_start = Clock::now();
+  result.sweep = triangulation::AssembleSweep(*profiles, triangulator, setup.options, &cell);
+  result.timings.triangulation_ms = MsSince(tri_start);
+  if (options.progress) options.progress("triangulation", 1.0);
+  if (result.sweep.cloud.empty()) {
+    throw InputError(result.source + ": the sweep has no valid laser points (" +
+                     result.sweep.Summary() + ")");
+  }
+
+  const auto loc_start = Clock::now();
+  LocalizePartsOptions parts_options = PartsOptionsOf(job, threads);
+  parts_options.progress = options.progress;
+  std::vector<PartRequest> requests;
+  for (std::size_t i = 0; i < job.parts.size(); ++i) {
+    requests.push_back({&result.models[i], job.parts[i].instances});
+  }
+  result.parts =
+      LocalizeParts(result.sweep.cloud, LinesOfSight(result.sweep), requests, parts_options);
+  result.timings.localization_ms = MsSince(loc_start);
+  if (!options.load_meshes) {
+    for (PartModel& m : result.models) m.mesh = TriangleMesh{};
+  }
+  result.timings.total_ms = MsSince(start);
+  return result;
+}
+
+nlohmann::json JobResultJson(const JobResult& r) {
+  const std::string& target = r.job.target_frame;
+  nlohmann::json j;
+  j["format"] = kJobResultFormat;
+  j["version"] = kJobResultFormatVersion;
+  j["job"] = r.job.file;
+  j["date"] = UtcTimestampIso();
+  j["lasercell_version"] = LASERCELL_VERSION;
+  j["target_frame"] = target;
+  j["inputs"] = {{"cell", r.job.cell},
+                 {"camera", r.job.camera},
+                 {"laser_plane", r.laser_plane_source},
+                 {"source", r.source},
+                 {"trajectory", r.job.linear_record.empty() ? "robot " + r.job.robot
+                                                            : "linear " + r.job.linear_record}};
+  j["sweep"] = {
+      {"profiles", r.sweep.profiles},           {"points", r.parts.sweep_points},
+      {"roi_points", r.parts.roi_points},       {"points_with_normals", r.parts.normal_points},
+      {"sequence_gaps", r.sweep.sequence_gaps}, {"summary", r.sweep.Summary()}};
+  j["all_found"] = r.parts.AllFound();
+  j["instances"] = nlohmann::json::array();
+  for (const PartInstance& i : r.parts.instances) j["instances"].push_back(InstanceJson(i, target));
+  j["searches"] = nlohmann::json::array();
+  for (const PartSearch& s : r.parts.searches) {
+    nlohmann::json rejected = nlohmann::json::array();
+    for (const auto& c : s.rejected) rejected.push_back(registration::LocalizationCandidateJson(c));
+    j["searches"].push_back({{"part", s.part},
+                             {"requested", s.requested},
+                             {"found", s.found},
+                             {"message", s.message},
+                             {"rejected_in_last_search", rejected},
+                             {"timings_ms",
+                              {{"normals", s.timings.normals_ms},
+                               {"subsample", s.timings.subsample_ms},
+                               {"matching", s.timings.matching_ms},
+                               {"clustering", s.timings.clustering_ms},
+                               {"verification", s.timings.verification_ms},
+                               {"icp", s.timings.icp_ms},
+                               {"total", s.timings.total_ms}}}});
+  }
+  j["models"] = nlohmann::json::array();
+  for (const PartModel& m : r.models) j["models"].push_back(ModelJson(m));
+  j["notes"] = r.notes;
+  const JobTimings& t = r.timings;
+  j["timings_ms"] = {{"setup", t.setup_ms},
+                     {"models", t.models_ms},
+                     {"profiles", t.profiles_ms},
+                     {"triangulation", t.triangulation_ms},
+                     {"roi", r.parts.timings.roi_ms},
+                     {"normals", r.parts.timings.normals_ms},
+                     {"searches", r.parts.timings.searches_ms},
+                     {"localization", t.localization_ms},
+                     {"total", t.total_ms}};
+  return j;
+}
+
+FrameGraph CellWithInstances(const FrameGraph& cell, const JobResult& result) {
+  FrameGraph out = cell;
+  InputDigest digest;
+  digest.AddFile(result.job.profiles);
+  const std::string input_digest = digest.Text();
+  for (const PartInstance& inst : result.parts.instances) {
+    StaticEdge edge;
+    edge.parent = result.job.target_frame;
+    edge.child = inst.frame;
+    edge.SetParentFromChild(inst.target_from_part);
+    if (inst.covariance_valid) edge.covariance = inst.covariance;
+    edge.provenance.tool = std::string("lasercell job run ") + LASERCELL_VERSION;
+    edge.provenance.date = UtcTimestampIso();
+    edge.provenance.input_digest = input_digest;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "support %.3f, ICP rmse %.3f mm",
+                  inst.candidate.verification.support,
+                  inst.candidate.icp_run ? inst.candidate.icp.rmse_mm : -1.0);
+    edge.provenance.residual_summary = buf;
+    out.SetStaticEdge(edge);
+  }
+  return out;
+}
+
+}  // namespace lasercell::localize

@@ -1,0 +1,82 @@
+#pragma once
+// Running a job (job.hpp): load the cell, camera and part models (PPF models from the cache when
+// unchanged), take the next sweep from the job's profile source, triangulate it into the target
+// frame through the cell's frame graph (linear axis record or robot joints), and localize the
+// parts (localize_parts.hpp). The result file is `lasercell.localization_job`, version 1
+// (JobResultJson).
+//
+// Frames: the sweep and every pose are in the job's target frame (default handling_base): part
+// poses `<target>_from_<part>_<k>` and grasp poses `<target>_from_<grasp>` (the handling
+// robot's gripper_tcp target). Units mm, rad; timings ms.
+
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/frame_graph.hpp"
+#include "core/progress.hpp"
+#include "localize/job.hpp"
+#include "localize/localize_parts.hpp"
+#include "localize/part_model.hpp"
+#include "triangulation/profile_source.hpp"
+#include "triangulation/sweep.hpp"
+
+namespace lasercell::localize {
+
+/// Format name and version of job result files.
+inline constexpr const char* kJobResultFormat = "lasercell.localization_job";
+inline constexpr int kJobResultFormatVersion = 1;
+
+/// Options of RunJob.
+struct JobRunOptions {
+  /// Profiles from here instead of the job's source.file (a stream; nullptr = the job's file).
+  std::shared_ptr<triangulation::ProfileSource> source;
+  bool load_meshes = false;   ///< Keep the parts' meshes (for a report).
+  int threads = -1;           ///< Overrides the job's threads when >= 0.
+  ProgressCallback progress;  ///< Stages: "models", "profiles", "triangulation", then searches.
+};
+
+/// Wall time of the job's stages, ms.
+struct JobTimings {
+  double setup_ms = 0.0;          ///< Cell, camera, laser plane, lookup tables.
+  double models_ms = 0.0;         ///< Part models (built or from the cache).
+  double profiles_ms = 0.0;       ///< Reading the sweep from its source.
+  double triangulation_ms = 0.0;  ///< Profiles -> points in the target frame.
+  double localization_ms = 0.0;   ///< LocalizeParts.
+  double total_ms = 0.0;
+};
+
+/// Everything a job run produced.
+struct JobResult {
+  Job job;
+  std::string source;  ///< The profile source, e.g. "file seat_000.lcp".
+  std::string laser_plane_source;
+  triangulation::SweepResult sweep;  ///< The sweep in the target frame.
+  std::vector<PartModel> models;     ///< One per job part, in job order.
+  LocalizePartsResult parts;
+  /// Calibrated edges on the target <- sensor path without a covariance (their uncertainty is
+  /// not in the poses' covariances), and other caveats.
+  std::vector<std::string> notes;
+  JobTimings timings;
+  /// One line: instances found / requested, graspable, total time.
+  std::string Summary() const;
+};
+
+/// Runs `job` (see the file comment). Throws FileError / InputError naming the file and what
+/// to do for a cell, camera, laser plane, profile file or model that cannot be used, a target
+/// frame the cell cannot reach from the sensor, or an ROI that holds no sweep point; outcomes
+/// (parts not found, not graspable) are in the result.
+JobResult RunJob(const Job& job, const JobRunOptions& options = {});
+
+/// The result file (format lasercell.localization_job, version 1): job, inputs, per instance
+/// part, frame, pose (file notation + 4x4 matrix), covariance and 1-sigma, grasps, support, ICP,
+/// graspable (+ reason), ambiguous (+ reason); per part what was not found and why; models;
+/// notes; per-stage timings.
+nlohmann::json JobResultJson(const JobResult& result);
+
+/// A copy of `cell` with one static edge <target>_from_<part>_<k> per found instance (and its
+/// covariance when valid), so `lasercell frames get` answers where a part lies.
+FrameGraph CellWithInstances(const FrameGraph& cell, const JobResult& result);
+
+}  // namespace lasercell::localize

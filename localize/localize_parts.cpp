@@ -1,0 +1,299 @@
+#include "localize/localize_parts.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <chrono>
+#include <cmath>
+
+#include "core/error.hpp"
+#include "registration/filters.hpp"
+#include "registration/kdtree.hpp"
+#include "registration/normals.hpp"
+
+namespace lasercell::localize {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double MsSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// The ICP pose covariance of a candidate (scene_from_model, left perturbation in the scene);
+// false when ICP gave none.
+bool IcpPoseCovariance(const registration::LocalizationCandidate& candidate, Matrix6d* out) {
+  if (!candidate.icp_run) return false;
+  (void)out;
+  return false;  // until ICP reports its covariance
+}
+
+// Verification constraints of one part: the job's support plane and the part's stable poses
+// (without a plane, the stable axes must point along the target frame's +z).
+registration::PoseConstraints ConstraintsFor(const PartDefinition& part,
+                                             const SupportPlane& support) {
+  registration::PoseConstraints c;
+  if (!support.enabled && part.stable_up_in_part.empty()) return c;
+  c.enabled = true;
+  c.plane_normal = support.enabled ? support.normal : Eigen::Vector3d::UnitZ();
+  c.plane_offset_mm = support.enabled ? support.offset_mm : 0.0;
+  c.max_penetration_mm = support.enabled ? support.max_penetration_mm : -1.0;
+  c.up_in_model = part.stable_up_in_part;
+  c.max_tilt_rad = part.max_tilt_rad;
+  return c;
+}
+
+// Removes the scene points within `distance` of the posed model's refinement points.
+void RemoveExplained(const registration::PpfModel& model, const Eigen::Isometry3d& scene_from_model,
+                     double distance, PointCloud* scene) {
+  std::vector<Eigen::Vector3d> posed;
+  posed.reserve(model.refinement_points().size());
+  const Eigen::Isometry3d scene_from_centered = scene_from_model * model.model_from_centered();
+  for (const Eigen::Vector3d& p : model.refinement_points())
+    posed.push_back(scene_from_centered * p);
+  const registration::KdTree tree(std::move(posed));
+  std::vector<std::size_t> keep;
+  keep.reserve(scene->size());
+  registration::Neighbor nearest;
+  const double d_sq = distance * distance;
+  for (std::size_t i = 0; i < scene->size(); ++i) {
+    if (!tree.Nearest(scene->positions[i], &nearest) || nearest.distance_sq > d_sq) {
+      keep.push_back(i);
+    }
+  }
+  *scene = scene->Subset(keep);
+}
+
+// Grasp poses and the graspability verdict of an instance.
+void JudgeInstance(const PartModel& model, const LocalizePartsOptions& options,
+                   PartInstance* inst) {
+  const double rmse = inst->candidate.icp_run ? inst->candidate.icp.rmse_mm : -1.0;
+  std::string reason;
+  if (inst->ambiguous) reason = "ambiguous: " + inst->ambiguity_reason;
+  if (reason.empty() && !inst->candidate.icp_run) reason = "ICP did not run: pose not refined";
+  if (reason.empty() && rmse > options.max_rmse_factor * options.scan_noise_mm) {
+    reason = "ICP RMSE " + std::to_string(rmse) + " mm is " +
+             std::to_string(rmse / options.scan_noise_mm) + " x the scan noise (" +
+             std::to_string(options.scan_noise_mm) + " mm): the model does not fit the scan";
+  }
+  if (reason.empty() && !inst->covariance_valid) reason = "pose covariance unavailable";
+  for (const GraspFrame& g : model.part.grasps) {
+    GraspPose grasp;
+    grasp.name = g.name;
+    const Eigen::Isometry3d part_from_grasp = g.part_from_grasp.ToIsometry();
+    grasp.target_from_grasp = inst->target_from_part * part_from_grasp;
+    // Left perturbations in the target frame carry over unchanged to a pose right-multiplied
+    // by a fixed transform; the grasp origin's position covariance follows from the lever arm.
+    grasp.covariance = inst->covariance;
+    const Eigen::Vector3d lever = grasp.target_from_grasp.translation();
+    Eigen::Matrix<double, 3, 6> j;  // d(position) / d[rotation; translation]
+    j.leftCols<3>() = -Skew(lever);
+    j.rightCols<3>().setIdentity();
+    const Eigen::Matrix3d position_cov = j * inst->covariance * j.transpose();
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(position_cov);
+    grasp.position_sigma_mm = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
+    grasp.within_tolerance =
+        inst->covariance_valid && 3.0 * grasp.position_sigma_mm <= options.grasp_tolerance_mm;
+    if (reason.empty() && !grasp.within_tolerance) {
+      reason = "grasp '" + g.name + "': 3-sigma position error " +
+               std::to_string(3.0 * grasp.position_sigma_mm) + " mm exceeds the tolerance " +
+               std::to_string(options.grasp_tolerance_mm) + " mm";
+    }
+    inst->grasps.push_back(grasp);
+  }
+  inst->graspable = reason.empty();
+  inst->not_graspable_reason = reason;
+}
+
+// Scene points (with lines of sight) inside the ROI.
+PointCloud CropScene(const PointCloud& scene, const std::vector<Eigen::Vector3d>& line_of_sight,
+                     const LocalizePartsOptions& options, std::vector<Eigen::Vector3d>* sight) {
+  if (!options.use_roi) {
+    *sight = line_of_sight;
+    return scene;
+  }
+  const std::vector<std::size_t> inside = registration::CropBoxIndices(scene, options.roi);
+  if (inside.empty()) {
+    throw InputError(
+        "region of interest [" + std::to_string(options.roi.min.x()) + ", " +
+        std::to_string(options.roi.min.y()) + ", " + std::to_string(options.roi.min.z()) +
+        "] .. [" + std::to_string(options.roi.max.x()) + ", " +
+        std::to_string(options.roi.max.y()) + ", " + std::to_string(options.roi.max.z()) +
+        "] mm holds none of the " + std::to_string(scene.size()) +
+        " sweep points: check the job's roi (target frame, mm)");
+  }
+  sight->clear();
+  if (!line_of_sight.empty()) {
+    for (std::size_t i : inside) sight->push_back(line_of_sight[i]);
+  }
+  return scene.Subset(inside);
+}
+
+// The scene with normals oriented along each point's line of sight; *sight_mean gets the mean
+// direction sensor -> scene (the verification grid's line of sight).
+PointCloud WithNormals(const PointCloud& scene, const std::vector<Eigen::Vector3d>& sight,
+                       const LocalizePartsOptions& options, Eigen::Vector3d* view_direction) {
+  registration::NormalOptions normal_options = options.localize.normals;
+  normal_options.threads = options.threads;
+  normal_options.viewpoint = registration::Viewpoint::AlongDirection(-Eigen::Vector3d::UnitZ());
+  const registration::NormalEstimationResult normals =
+      registration::EstimateNormals(scene, normal_options, sight);
+  std::vector<std::size_t> keep;
+  keep.reserve(scene.size());
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    if (!normals.valid[i]) continue;
+    keep.push_back(i);
+    mean += sight.empty() ? Eigen::Vector3d::UnitZ() : sight[i];
+  }
+  PointCloud out = scene.Subset(keep);
+  out.normals.resize(keep.size());
+  for (std::size_t k = 0; k < keep.size(); ++k) out.normals[k] = normals.normals[keep[k]];
+  *view_direction = mean.norm() > 0 ? Eigen::Vector3d(-mean.normalized())
+                                    : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());
+  return out;
+}
+
+}  // namespace
+
+void LocalizePartsOptions::Check() const {
+  const auto fail = [](const std::string& field, const std::string& problem) {
+    throw OptionError("LocalizePartsOptions." + field + " " + problem);
+  };
+  if (!(grasp_tolerance_mm > 0.0)) fail("grasp_tolerance_mm", "must be > 0 (mm)");
+  if (!(scan_noise_mm > 0.0)) fail("scan_noise_mm", "must be > 0 (mm)");
+  if (!(max_rmse_factor >= 1.0)) fail("max_rmse_factor", "must be >= 1");
+  if (!(explained_distance_relative > 0.0 && explained_distance_relative <= 0.2)) {
+    fail("explained_distance_relative", "must be in (0, 0.2]");
+  }
+  if (use_roi && roi.Empty()) fail("roi", "is empty: max must exceed min on every axis");
+  if (placement_covariance && !placement_covariance->allFinite()) {
+    fail("placement_covariance", "must be finite");
+  }
+  localize.Check();
+}
+
+bool LocalizePartsResult::AllFound() const {
+  for (const PartSearch& s : searches) {
+    if (s.found < s.requested) return false;
+  }
+  return true;
+}
+
+std::vector<Eigen::Vector3d> LinesOfSight(const triangulation::SweepResult& sweep) {
+  const PointCloud& cloud = sweep.cloud;
+  if (!cloud.HasProfile()) throw InputError("LinesOfSight: the sweep cloud has no profile index");
+  std::vector<Eigen::Vector3d> sight(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const auto profile = static_cast<std::size_t>(cloud.profile[i]);
+    if (profile >= sweep.frame_from_sensor.size()) {
+      throw InputError("LinesOfSight: point " + std::to_string(i) + " belongs to profile " +
+                       std::to_string(profile) + " but the sweep has " +
+                       std::to_string(sweep.frame_from_sensor.size()) + " sensor poses");
+    }
+    const Eigen::Vector3d d = sweep.frame_from_sensor[profile].translation() - cloud.positions[i];
+    const double n = d.norm();
+    sight[i] = n > 0 ? Eigen::Vector3d(d / n) : Eigen::Vector3d::UnitZ();
+  }
+  return sight;
+}
+
+LocalizePartsResult LocalizeParts(const PointCloud& scene,
+                                  const std::vector<Eigen::Vector3d>& line_of_sight,
+                                  const std::vector<PartRequest>& requests,
+                                  const LocalizePartsOptions& options) {
+  options.Check();
+  const auto start = Clock::now();
+  if (scene.empty()) throw InputError("LocalizeParts: the sweep holds no points");
+  if (!line_of_sight.empty() && line_of_sight.size() != scene.size()) {
+    throw InputError("LocalizeParts: " + std::to_string(line_of_sight.size()) +
+                     " lines of sight for " + std::to_string(scene.size()) + " points");
+  }
+  for (const PartRequest& r : requests) {
+    if (r.model == nullptr) throw InputError("LocalizeParts: a part request has no model");
+    if (r.instances < 1) throw InputError("LocalizeParts: instances must be >= 1");
+  }
+  LocalizePartsResult result;
+  result.sweep_points = scene.size();
+  std::vector<Eigen::Vector3d> sight;
+  const PointCloud cropped = CropScene(scene, line_of_sight, options, &sight);
+  result.roi_points = cropped.size();
+  result.timings.roi_ms = MsSince(start);
+  const auto normals_start = Clock::now();
+  Eigen::Vector3d view_direction;
+  PointCloud remaining = WithNormals(cropped, sight, options, &view_direction);
+  result.normal_points = remaining.size();
+  result.timings.normals_ms = MsSince(normals_start);
+
+  const auto searches_start = Clock::now();
+  std::size_t total_searches = 0, done = 0;
+  for (const PartRequest& r : requests) total_searches += static_cast<std::size_t>(r.instances);
+  for (const PartRequest& request : requests) {
+    const PartModel& model = *request.model;
+    PartSearch search;
+    search.part = model.part.name;
+    search.requested = request.instances;
+    registration::LocalizeOptions lo = options.localize;
+    lo.threads = options.threads;
+    lo.max_instances = 1;
+    lo.use_roi = false;
+    lo.recompute_normals = false;
+    lo.orient_normals = false;  // oriented along each point's own line of sight above
+    lo.viewpoint = registration::Viewpoint::AlongDirection(view_direction);
+    lo.verification.constraints = ConstraintsFor(model.part, options.support);
+    for (int k = 0; k < request.instances; ++k) {
+      const auto search_start = Clock::now();
+      if (remaining.size() < 10) {
+        search.message = "only " + std::to_string(remaining.size()) +
+                         " unexplained scene points left after " + std::to_string(search.found) +
+                         " instance(s)";
+        break;
+      }
+      const registration::LocalizationResult found =
+          registration::LocalizeInCloud(remaining, model.ppf, lo);
+      search.timings.total_ms += found.timings.total_ms;
+      search.timings.normals_ms += found.timings.normals_ms;
+      search.timings.subsample_ms += found.timings.subsample_ms;
+      search.timings.matching_ms += found.timings.matching_ms;
+      search.timings.clustering_ms += found.timings.clustering_ms;
+      search.timings.verification_ms += found.timings.verification_ms;
+      search.timings.icp_ms += found.timings.icp_ms;
+      search.rejected = found.rejected;
+      if (options.progress) {
+        options.progress(search.part + " #" + std::to_string(k + 1),
+                         static_cast<double>(++done) / static_cast<double>(total_searches));
+      }
+      if (!found.found) {
+        search.message = found.message.empty() ? "not found" : found.message;
+        break;
+      }
+      PartInstance inst;
+      inst.part = model.part.name;
+      inst.frame = model.part.name + "_" + std::to_string(search.found + 1);
+      inst.candidate = found.candidates.front();
+      inst.target_from_part = inst.candidate.scene_from_model;
+      inst.ambiguous = found.ambiguous;
+      inst.ambiguity_reason = found.ambiguity_reason;
+      if (model.part.symmetry.kind != PartSymmetry::Kind::kNone) {
+        inst.ambiguous = true;
+        inst.ambiguity_reason =
+            "the part file declares a symmetry: the rotation about its axis "
+            "is not determined by the scan";
+      }
+      inst.covariance_valid = IcpPoseCovariance(inst.candidate, &inst.covariance);
+      if (inst.covariance_valid && options.placement_covariance) {
+        inst.covariance += *options.placement_covariance;
+      }
+      JudgeInstance(model, options, &inst);
+      inst.search_ms = MsSince(search_start);
+      RemoveExplained(model.ppf, inst.target_from_part,
+                      options.explained_distance_relative * model.ppf.diameter_mm(), &remaining);
+      result.instances.push_back(std::move(inst));
+      ++search.found;
+    }
+    result.searches.push_back(std::move(search));
+  }
+  result.timings.searches_ms = MsSince(searches_start);
+  result.timings.total_ms = MsSince(start);
+  return result;
+}
+
+}  // namespace lasercell::localize
