@@ -1,6 +1,7 @@
 #include "datasets/chair_parts.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <string>
 
@@ -219,6 +220,55 @@ CadChairPart MakeArmrest(const ArmrestOptions& o) {
   // On its inner side (part +y up): the pad's and the post's -y faces towards the deck.
   part.rest_orientations.push_back(
       Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix());
+  return part;
+}
+
+PartGrasp SeatHoleGrasp(const ChairSeat& seat) {
+  PartGrasp g;
+  g.name = "hole";
+  g.part_from_grasp.linear() =
+      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), seat.hole_axis_in_part)
+          .toRotationMatrix();
+  g.part_from_grasp.translation() = seat.hole_center_in_part;
+  g.hole_diameter_mm = 27.0;
+  return g;
+}
+
+namespace {
+
+localize::GraspFrame GraspFrameOf(const PartGrasp& g, const std::string& where) {
+  localize::GraspFrame frame;
+  frame.name = g.name;
+  frame.part_from_grasp = QuaternionPose::FromIsometry(g.part_from_grasp);
+  char mm[32];
+  std::snprintf(mm, sizeof(mm), "%g", g.hole_diameter_mm);
+  frame.description = "3-finger gripper into the " + std::string(mm) + " mm hole of " + where +
+                      ", approach along -z";
+  return frame;
+}
+
+}  // namespace
+
+localize::PartDefinition SeatPartDefinition(const ChairSeat& seat) {
+  localize::PartDefinition part;
+  part.name = "seat";
+  part.model = "seat.stl";
+  part.units = "mm";
+  part.grasps.push_back(GraspFrameOf(SeatHoleGrasp(seat), "the boss"));
+  return part;
+}
+
+localize::PartDefinition CadPartDefinition(const CadChairPart& cad) {
+  localize::PartDefinition part;
+  part.name = cad.name;
+  part.model = cad.name + ".step";
+  for (const PartGrasp& g : cad.grasps) {
+    part.grasps.push_back(
+        GraspFrameOf(g, cad.name == "back" ? "the grip boss" : "the post's boss"));
+  }
+  for (const Eigen::Matrix3d& cell_from_part : cad.rest_orientations) {
+    part.stable_up_in_part.push_back(cell_from_part.transpose() * Eigen::Vector3d::UnitZ());
+  }
   return part;
 }
 

@@ -26,8 +26,10 @@
 #include <string>
 #include <vector>
 
+#include "datasets/chair_seat.hpp"
 #include "datasets/geometry.hpp"
 #include "localize/cad_export.hpp"
+#include "localize/part.hpp"
 
 namespace lasercell::datasets {
 
@@ -104,6 +106,19 @@ struct ArmrestOptions {
 CadChairPart MakeSeatBack(const SeatBackOptions& options = {});
 /// Builds the armrest ("armrest"; grasp "post_hole"). Check()s the options.
 CadChairPart MakeArmrest(const ArmrestOptions& options = {});
+
+/// The seat's grasp ("hole"): origin at the centre of the hole's opening, z along the hole axis
+/// out of the boss (the rotation taking +z to that axis), as in the seat's part file.
+PartGrasp SeatHoleGrasp(const ChairSeat& seat);
+
+/// The seat's part file (localize/part.hpp): model "seat.stl" in mm beside the part file, grasp
+/// "hole" (SeatHoleGrasp); no stable poses (the seat scenes tilt it by up to 25 deg).
+localize::PartDefinition SeatPartDefinition(const ChairSeat& seat);
+
+/// A CAD part's part file: model "<name>.step" beside the part file (no units: the STEP file
+/// carries them), its grasps, and the up axis of each rest orientation as a stable pose (the
+/// default 30 deg of tilt covers the settling, part_rest.hpp).
+localize::PartDefinition CadPartDefinition(const CadChairPart& part);
 
 /// The rendered geometry of a CAD part: its file read back by localize::ReadCadModel at a fine
 /// tessellation (chord error `linear_deflection_mm`, 0.05 rad between neighbouring normals), as

@@ -69,20 +69,6 @@ bool DrawOne(const PalletPlacementOptions& o, const PalletPart& part, Rng& rng,
 
 }  // namespace
 
-PartGrasp SeatHoleGrasp(const ChairSeat& seat) {
-  PartGrasp g;
-  g.name = "hole";
-  const Eigen::Vector3d z = seat.hole_axis_in_part.normalized();
-  Eigen::Vector3d x = Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitX().dot(z) * z;
-  if (x.norm() < 1e-6) x = Eigen::Vector3d::UnitY() - Eigen::Vector3d::UnitY().dot(z) * z;
-  x.normalize();
-  g.part_from_grasp.linear().col(0) = x;
-  g.part_from_grasp.linear().col(1) = z.cross(x);
-  g.part_from_grasp.linear().col(2) = z;
-  g.part_from_grasp.translation() = seat.hole_center_in_part;
-  return g;
-}
-
 PalletPart MakePalletPart(const std::string& name, MeshPart geometry, double albedo,
                           std::vector<PartGrasp> grasps,
                           const std::vector<Eigen::Matrix3d>& start_orientations) {

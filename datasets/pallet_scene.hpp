@@ -42,9 +42,6 @@ PalletPart MakePalletPart(const std::string& name, MeshPart geometry, double alb
                           std::vector<PartGrasp> grasps,
                           const std::vector<Eigen::Matrix3d>& start_orientations);
 
-/// The seat's grasp ("hole"): origin at the hole centre, z along the hole axis out of the boss.
-PartGrasp SeatHoleGrasp(const ChairSeat& seat);
-
 /// Where the parts may go.
 struct PalletPlacementOptions {
   /// Half extents of the placement region on the deck, centred on the pallet (cell xy), mm: the

@@ -10,12 +10,13 @@
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "core/io/mesh_io.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/rng.hpp"
 #include "datasets/simulate_records.hpp"
-#include "datasets/stl.hpp"
 #include "localize/cad_export.hpp"
+#include "localize/part.hpp"
 #include "triangulation/linear_sweep.hpp"
 #include "triangulation/profile_io.hpp"
 
@@ -50,11 +51,17 @@ class PalletOutput {
   void WriteMesh(const std::string& name, const TriangleMesh& mesh) {
     io::WritePlyMesh(Path("models/" + name + ".ply"), mesh);
     files_.push_back("models/" + name + ".ply");
-    WriteStlMesh(Path("models/" + name + ".stl"), mesh);
+    io::WriteStlMesh(Path("models/" + name + ".stl"), mesh);
     files_.push_back("models/" + name + ".stl");
   }
   // A file some other writer put there.
   void Record(const std::string& relative) { files_.push_back(relative); }
+  // models/<name>.part.yaml.
+  void WritePart(const localize::PartDefinition& part) {
+    const std::string relative = "models/" + part.name + ".part.yaml";
+    localize::WritePartFile(Path(relative), part);
+    files_.push_back(relative);
+  }
   std::string Path(const std::string& relative) const {
     return (std::filesystem::path(dir_) / relative).string();
   }
@@ -65,12 +72,14 @@ class PalletOutput {
   std::vector<std::string> files_;
 };
 
-// The CAD part: its STEP file in models/, read back finely as the rendered geometry.
+// The CAD part: its STEP file and part file in models/, the STEP read back finely as the
+// rendered geometry.
 PalletPart CadPart(const CadChairPart& cad, double albedo, double deflection_mm,
                    PalletOutput& out) {
   const std::string step = "models/" + cad.name + ".step";
   localize::WriteCadSolid(out.Path(step), cad.solid, "mm");
   out.Record(step);
+  out.WritePart(CadPartDefinition(cad));
   return MakePalletPart(cad.name, ReadCadRenderMesh(out.Path(step), deflection_mm), albedo,
                         cad.grasps, cad.rest_orientations);
 }
@@ -232,6 +241,7 @@ SimulationReport SimulatePallets(const SimConfig& config_in, int scenes, const s
   out.Write("truth/robots.yaml", RobotsTruthYaml(truth));
   out.Write("truth/sim_config.yaml", SimConfigToYaml(config));
   for (const PalletPart& part : parts) out.WriteMesh(part.name, part.geometry.mesh);
+  out.WritePart(SeatPartDefinition(truth.seat));
   out.WriteMesh("pallet", MakePallet().mesh);
   report.files = out.files();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -9,6 +9,8 @@
 //   profiles/pallet_NNN.lcp       the sweep of scene NNN
 //   records/linear_sweep.yaml     t0 and the velocity in the sensor frame (no truth)
 //   models/back.step, models/armrest.step              the CAD parts (AP214, mm)
+//   models/{seat,back,armrest}.part.yaml               part files (localize/part.hpp): model,
+//                                 grasp frame; the CAD parts' with their stable poses
 //   models/{seat,back,armrest,pallet}.{ply,stl}        rendered meshes (CAD parts: the fine
 //                                 tessellation of the STEP file)
 //   truth/cell.yaml               true frame graph with handling_base -> <part>_NNN per part

@@ -14,6 +14,7 @@
 #include "core/io/file_util.hpp"
 #include "datasets/simulate_pallets.hpp"
 #include "datasets/simulate_records.hpp"
+#include "localize/part.hpp"
 #include "tests/cli_util.hpp"
 #include "triangulation/profile_io.hpp"
 
@@ -177,6 +178,25 @@ TEST(PalletScene, TruthFilesAgreeWithTheFrameGraphAndTheDraws) {
   }
   for (const std::string& f : report.files) {
     EXPECT_TRUE(std::filesystem::exists(dir + "/" + f)) << f;
+  }
+  // The part files name their models beside them and carry the grasps the truth uses.
+  for (const PalletPart& part : parts) {
+    SCOPED_TRACE(part.name);
+    const localize::PartDefinition def =
+        localize::ReadPartFile(dir + "/models/" + part.name + ".part.yaml");
+    EXPECT_EQ(def.name, part.name);
+    EXPECT_TRUE(std::filesystem::exists(def.model_path)) << def.model_path;
+    EXPECT_EQ(def.units, part.name == "seat" ? "mm" : "");
+    ASSERT_EQ(def.grasps.size(), part.grasps.size());
+    const Eigen::Isometry3d file_grasp = def.grasps[0].part_from_grasp.ToIsometry();
+    EXPECT_EQ(def.grasps[0].name, part.grasps[0].name);
+    EXPECT_LT((file_grasp.matrix() - part.grasps[0].part_from_grasp.matrix()).norm(), 1e-12);
+    if (part.name != "seat") {
+      // The stable pose it lies in: its up axis within the file's tilt of a listed one.
+      ASSERT_EQ(def.stable_up_in_part.size(), 1u);
+      const Eigen::Vector3d up = part.stable_poses[0].plane_from_part.linear().row(2);
+      EXPECT_LT(std::acos(std::min(1.0, up.dot(def.stable_up_in_part[0]))), def.max_tilt_rad);
+    }
   }
   // The effective config (the pallet sweep's length) reads back.
   EXPECT_EQ(LoadSimConfig(dir + "/truth/sim_config.yaml").sweep_length_mm, options.sweep_length_mm);
