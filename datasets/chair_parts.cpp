@@ -1,5 +1,6 @@
 #include "datasets/chair_parts.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -77,7 +78,8 @@ void SeatBackOptions::Check(const std::string& what) const {
   Positive(panel_width_mm, what, "panel_width_mm");
   Positive(height_mm, what, "height_mm");
   Positive(thickness_mm, what, "thickness_mm");
-  Positive(wing_width_mm, what, "wing_width_mm");
+  Positive(left_wing_width_mm, what, "left_wing_width_mm");
+  Positive(right_wing_width_mm, what, "right_wing_width_mm");
   Positive(ridge_height_mm, what, "ridge_height_mm");
   Positive(ridge_depth_mm, what, "ridge_depth_mm");
   Positive(grip_boss_radius_mm, what, "grip_boss_radius_mm");
@@ -88,12 +90,23 @@ void SeatBackOptions::Check(const std::string& what) const {
   Positive(mount_boss_height_mm, what, "mount_boss_height_mm");
   Positive(mount_hole_diameter_mm, what, "mount_hole_diameter_mm");
   Positive(mount_hole_depth_mm, what, "mount_hole_depth_mm");
-  Require(wing_angle_deg > 0 && wing_angle_deg <= 60, what,
-          "wing_angle_deg must be in (0, 60] deg, got " + std::to_string(wing_angle_deg));
+  Require(left_wing_angle_deg > 0 && left_wing_angle_deg <= 60, what,
+          "left_wing_angle_deg must be in (0, 60] deg, got " + std::to_string(left_wing_angle_deg));
+  Require(
+      right_wing_angle_deg > 0 && right_wing_angle_deg <= 60, what,
+      "right_wing_angle_deg must be in (0, 60] deg, got " + std::to_string(right_wing_angle_deg));
+  Require(right_wing_y_mm.allFinite() && right_wing_y_mm[0] >= 0 &&
+              right_wing_y_mm[1] <= height_mm && right_wing_y_mm[1] - right_wing_y_mm[0] > 20,
+          what, "right_wing_y_mm must be a range of > 20 mm inside [0, height_mm]");
   Require(thickness_mm > 2 * kEmbedMm && panel_width_mm > 40, what,
           "thickness_mm must exceed 4 mm and panel_width_mm 40 mm");
-  const double joint = thickness_mm * std::sin(wing_angle_deg * kDegToRad) + kEmbedMm;
-  Require(wing_width_mm > joint + 1, what, "wing_width_mm is too small for the wing's joint");
+  const double left_joint = thickness_mm * std::sin(left_wing_angle_deg * kDegToRad) + kEmbedMm;
+  const double right_joint = thickness_mm * std::sin(right_wing_angle_deg * kDegToRad) + kEmbedMm;
+  Require(left_wing_width_mm > left_joint + 1, what,
+          "left_wing_width_mm is too small for the wing's joint");
+  Require(right_wing_width_mm > right_joint + 1, what,
+          "right_wing_width_mm is too small for the wing's joint");
+  const double joint = std::max(left_joint, right_joint);
   const auto boss = [&](const Eigen::Vector2d& xy, double r, double h, double d, double depth,
                         const char* name) {
     Require(xy.allFinite() && std::abs(xy.x()) + r <= panel_width_mm / 2 - joint - 1 &&
@@ -152,18 +165,23 @@ CadChairPart MakeSeatBack(const SeatBackOptions& o) {
   o.Check();
   CadChairPart part;
   part.name = "back";
-  const double t = o.thickness_mm, w = o.wing_width_mm, h = o.height_mm;
-  const double angle = o.wing_angle_deg * kDegToRad;
+  const double t = o.thickness_mm, h = o.height_mm;
+  const double left_angle = o.left_wing_angle_deg * kDegToRad;
+  const double right_angle = o.right_wing_angle_deg * kDegToRad;
   // Each wing's inner end reaches `joint` into the panel, so its end face lies inside it.
-  const double joint = t * std::sin(angle) + kEmbedMm;
+  const double left_joint = t * std::sin(left_angle) + kEmbedMm;
+  const double right_joint = t * std::sin(right_angle) + kEmbedMm;
   auto& prims = part.solid.primitives;
   prims.push_back(Box({-o.panel_width_mm / 2, 0, 0}, {o.panel_width_mm, h, t}));
   // Right wing: RotY(+angle) turns +x towards -z. Left wing: RotY(-angle) turns +x towards +z,
   // so the wing box runs from its outer end (the corner) inwards to the joint.
-  const Eigen::Matrix3d right = RotY(angle), left = RotY(-angle);
-  prims.push_back(Box({o.panel_width_mm / 2 - joint, 0, 0}, right, {w, h, t}));
-  const Eigen::Vector3d left_joint(-o.panel_width_mm / 2 + joint, 0, 0);
-  prims.push_back(Box(left_joint - w * left.col(0), left, {w, h, t}));
+  const Eigen::Matrix3d right = RotY(right_angle), left = RotY(-left_angle);
+  const Eigen::Vector2d& ry = o.right_wing_y_mm;
+  prims.push_back(Box({o.panel_width_mm / 2 - right_joint, ry[0], 0}, right,
+                      {o.right_wing_width_mm, ry[1] - ry[0], t}));
+  const Eigen::Vector3d left_joint_at(-o.panel_width_mm / 2 + left_joint, 0, 0);
+  prims.push_back(
+      Box(left_joint_at - o.left_wing_width_mm * left.col(0), left, {o.left_wing_width_mm, h, t}));
   prims.push_back(
       Box({-o.panel_width_mm / 2 + 10, o.ridge_center_y_mm - o.ridge_height_mm / 2, t - kEmbedMm},
           {o.panel_width_mm - 20, o.ridge_height_mm, o.ridge_depth_mm + kEmbedMm}));
@@ -220,6 +238,7 @@ CadChairPart MakeArmrest(const ArmrestOptions& o) {
   // On its inner side (part +y up): the pad's and the post's -y faces towards the deck.
   part.rest_orientations.push_back(
       Eigen::AngleAxisd(std::numbers::pi / 2, Eigen::Vector3d::UnitX()).toRotationMatrix());
+  part.ppf_sampling_step_mm = 10.0;  // Skotheim et al. IV-C: 10 mm voxels for the armrest
   return part;
 }
 
@@ -266,6 +285,7 @@ localize::PartDefinition CadPartDefinition(const CadChairPart& cad) {
     part.grasps.push_back(
         GraspFrameOf(g, cad.name == "back" ? "the grip boss" : "the post's boss"));
   }
+  if (cad.ppf_sampling_step_mm > 0) part.model_options.sampling_step_mm = cad.ppf_sampling_step_mm;
   for (const Eigen::Matrix3d& cell_from_part : cad.rest_orientations) {
     part.stable_up_in_part.push_back(cell_from_part.transpose() * Eigen::Vector3d::UnitZ());
   }

@@ -11,9 +11,12 @@
 //
 // Seat back (frame "back", as mounted on a chair): x across the width, y up the backrest, z out
 // of its rear face. A centre panel (z from 0 = front face to thickness) with two side wings bent
-// towards the front (-z) by wing_angle_deg, a lumbar ridge across the rear, and two mounting
-// bosses on the rear near the bottom edge: the larger holds the gripping hole. It lies on the
-// pallet front face down, on the wings' outer edges, bosses up.
+// towards the front (-z), a lumbar ridge across the rear, and two mounting bosses on the rear
+// near the bottom edge: the larger holds the gripping hole. The wings differ in width, bend and
+// height (the right one is shorter, clear of the panel's top and bottom edges): a back with
+// mirror-image wings would look the same turned 180 deg about its normal but for the small
+// ridge and bosses, and its extruded panel would let a fit slide along y. It lies on the pallet
+// front face down, on the wings' outer edges, bosses up.
 //
 // Armrest (frame "armrest", as mounted): x forward along the bar, z up the post, y outwards. A
 // vertical post (bottom at z = 0) carrying a horizontal bar with a pad on top, the bar running
@@ -46,6 +49,9 @@ struct CadChairPart {
   std::string name;               ///< "back" or "armrest": file and frame prefix.
   localize::CadSolid solid;       ///< In the part frame, mm.
   std::vector<PartGrasp> grasps;  ///< At least one.
+  /// Voxel size of the part's PPF model in its part file, mm; 0 keeps the library's relative
+  /// default (Skotheim et al. IV-C: 20 mm for seat and back, 10 mm for the armrest).
+  double ppf_sampling_step_mm = 0.0;
   /// Orientations to lay the part down from (cell_from_part rotations, z up), one per stable
   /// pose it is meant to rest in; the pallet scene settles each onto the deck (part_rest.hpp).
   std::vector<Eigen::Matrix3d> rest_orientations;
@@ -53,14 +59,18 @@ struct CadChairPart {
 
 /// Shape of the seat back, mm and deg (frame: see the file comment).
 struct SeatBackOptions {
-  double panel_width_mm = 220.0;   ///< Width of the flat centre panel along x.
-  double height_mm = 340.0;        ///< Height of the panel and the wings along y.
-  double thickness_mm = 12.0;      ///< Thickness of the panel and the wings.
-  double wing_width_mm = 90.0;     ///< Width of each side wing, along the wing.
-  double wing_angle_deg = 20.0;    ///< Bend of each wing towards the front (-z), (0, 60].
+  double panel_width_mm = 220.0;       ///< Width of the flat centre panel along x.
+  double height_mm = 340.0;            ///< Height of the panel (and the left wing) along y.
+  double thickness_mm = 12.0;          ///< Thickness of the panel and the wings.
+  double left_wing_width_mm = 90.0;    ///< Width of the left (-x) wing, along the wing.
+  double left_wing_angle_deg = 20.0;   ///< Bend of the left wing towards the front (-z), (0, 60].
+  double right_wing_width_mm = 70.0;   ///< Width of the right (+x) wing, along the wing.
+  double right_wing_angle_deg = 32.0;  ///< Bend of the right wing towards the front, (0, 60].
+  /// Extent of the right wing along y, [from, to], inside [0, height_mm].
+  Eigen::Vector2d right_wing_y_mm = {30.0, 300.0};
   double ridge_center_y_mm = 240;  ///< Lumbar ridge across the rear: centre height along y.
-  double ridge_height_mm = 40.0;   ///< Ridge extent along y.
-  double ridge_depth_mm = 8.0;     ///< Ridge rise above the rear face.
+  double ridge_height_mm = 50.0;   ///< Ridge extent along y.
+  double ridge_depth_mm = 14.0;    ///< Ridge rise above the rear face.
   /// Gripping boss on the rear face: axis position (x, y), radius, rise above the rear face.
   Eigen::Vector2d grip_boss_xy_mm = {-50.0, 85.0};
   double grip_boss_radius_mm = 24.0;    ///< Radius of the gripping boss.

@@ -283,8 +283,8 @@ TEST(ChairParts, OptionErrorsNameTheField) {
     return std::string("no OptionError");
   };
   SeatBackOptions back;
-  back.wing_angle_deg = 75;
-  EXPECT_NE(message([&] { MakeSeatBack(back); }).find("SeatBackOptions.wing_angle_deg"),
+  back.right_wing_angle_deg = 75;
+  EXPECT_NE(message([&] { MakeSeatBack(back); }).find("SeatBackOptions.right_wing_angle_deg"),
             std::string::npos);
   back = {};
   back.grip_hole_diameter_mm = 46;
