@@ -60,6 +60,19 @@ Eigen::Matrix3d RotY(double angle) {
   return Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()).toRotationMatrix();
 }
 
+// A square bar of half-diagonal `depth` centred at `center`, its axis along part axis `axis`
+// (0 = x, 2 = z) for `length`, turned 45 deg about that axis: centred on a face normal to the
+// other axis, it stands out of it as a roof of two 45 deg slopes, `depth` high.
+localize::CadPrimitive RoofBar(const Eigen::Vector3d& center, int axis, double length,
+                               double depth) {
+  const double side = depth * std::sqrt(2.0);
+  Eigen::Vector3d size(side, side, side);
+  size[axis] = length;
+  const Eigen::Vector3d along = axis == 0 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitZ();
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(std::numbers::pi / 4, along).toRotationMatrix();
+  return Box(center - r * (size / 2), r, size);
+}
+
 // A boss of `radius` rising `height` above the face z = face_z of the part (axis +z, reaching
 // kEmbedMm into the material below), with a blind hole of `hole_depth` from its top.
 void AddBossWithHole(localize::CadSolid& solid, const Eigen::Vector2d& xy, double face_z,
@@ -80,8 +93,10 @@ void SeatBackOptions::Check(const std::string& what) const {
   Positive(thickness_mm, what, "thickness_mm");
   Positive(left_wing_width_mm, what, "left_wing_width_mm");
   Positive(right_wing_width_mm, what, "right_wing_width_mm");
-  Positive(ridge_height_mm, what, "ridge_height_mm");
   Positive(ridge_depth_mm, what, "ridge_depth_mm");
+  Require(ridge_depth_mm <= thickness_mm - 1, what,
+          "ridge_depth_mm must stay 1 mm below thickness_mm (the ridge's lower half lies in the "
+          "panel)");
   Positive(grip_boss_radius_mm, what, "grip_boss_radius_mm");
   Positive(grip_boss_height_mm, what, "grip_boss_height_mm");
   Positive(grip_hole_diameter_mm, what, "grip_hole_diameter_mm");
@@ -116,8 +131,8 @@ void SeatBackOptions::Check(const std::string& what) const {
             std::string(name) + "_hole_diameter_mm leaves less than a 2 mm wall in the boss");
     Require(depth <= h - 1, what,
             std::string(name) + "_hole_depth_mm must stay 1 mm above the rear face (blind hole)");
-    Require(xy.y() + r < ridge_center_y_mm - ridge_height_mm / 2 - 1 ||
-                xy.y() - r > ridge_center_y_mm + ridge_height_mm / 2 + 1,
+    Require(xy.y() + r < ridge_center_y_mm - ridge_depth_mm - 1 ||
+                xy.y() - r > ridge_center_y_mm + ridge_depth_mm + 1,
             what, std::string(name) + "_boss_xy_mm puts the boss on the lumbar ridge");
   };
   boss(grip_boss_xy_mm, grip_boss_radius_mm, grip_boss_height_mm, grip_hole_diameter_mm,
@@ -127,9 +142,9 @@ void SeatBackOptions::Check(const std::string& what) const {
   Require(
       (grip_boss_xy_mm - mount_boss_xy_mm).norm() > grip_boss_radius_mm + mount_boss_radius_mm + 1,
       what, "grip_boss_xy_mm and mount_boss_xy_mm: the bosses overlap");
-  Require(ridge_center_y_mm - ridge_height_mm / 2 > 1 &&
-              ridge_center_y_mm + ridge_height_mm / 2 < height_mm - 1,
-          what, "ridge_center_y_mm/ridge_height_mm put the ridge off the panel");
+  Require(
+      ridge_center_y_mm - ridge_depth_mm > 1 && ridge_center_y_mm + ridge_depth_mm < height_mm - 1,
+      what, "ridge_center_y_mm/ridge_depth_mm put the ridge off the panel");
 }
 
 void ArmrestOptions::Check(const std::string& what) const {
@@ -159,6 +174,14 @@ void ArmrestOptions::Check(const std::string& what) const {
           what, "boss_radius_mm/boss_center_z_mm put the boss off the post's outer face");
   Require(hole_diameter_mm <= 2 * boss_radius_mm - 4, what,
           "hole_diameter_mm leaves less than a 2 mm wall in the boss");
+  Positive(rib_depth_mm, what, "rib_depth_mm");
+  Positive(rib_length_mm, what, "rib_length_mm");
+  Require(2 * rib_depth_mm <= post_width_x_mm - 4 &&
+              rib_depth_mm <= bar_width_y_mm - 2 * post_inset_mm - 1,
+          what, "rib_depth_mm does not fit on (and into) the post");
+  Require(rib_center_z_mm - rib_length_mm / 2 > boss_center_z_mm + boss_radius_mm + 1 &&
+              rib_center_z_mm + rib_length_mm / 2 < post_height_mm - 1,
+          what, "rib_center_z_mm/rib_length_mm put the rib off the post or onto the boss");
 }
 
 CadChairPart MakeSeatBack(const SeatBackOptions& o) {
@@ -182,9 +205,7 @@ CadChairPart MakeSeatBack(const SeatBackOptions& o) {
   const Eigen::Vector3d left_joint_at(-o.panel_width_mm / 2 + left_joint, 0, 0);
   prims.push_back(
       Box(left_joint_at - o.left_wing_width_mm * left.col(0), left, {o.left_wing_width_mm, h, t}));
-  prims.push_back(
-      Box({-o.panel_width_mm / 2 + 10, o.ridge_center_y_mm - o.ridge_height_mm / 2, t - kEmbedMm},
-          {o.panel_width_mm - 20, o.ridge_height_mm, o.ridge_depth_mm + kEmbedMm}));
+  prims.push_back(RoofBar({0, o.ridge_center_y_mm, t}, 0, o.panel_width_mm - 20, o.ridge_depth_mm));
   AddBossWithHole(part.solid, o.grip_boss_xy_mm, t, o.grip_boss_radius_mm, o.grip_boss_height_mm,
                   o.grip_hole_diameter_mm, o.grip_hole_depth_mm);
   AddBossWithHole(part.solid, o.mount_boss_xy_mm, t, o.mount_boss_radius_mm, o.mount_boss_height_mm,
@@ -224,6 +245,7 @@ CadChairPart MakeArmrest(const ArmrestOptions& o) {
   const double outer = bw - in;
   prims.push_back(Cylinder({pw / 2, outer - kEmbedMm, o.boss_center_z_mm}, along_y,
                            o.boss_radius_mm, o.boss_height_mm + kEmbedMm, false));
+  prims.push_back(RoofBar({pw / 2, outer, o.rib_center_z_mm}, 2, o.rib_length_mm, o.rib_depth_mm));
   const double through = outer + o.boss_height_mm - in;
   prims.push_back(Cylinder({pw / 2, in - 1.0, o.boss_center_z_mm}, along_y, o.hole_diameter_mm / 2,
                            through + 2.0, true));

@@ -21,8 +21,14 @@
 // Armrest (frame "armrest", as mounted): x forward along the bar, z up the post, y outwards. A
 // vertical post (bottom at z = 0) carrying a horizontal bar with a pad on top, the bar running
 // mostly forward of the post (an L); a boss on the post's outer (+y) face near its bottom holds
-// the gripping hole, through boss and post along y. It lies on the pallet on its inner side
-// (the pad's and the post's -y faces), boss up.
+// the gripping hole, through boss and post along y, and a roof-shaped rib above it slopes
+// across x. It lies on the pallet on its inner side (the pad's and the post's -y faces), boss
+// up.
+//
+// Sloped faces: the sweep's laser plane is vertical, so vertical walls are lit at grazing
+// incidence or not at all, and a part made of upright boxes lying flat shows mostly level faces
+// that leave ICP free to slide along them. The 45 deg ridge (back, across y) and rib (armrest,
+// across x) give the fit a face it can see in each of those directions.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -68,9 +74,10 @@ struct SeatBackOptions {
   double right_wing_angle_deg = 32.0;  ///< Bend of the right wing towards the front, (0, 60].
   /// Extent of the right wing along y, [from, to], inside [0, height_mm].
   Eigen::Vector2d right_wing_y_mm = {30.0, 300.0};
-  double ridge_center_y_mm = 240;  ///< Lumbar ridge across the rear: centre height along y.
-  double ridge_height_mm = 50.0;   ///< Ridge extent along y.
-  double ridge_depth_mm = 14.0;    ///< Ridge rise above the rear face.
+  /// Lumbar ridge across the rear: a square bar along x turned 45 deg about x, its axis on the
+  /// rear face (a roof of two 45 deg slopes, 2 x ridge_depth_mm wide): centre height along y.
+  double ridge_center_y_mm = 240;
+  double ridge_depth_mm = 10.0;  ///< Rise of the ridge's apex above the rear face (< thickness).
   /// Gripping boss on the rear face: axis position (x, y), radius, rise above the rear face.
   Eigen::Vector2d grip_boss_xy_mm = {-50.0, 85.0};
   double grip_boss_radius_mm = 24.0;    ///< Radius of the gripping boss.
@@ -106,6 +113,11 @@ struct ArmrestOptions {
   double boss_radius_mm = 22.0;    ///< Gripping boss radius (must fit on the post's face).
   double boss_height_mm = 12.0;    ///< Boss rise above the post's outer face.
   double hole_diameter_mm = 20.0;  ///< Gripping hole through boss and post.
+  /// Rib on the post's outer face: a square bar along z turned 45 deg about z, its axis on the
+  /// face (a roof of two 45 deg slopes across x): rise of its apex above the face.
+  double rib_depth_mm = 10.0;
+  double rib_center_z_mm = 140.0;  ///< Centre of the rib along z.
+  double rib_length_mm = 120.0;    ///< Rib length along z.
 
   /// Throws OptionError naming `what` and the field when a value is out of range or the
   /// features do not fit.
