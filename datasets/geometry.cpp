@@ -250,10 +250,18 @@ MeshPart MakePallet() {
   }
   for (double x : {-545.0, 0.0, 545.0}) box(x, 0, board + block + board / 2, 110, 800, board);
   const double top_z = 2 * board + block + board / 2;
+  for (const Eigen::Vector2d& y : PalletDeckBoards()) {
+    box(0, (y[0] + y[1]) / 2, top_z, 1200, y[1] - y[0], board);
+  }
+  return m;
+}
+
+std::vector<Eigen::Vector2d> PalletDeckBoards() {
   const double widths[5] = {100, 145, 100, 145, 100};
   const double ys[5] = {-350, -177.5, 0, 177.5, 350};
-  for (int i = 0; i < 5; ++i) box(0, ys[i], top_z, 1200, widths[i], board);
-  return m;
+  std::vector<Eigen::Vector2d> boards;
+  for (int i = 0; i < 5; ++i) boards.emplace_back(ys[i] - widths[i] / 2, ys[i] + widths[i] / 2);
+  return boards;
 }
 
 }  // namespace lasercell::datasets

@@ -78,5 +78,8 @@ MeshPart MakeSphere(const Eigen::Isometry3d& frame_from_sphere, double radius_mm
 MeshPart MakePallet();
 /// Height of MakePallet's top deck above its base, mm.
 inline constexpr double kPalletHeightMm = 144.0;
+/// MakePallet's top deck boards, each as its [y_min, y_max] in the pallet frame, mm; they run
+/// the pallet's full length (x in [-600, 600]), with gaps between them.
+std::vector<Eigen::Vector2d> PalletDeckBoards();
 
 }  // namespace lasercell::datasets

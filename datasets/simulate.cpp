@@ -16,6 +16,7 @@
 #include "core/se3.hpp"
 #include "datasets/calibration_captures.hpp"
 #include "datasets/camera_images.hpp"
+#include "datasets/chair_parts.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/rng.hpp"
 #include "datasets/robots.hpp"
@@ -341,26 +342,6 @@ void RunPoseSweeps(const SimConfig& config, const CellTruth& truth, const PoseSw
                      ExposureTimesTruthYaml(result, config);
     ReportProgress(progress, set, static_cast<double>(i + 1) / plans.size());
   }
-}
-
-// The seat's part file: its STL, the hole as grasp frame (z along the hole axis, out of the
-// boss: the gripper approaches along -z).
-localize::PartDefinition SeatPartDefinition(const ChairSeat& seat) {
-  localize::PartDefinition part;
-  part.name = "seat";
-  part.model = "seat.stl";
-  part.units = "mm";
-  localize::GraspFrame hole;
-  hole.name = "hole";
-  hole.description = "3-finger gripper into the 27 mm hole of the boss, approach along -z";
-  Eigen::Isometry3d part_from_hole = Eigen::Isometry3d::Identity();
-  part_from_hole.linear() =
-      Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), seat.hole_axis_in_part)
-          .toRotationMatrix();
-  part_from_hole.translation() = seat.hole_center_in_part;
-  hole.part_from_grasp = QuaternionPose::FromIsometry(part_from_hole);
-  part.grasps.push_back(hole);
-  return part;
 }
 
 void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,

@@ -3,6 +3,7 @@
 #include <stdlib.h>  // mkstemp (POSIX)
 #include <unistd.h>
 
+#include <APIHeaderSection_MakeHeader.hxx>
 #include <BRepAlgoAPI_Cut.hxx>
 #include <BRepAlgoAPI_Fuse.hxx>
 #include <BRepPrimAPI_MakeBox.hxx>
@@ -11,6 +12,9 @@
 #include <IGESControl_Writer.hxx>
 #include <STEPControl_Writer.hxx>
 #include <Standard_Failure.hxx>
+#include <StepBasic_Product.hxx>
+#include <StepData_StepModel.hxx>
+#include <TCollection_HAsciiString.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS_Shape.hxx>
 #include <cmath>
@@ -129,7 +133,9 @@ TopoDS_Shape BuildSolid(const CadSolid& solid, const std::string& path) {
 }
 
 // STEP: OpenCASCADE writes only to a named file, so to a temporary one first, whose bytes then
-// go through the atomic write.
+// go through the atomic write. The product is named after the file and the header carries a
+// fixed time stamp (OpenCASCADE's defaults are a per-process counter and the wall clock), so
+// the bytes depend on the solid and the unit alone.
 std::string StepBytes(const TopoDS_Shape& shape, const UnitNames& unit, const std::string& path) {
   internal::OcctSession::SetStatic("write.step.unit", unit.step);
   internal::OcctSession::SetStatic("write.step.schema", "AP214IS");
@@ -137,6 +143,18 @@ std::string StepBytes(const TopoDS_Shape& shape, const UnitNames& unit, const st
   if (writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone) {
     throw InputError(path + ": OpenCASCADE could not translate the solid to STEP");
   }
+  const Handle(StepData_StepModel) model = writer.Model();
+  std::string stem = std::filesystem::path(path).stem().string();
+  if (stem.empty()) stem = "part";
+  const Handle(TCollection_HAsciiString) product = new TCollection_HAsciiString(stem.c_str());
+  for (Standard_Integer i = 1; i <= model->NbEntities(); ++i) {
+    const Handle(StepBasic_Product) p = Handle(StepBasic_Product)::DownCast(model->Value(i));
+    if (p.IsNull()) continue;
+    p->SetId(product);
+    p->SetName(product);
+  }
+  APIHeaderSection_MakeHeader header(model);
+  header.SetTimeStamp(new TCollection_HAsciiString("1970-01-01T00:00:00"));
   std::string temp = (std::filesystem::temp_directory_path() / "lasercell-cad-XXXXXX").string();
   const int fd = mkstemp(temp.data());
   if (fd < 0) throw FileError(temp, "cannot create a temporary file for the STEP writer");

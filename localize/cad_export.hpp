@@ -40,6 +40,8 @@ struct CadSolid {
 /// Builds `solid` and writes it to `path` as STEP (.step, .stp: AP214) or IGES (.iges, .igs:
 /// B-rep solid entities), chosen by the extension (case-insensitive), in length unit `unit`
 /// ("mm", "inch" or "m"). The write is atomic (a temporary file beside `path`, then renamed).
+/// STEP bytes depend only on the solid, the unit and the file name (the product is named after
+/// the file's stem, the header time stamp is fixed at 1970-01-01T00:00:00).
 /// Throws InputError for an empty solid, a first primitive that subtracts, a size that is not
 /// positive and finite, a placement that is not rigid, an unknown extension or unit, or a
 /// boolean operation that fails or leaves nothing; FileError when the file cannot be written.

@@ -132,7 +132,15 @@ std::string PoseYaml(const QuaternionPose& pose) {
 }
 
 std::string VectorYaml(const Eigen::Vector3d& v) {
-  return "[" + FormatDouble(v.x()) + ", " + FormatDouble(v.y()) + ", " + FormatDouble(v.z()) + "]";
+  // Appends (not "[" + std::string): GCC 12 -O2 reports a false -Wrestrict on the latter.
+  std::string s = "[";
+  s += FormatDouble(v.x());
+  s += ", ";
+  s += FormatDouble(v.y());
+  s += ", ";
+  s += FormatDouble(v.z());
+  s += "]";
+  return s;
 }
 
 // A YAML double-quoted scalar.

@@ -1,6 +1,8 @@
-// `lasercell simulate cell --out DIR [--seed N] [--config SIM.yaml]` and
-// `lasercell simulate seat --placements N --out DIR [--seed N] [--config SIM.yaml]`:
-// the workcell simulator (datasets/simulate.hpp). Same seed and config -> identical bytes.
+// `lasercell simulate cell --out DIR [--seed N] [--config SIM.yaml]`,
+// `lasercell simulate seat --placements N --out DIR [--seed N] [--config SIM.yaml]` and
+// `lasercell simulate pallet --scenes N --out DIR [--seed N] [--config SIM.yaml]`:
+// the workcell simulator (datasets/simulate.hpp, datasets/simulate_pallets.hpp). Same seed and
+// config -> identical bytes.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -8,6 +10,7 @@
 #include "core/error.hpp"
 #include "datasets/sim_config.hpp"
 #include "datasets/simulate.hpp"
+#include "datasets/simulate_pallets.hpp"
 #include "tools/commands.hpp"
 
 namespace lasercell::tools {
@@ -17,6 +20,7 @@ struct SimulateArgs {
   std::string out, config;
   long long seed = -1;  // -1: from the config (default 1)
   int placements = 10;
+  int scenes = 1;
   int threads = 0;
   bool quiet = false;
 };
@@ -77,6 +81,22 @@ void AddSimulateCommands(CLI::App& app) {
                                 Progress(seat_args->quiet), seat_args->threads);
     if (!seat_args->quiet)
       std::printf("%s -> %s\n", report.Summary().c_str(), seat_args->out.c_str());
+  });
+
+  CLI::App* pallet = sim->add_subcommand(
+      "pallet",
+      "Seat, seat back and armrest lying on the pallet (the paper's Fig. 4), one sweep per scene, "
+      "with STEP models, part files and truth");
+  auto pallet_args = std::make_shared<SimulateArgs>();
+  AddCommon(pallet, *pallet_args);
+  pallet->add_option("--scenes", pallet_args->scenes, "Number of scenes (>= 1)")
+      ->check(CLI::PositiveNumber);
+  pallet->callback([pallet_args] {
+    const auto report =
+        datasets::SimulatePallets(Config(*pallet_args), pallet_args->scenes, pallet_args->out, {},
+                                  Progress(pallet_args->quiet), pallet_args->threads);
+    if (!pallet_args->quiet)
+      std::printf("%s -> %s\n", report.Summary().c_str(), pallet_args->out.c_str());
   });
 }
 
