@@ -1,7 +1,9 @@
 #include "datasets/capture_calibration.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <thread>
 
 #include "calib/camera_calibration.hpp"
 #include "calib/camera_model.hpp"
@@ -31,7 +33,8 @@ calib::CameraModel CalibrateCamera(const std::string& dir, const calib::BoardSpe
                                    int threads, std::string* summary) {
   calib::IntrinsicsOptions options;
   options.model = calib::LensModelKind::kOpenCV8;
-  options.threads = threads;
+  options.threads =
+      threads > 0 ? threads : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   const std::string glob = In(dir, "images/chessboard_*.png");
   const calib::CalibrationImages images =
       calib::DetectCalibrationImages(io::GlobFiles(glob, "chessboard images"), board, {});

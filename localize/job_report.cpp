@@ -74,7 +74,7 @@ void AddInstances(const JobResult& result, report::HtmlReport* report) {
 void AddModelsAndTimings(const JobResult& result, report::HtmlReport* report) {
   report->AddHeading("Part models");
   std::vector<std::vector<std::string>> rows;
-  for (const PartModel& m : result.models) {
+  for (const PartModel& m : *result.models) {
     rows.push_back({m.part.name, m.part.model_path, m.source_format + " (" + m.source_unit + ")",
                     std::to_string(m.ppf.points().size()), Fixed(m.ppf.diameter_mm(), 1),
                     m.from_cache ? "cache" : "built", Fixed(m.load_ms, 1)});
@@ -107,7 +107,7 @@ report::Scene3d SceneOf(const JobResult& result) {
   std::size_t k = 0;
   for (const PartInstance& inst : result.parts.instances) {
     const PartModel* model = nullptr;
-    for (const PartModel& m : result.models) {
+    for (const PartModel& m : *result.models) {
       if (m.part.name == inst.part) model = &m;
     }
     if (model != nullptr && !model->mesh.faces.empty()) {

@@ -34,15 +34,29 @@ triangulation::SweepOptions SweepOptionsOf(const Job& job, int threads) {
   return o;
 }
 
-// Static edges on the target <- sensor path without a covariance.
-std::vector<std::string> EdgesWithoutCovariance(const FrameGraph& cell, const std::string& target) {
-  std::vector<std::string> notes;
-  if (!cell.RobotsOnPath(target, "sensor").empty()) {
-    notes.push_back("the path " + target +
-                    " <- sensor passes a robot: joint and kinematic uncertainty are not in the "
-                    "pose covariances");
+// The covariance of target <- sensor (the calibrated edges that place the sweep) and what it
+// leaves out. A robot sweep is evaluated at its middle profile's joints.
+std::optional<Matrix6d> PlacementCovariance(const FrameGraph& cell, const Job& job,
+                                            const triangulation::ProfileSet& profiles,
+                                            const triangulation::SweepOptions& sweep,
+                                            std::vector<std::string>* notes) {
+  JointValues joints;
+  if (sweep.motion == triangulation::SweepMotion::kRobot && !profiles.profiles.empty()) {
+    const std::string robot = sweep.robot.empty() ? profiles.header.robot : sweep.robot;
+    joints[robot] = profiles.profiles[profiles.profiles.size() / 2].joints_rad;
   }
-  return notes;
+  const TransformWithCovarianceResult placement =
+      cell.TransformWithCovariance(job.target_frame, "sensor", joints);
+  for (const std::string& edge : placement.edges_without_covariance) {
+    notes->push_back("edge " + edge + " has no covariance: its uncertainty is not in the poses");
+  }
+  if (placement.crosses_dynamic_edge) {
+    notes->push_back("the path " + job.target_frame +
+                     " <- sensor passes a robot: joint and kinematic uncertainty are not in the "
+                     "pose covariances");
+  }
+  notes->push_back("camera intrinsics and laser plane uncertainty are not in the pose covariances");
+  return placement.covariance;
 }
 
 LocalizePartsOptions PartsOptionsOf(const Job& job, int threads) {
@@ -122,66 +136,89 @@ std::string JobResult::Summary() const {
   return buf;
 }
 
-JobResult RunJob(const Job& job, const JobRunOptions& options) {
-  job.Check();
+JobRunner::JobRunner(const Job& job, const JobRunOptions& options) : job_(job), options_(options) {
+  job_.Check();
   const auto start = Clock::now();
-  const int threads = options.threads >= 0 ? options.threads : job.threads;
-  JobResult result;
-  result.job = job;
-
-  const FrameGraph cell = LoadFrameGraph(job.cell);
+  threads_ = options.threads >= 0 ? options.threads : job.threads;
+  cell_ = LoadFrameGraph(job.cell);
   triangulation::LaserPlaneSource plane_source;
   plane_source.laser = job.laser;
-  const triangulation::ScanSetup setup =
-      triangulation::ScanSetupFromCell(&cell, job.cell, plane_source, SweepOptionsOf(job, threads));
-  result.laser_plane_source = setup.laser_plane_source;
-  const triangulation::Triangulator triangulator(calib::LoadCameraModel(job.camera),
-                                                 setup.laser_plane);
-  result.notes = EdgesWithoutCovariance(cell, job.target_frame);
-  result.timings.setup_ms = MsSince(start);
+  setup_ = triangulation::ScanSetupFromCell(&cell_, job.cell, plane_source,
+                                            SweepOptionsOf(job, threads_));
+  triangulator_ = std::make_unique<triangulation::Triangulator>(calib::LoadCameraModel(job.camera),
+                                                                setup_.laser_plane);
+  setup_ms_ = MsSince(start);
 
   const auto models_start = Clock::now();
   PartModelOptions model_options;
   model_options.cache_dir = job.model_cache;
   model_options.load_mesh = options.load_meshes;
-  model_options.threads = threads;
-  for (const JobPart& p : job.parts) result.models.push_back(LoadPartModel(p.part, model_options));
-  result.timings.models_ms = MsSince(models_start);
+  model_options.threads = threads_;
+  auto models = std::make_shared<std::vector<PartModel>>();
+  for (const JobPart& p : job.parts) models->push_back(LoadPartModel(p.part, model_options));
+  models_ = std::move(models);
+  models_ms_ = MsSince(models_start);
   if (options.progress) options.progress("models", 1.0);
+}
 
-  const auto profiles_start = Clock::now();
-  std::shared_ptr<triangulation::ProfileSource> source = options.source;
-  if (!source) source = std::make_shared<triangulation::FileProfileSource>(job.profiles);
-  result.source = source->Describe();
-  std::optional<triangulation::ProfileSet> profiles = source->NextSweep();
-  if (!profiles) throw InputError(result.source + ": the source delivered no sweep");
-  result.timings.profiles_ms = MsSince(profiles_start);
-  if (options.progress) options.progress("profiles", 1.0);
+JobRunner::~JobRunner() = default;
+
+std::optional<JobResult> JobRunner::RunNext(triangulation::ProfileSource& source) {
+  const auto start = Clock::now();
+  std::optional<triangulation::ProfileSet> profiles = source.NextSweep();
+  if (!profiles) return std::nullopt;
+  const double profiles_ms = MsSince(start);
+  if (options_.progress) options_.progress("profiles", 1.0);
+  JobResult result = Run(*profiles, source.Describe());
+  result.timings.profiles_ms = profiles_ms;
+  result.timings.total_ms += profiles_ms;
+  return result;
+}
+
+JobResult JobRunner::Run(const triangulation::ProfileSet& profiles,
+                         const std::string& source_name) {
+  const auto start = Clock::now();
+  JobResult result;
+  result.job = job_;
+  result.source = source_name;
+  result.laser_plane_source = setup_.laser_plane_source;
+  result.models = models_;
+  result.timings.setup_ms = setup_ms_;
+  result.timings.models_ms = models_ms_;
 
   const auto tri_start = Clock::now();
-  result.sweep = triangulation::AssembleSweep(*profiles, triangulator, setup.options, &cell);
+  result.sweep = triangulation::AssembleSweep(profiles, *triangulator_, setup_.options, &cell_);
   result.timings.triangulation_ms = MsSince(tri_start);
-  if (options.progress) options.progress("triangulation", 1.0);
+  if (options_.progress) options_.progress("triangulation", 1.0);
   if (result.sweep.cloud.empty()) {
     throw InputError(result.source + ": the sweep has no valid laser points (" +
                      result.sweep.Summary() + ")");
   }
 
   const auto loc_start = Clock::now();
-  LocalizePartsOptions parts_options = PartsOptionsOf(job, threads);
-  parts_options.progress = options.progress;
+  LocalizePartsOptions parts_options = PartsOptionsOf(job_, threads_);
+  parts_options.placement_covariance =
+      PlacementCovariance(cell_, job_, profiles, setup_.options, &result.notes);
+  parts_options.progress = options_.progress;
   std::vector<PartRequest> requests;
-  for (std::size_t i = 0; i < job.parts.size(); ++i) {
-    requests.push_back({&result.models[i], job.parts[i].instances});
+  for (std::size_t i = 0; i < job_.parts.size(); ++i) {
+    requests.push_back({&(*models_)[i], job_.parts[i].instances});
   }
   result.parts =
       LocalizeParts(result.sweep.cloud, LinesOfSight(result.sweep), requests, parts_options);
   result.timings.localization_ms = MsSince(loc_start);
-  if (!options.load_meshes) {
-    for (PartModel& m : result.models) m.mesh = TriangleMesh{};
-  }
-  result.timings.total_ms = MsSince(start);
+  result.timings.run_ms = MsSince(start);
+  result.timings.total_ms = setup_ms_ + models_ms_ + result.timings.run_ms;
   return result;
+}
+
+JobResult RunJob(const Job& job, const JobRunOptions& options) {
+  JobRunner runner(job, options);
+  std::shared_ptr<triangulation::ProfileSource> source = options.source;
+  if (!source) source = std::make_shared<triangulation::FileProfileSource>(job.profiles);
+  std::optional<JobResult> result = runner.RunNext(*source);
+  if (!result) throw InputError(source->Describe() + ": the source delivered no sweep");
+  return std::move(*result);
 }
 
 nlohmann::json JobResultJson(const JobResult& r) {
@@ -225,7 +262,9 @@ nlohmann::json JobResultJson(const JobResult& r) {
                                {"total", s.timings.total_ms}}}});
   }
   j["models"] = nlohmann::json::array();
-  for (const PartModel& m : r.models) j["models"].push_back(ModelJson(m));
+  if (r.models) {
+    for (const PartModel& m : *r.models) j["models"].push_back(ModelJson(m));
+  }
   j["notes"] = r.notes;
   const JobTimings& t = r.timings;
   j["timings_ms"] = {{"setup", t.setup_ms},
@@ -236,6 +275,7 @@ nlohmann::json JobResultJson(const JobResult& r) {
                      {"normals", r.parts.timings.normals_ms},
                      {"searches", r.parts.timings.searches_ms},
                      {"localization", t.localization_ms},
+                     {"run", t.run_ms},
                      {"total", t.total_ms}};
   return j;
 }

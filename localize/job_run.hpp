@@ -11,6 +11,7 @@
 
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +22,7 @@
 #include "localize/part_model.hpp"
 #include "triangulation/profile_source.hpp"
 #include "triangulation/sweep.hpp"
+#include "triangulation/triangulator.hpp"
 
 namespace lasercell::localize {
 
@@ -44,7 +46,9 @@ struct JobTimings {
   double profiles_ms = 0.0;       ///< Reading the sweep from its source.
   double triangulation_ms = 0.0;  ///< Profiles -> points in the target frame.
   double localization_ms = 0.0;   ///< LocalizeParts.
-  double total_ms = 0.0;
+  /// This sweep: triangulation + localization + the job's own work around them.
+  double run_ms = 0.0;
+  double total_ms = 0.0;  ///< setup + models + profiles + run.
 };
 
 /// Everything a job run produced.
@@ -53,7 +57,8 @@ struct JobResult {
   std::string source;  ///< The profile source, e.g. "file seat_000.lcp".
   std::string laser_plane_source;
   triangulation::SweepResult sweep;  ///< The sweep in the target frame.
-  std::vector<PartModel> models;     ///< One per job part, in job order.
+  /// One per job part, in job order (shared by the runs of one JobRunner).
+  std::shared_ptr<const std::vector<PartModel>> models;
   LocalizePartsResult parts;
   /// Calibrated edges on the target <- sensor path without a covariance (their uncertainty is
   /// not in the poses' covariances), and other caveats.
@@ -63,10 +68,41 @@ struct JobResult {
   std::string Summary() const;
 };
 
-/// Runs `job` (see the file comment). Throws FileError / InputError naming the file and what
-/// to do for a cell, camera, laser plane, profile file or model that cannot be used, a target
-/// frame the cell cannot reach from the sensor, or an ROI that holds no sweep point; outcomes
-/// (parts not found, not graspable) are in the result.
+/// A job loaded once (cell, camera, lookup tables, part models) and run on sweep after sweep, as
+/// a cell does while profiles arrive.
+class JobRunner {
+ public:
+  /// Loads everything the job needs. Throws as RunJob does for the cell, camera, laser plane,
+  /// target frame and models.
+  explicit JobRunner(const Job& job, const JobRunOptions& options = {});
+  ~JobRunner();
+  JobRunner(const JobRunner&) = delete;
+  JobRunner& operator=(const JobRunner&) = delete;
+
+  /// Localizes the job's parts in one sweep; `source_name` names it in the result. Timings
+  /// setup_ms and models_ms are the runner's (paid once).
+  JobResult Run(const triangulation::ProfileSet& profiles, const std::string& source_name);
+  /// The next sweep of `source`, or nullopt when it has none.
+  std::optional<JobResult> RunNext(triangulation::ProfileSource& source);
+  const Job& job() const { return job_; }
+  /// The loaded part models, in job order.
+  const std::vector<PartModel>& models() const { return *models_; }
+
+ private:
+  Job job_;
+  JobRunOptions options_;
+  int threads_ = 0;
+  FrameGraph cell_;
+  triangulation::ScanSetup setup_;
+  std::unique_ptr<triangulation::Triangulator> triangulator_;
+  std::shared_ptr<const std::vector<PartModel>> models_;
+  double setup_ms_ = 0.0, models_ms_ = 0.0;
+};
+
+/// Runs `job` once on the next sweep of options.source (default: the job's profile file). Throws
+/// FileError / InputError naming the file and what to do for a cell, camera, laser plane, profile
+/// file or model that cannot be used, a target frame the cell cannot reach from the sensor, or an
+/// ROI that holds no sweep point; outcomes (parts not found, not graspable) are in the result.
 JobResult RunJob(const Job& job, const JobRunOptions& options = {});
 
 /// The result file (format lasercell.localization_job, version 1): job, inputs, per instance

@@ -21,9 +21,9 @@ double MsSince(Clock::time_point start) {
 // The ICP pose covariance of a candidate (scene_from_model, left perturbation in the scene);
 // false when ICP gave none.
 bool IcpPoseCovariance(const registration::LocalizationCandidate& candidate, Matrix6d* out) {
-  if (!candidate.icp_run) return false;
-  (void)out;
-  return false;  // until ICP reports its covariance
+  if (!candidate.icp_run || !candidate.covariance_valid) return false;
+  *out = candidate.covariance;
+  return true;
 }
 
 // Verification constraints of one part: the job's support plane and the part's stable poses

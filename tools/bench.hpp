@@ -15,6 +15,9 @@ void AddBenchPeaksCommand(CLI::App& bench);
 /// Registers `bench calibration` under `bench` (bench_calibration.cpp).
 void AddCalibrationBenchCommand(CLI::App& bench);
 
+/// Registers `bench table1` under `bench` (bench_table1.cpp).
+void AddTable1BenchCommand(CLI::App& bench);
+
 /// Arguments of `lasercell bench robustness`.
 struct RobustnessBenchArgs {
   int placements = 200;  ///< Random model poses per noise level.

@@ -154,6 +154,7 @@ void AddBenchCommands(CLI::App& app) {
 
   AddBenchPeaksCommand(*bench);
   AddCalibrationBenchCommand(*bench);
+  AddTable1BenchCommand(*bench);
 }
 
 }  // namespace lasercell::tools

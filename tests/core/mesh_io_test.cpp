@@ -93,7 +93,7 @@ TEST(MeshIo, TruncatedOrMalformedStlNamesTheFileAndTheLine) {
             std::string::npos);
   const std::string text = EncodeAsciiStl(Box());
   EXPECT_NE(ErrorOf([&] {
-              DecodeStl(text.substr(0, text.size() / 2), "half.stl");
+              DecodeStl(text.substr(0, text.find("endloop")), "half.stl");
             }).find("unexpected end of file"),
             std::string::npos);
   const std::string bad = "solid x\n facet normal 0 0 1\n outer loop\n vertex 0 0 nan\n";

@@ -8,10 +8,12 @@
 #include <cmath>
 #include <filesystem>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
+#include "core/html_report.hpp"
 #include "core/io/file_util.hpp"
 #include "datasets/simulate.hpp"
 #include "datasets/simulate_records.hpp"
@@ -106,6 +108,16 @@ TEST_F(SeatJob, TheHoleGraspOfEachSeatIsWithinAMillimetreAndAHalfAndGraspable) {
         180.0 / M_PI;
     EXPECT_LT(axis_deg, 1.0) << seat;
     EXPECT_FALSE(inst.ambiguous) << inst.ambiguity_reason;
+    EXPECT_TRUE(inst.covariance_valid);
+    EXPECT_TRUE(inst.graspable) << inst.not_graspable_reason;
+    EXPECT_TRUE(hole.within_tolerance);
+    EXPECT_GT(hole.position_sigma_mm, 0.0);
+    // This cell's handling_base <- sensor edge carries no covariance: the result says so.
+    bool noted = false;
+    for (const std::string& note : result.notes) {
+      noted |= note.find("edge handling_base <- sensor has no covariance") != std::string::npos;
+    }
+    EXPECT_TRUE(noted);
     EXPECT_GT(inst.candidate.verification.support, 0.5);
     EXPECT_TRUE(result.parts.AllFound());
     EXPECT_EQ(result.sweep.frame, "handling_base");
@@ -132,7 +144,7 @@ TEST_F(SeatJob, TheSecondRunLoadsTheModelFromTheCacheAndGivesTheSamePose) {
   options.threads = 1;
   const JobResult first = RunJob(job, options);
   const JobResult second = RunJob(job, options);
-  EXPECT_TRUE(second.models[0].from_cache);
+  EXPECT_TRUE((*second.models)[0].from_cache);
   ASSERT_EQ(first.parts.instances.size(), 1u);
   ASSERT_EQ(second.parts.instances.size(), 1u);
   EXPECT_TRUE(first.parts.instances[0].target_from_part.isApprox(
@@ -173,6 +185,34 @@ TEST_F(SeatJob, BadCellsFramesPlanesAndRoisAreClearErrors) {
   text.replace(text.find("sim/profiles/seat_000.lcp"), 25, "cut.lcp");
   io::WriteFileAtomically(cut, text);
   EXPECT_NE(ErrorOf([&] { RunJob(ReadJobFile(cut)); }).find("cut.lcp"), std::string::npos);
+}
+
+std::string Attribute(const std::string& dom, const std::string& name) {
+  const std::regex re(name + "=\"([^\"]*)\"");
+  std::smatch m;
+  return std::regex_search(dom, m, re) ? m[1].str() : std::string("(absent)");
+}
+
+TEST_F(SeatJob, TheReportShowsTheSweepThePosedSeatAndItsGraspInA3dViewWithoutScriptErrors) {
+  const Job job = ReadJobFile(WriteJob("seat_000",
+                                       "roi: {min_mm: [-2000, -2000, -500], "
+                                       "max_mm: [2000, 2000, 1000]}\n"));
+  JobRunOptions options;
+  options.load_meshes = true;
+  const JobResult result = RunJob(job, options);
+  ASSERT_EQ(result.parts.instances.size(), 1u);
+  const std::string page = dir_->File("seat_000_report.html");
+  report::WriteHtmlReport(page, JobReport(result));
+  const std::string html = io::ReadFileBytes(page);
+  EXPECT_NE(html.find("seat_1.hole"), std::string::npos);
+  EXPECT_EQ(html.find("<script src"), std::string::npos);  // three.js inlined, no network
+  const std::string dom = test::HeadlessChromium(
+      page, "--use-angle=swiftshader --enable-unsafe-swiftshader --window-size=1000,800");
+  ASSERT_FALSE(dom.empty()) << "chromium did not run (scripts/install-deps installs it)";
+  EXPECT_EQ(Attribute(dom, "data-report-errors"), "(absent)");
+  EXPECT_EQ(Attribute(dom, "data-view3d-drawn"), "1");
+  // The sweep, the posed seat mesh, its hole frame and the ROI box.
+  EXPECT_EQ(Attribute(dom, "data-view3d-objects"), "4");
 }
 
 TEST_F(SeatJob, TheCommandLineRunsTheJobAndAnswersWhereThePartIs) {
