@@ -66,7 +66,7 @@ TEST(PartRest, ATiltedBoxFallsOntoTheFaceBelowItsCentre) {
   EXPECT_TRUE(again.plane_from_part.isApprox(rest.plane_from_part, 1e-12));
 }
 
-TEST(PartRest, ATallBoxOnItsEdgeTipsOverAndAWedgeRestsOnItsWideFace) {
+TEST(PartRest, ALeaningTallBoxTipsOverOnlyBeyondItsTippingAngle) {
   // Balanced on an edge with the centre off to one side, a box lands on the face on that side.
   const TriangleMesh box = BoxMesh({20, 20, 80}, Eigen::Vector3d::Zero());
   const MeshSolidCheck c = CheckMeshSolid(box);
@@ -78,16 +78,16 @@ TEST(PartRest, ATallBoxOnItsEdgeTipsOverAndAWedgeRestsOnItsWideFace) {
   EXPECT_LT(std::abs(up.z()), 1e-9);
   EXPECT_GT(rest.stability_margin_mm, 9.0);
   // A small lean stays upright.
-  const RestingPose upright = SettleOnPlane(
-      box.vertices.positions, c.center_of_mass,
-      Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()).toRotationMatrix());
+  const RestingPose upright =
+      SettleOnPlane(box.vertices.positions, c.center_of_mass,
+                    Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()).toRotationMatrix());
   EXPECT_NEAR(upright.plane_from_part.linear().row(2).z(), 1.0, 1e-9);
-  EXPECT_THROW(SettleOnPlane({{0, 0, 0}, {1, 0, 0}}, Eigen::Vector3d::Zero(),
-                             Eigen::Matrix3d::Identity()),
-               InputError);
-  EXPECT_THROW(SettleOnPlane(box.vertices.positions, c.center_of_mass,
-                             Eigen::Matrix3d::Identity(), 0.0),
-               InputError);
+  EXPECT_THROW(
+      SettleOnPlane({{0, 0, 0}, {1, 0, 0}}, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Identity()),
+      InputError);
+  EXPECT_THROW(
+      SettleOnPlane(box.vertices.positions, c.center_of_mass, Eigen::Matrix3d::Identity(), 0.0),
+      InputError);
 }
 
 TEST(PartRest, HullsDistancesAndFootprintGaps) {
@@ -107,8 +107,8 @@ TEST(PartRest, HullsDistancesAndFootprintGaps) {
   const auto square = [](double x, double y) {
     return std::vector<Eigen::Vector2d>{{x, y}, {x + 1, y}, {x + 1, y + 1}, {x, y + 1}};
   };
-  EXPECT_TRUE(ConvexPolygonsCloserThan(square(0, 0), square(0.5, 0.5), 0.0));   // overlap
-  EXPECT_FALSE(ConvexPolygonsCloserThan(square(0, 0), square(1.5, 0), 0.4));    // 0.5 apart
+  EXPECT_TRUE(ConvexPolygonsCloserThan(square(0, 0), square(0.5, 0.5), 0.0));  // overlap
+  EXPECT_FALSE(ConvexPolygonsCloserThan(square(0, 0), square(1.5, 0), 0.4));   // 0.5 apart
   EXPECT_TRUE(ConvexPolygonsCloserThan(square(0, 0), square(1.5, 0), 0.6));
   // A square turned 45 deg with its corner 0.5 mm from the first square's side: apart, but the
   // edge-normal test may call it closer than 0.6 mm (conservative), never than 0.4 mm.
