@@ -25,6 +25,10 @@ function(lasercell_add_gtest_suites target module)
     add_test(NAME ${module}.${suite}
              COMMAND ${target} --gtest_filter=${suite}.*:*/${suite}.* --gtest_brief=1)
     set_tests_properties(${module}.${suite} PROPERTIES TIMEOUT ${ARG_TIMEOUT})
+    if(LASERCELL_SANITIZE)
+      set_tests_properties(${module}.${suite} PROPERTIES ENVIRONMENT
+                           "LSAN_OPTIONS=suppressions=${PROJECT_SOURCE_DIR}/tests/lsan.supp")
+    endif()
   endforeach()
   string(REPLACE ";" "," suite_csv "${suites}")
   add_test(NAME ${module}.all_suites_registered

@@ -21,6 +21,7 @@
 #include "datasets/calibration_captures.hpp"
 #include "datasets/sim_config.hpp"
 #include "tests/calib/kuka2_data.hpp"
+#include "tests/sanitizer_scale.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -206,7 +207,7 @@ TEST(HandEye, RefinementBeatsEveryOpenCvMethod) {
   std::vector<double> cv_r(methods.size(), 0.0), cv_t(methods.size(), 0.0);
   std::vector<int> cv_failed(methods.size(), 0);
   double our_r = 0, our_t = 0;
-  const int draws = 20;
+  const int draws = lasercell::test::Draws(20);
   for (int draw = 0; draw < draws; ++draw) {
     const Synthetic s = MakeViews(camera, 15, 9, 6, 30.0, 0.2, 400 + draw);
     const HandEyeResult ours = CalibrateHandEye(s.views, camera);
@@ -251,7 +252,8 @@ TEST(HandEye, RefinementBeatsEveryOpenCvMethod) {
   our_t = std::sqrt(our_t / draws);
   for (std::size_t m = 0; m < methods.size(); ++m) {
     const int ok = draws - cv_failed[m];
-    if (ok == 0) continue;  // failed on every draw: worse than ours by definition
+    if (ok == 0 || !lasercell::test::StatisticsAsserted())
+      continue;  // ok == 0: worse by definition
     EXPECT_LT(our_t, std::sqrt(cv_t[m] / ok)) << "OpenCV method " << methods[m];
     EXPECT_LT(our_r, std::sqrt(cv_r[m] / ok)) << "OpenCV method " << methods[m];
   }
@@ -269,7 +271,7 @@ TEST(HandEye, RefinementBeatsEveryOpenCvMethod) {
 TEST(HandEye, CovarianceCoversTruth) {
   const CameraModel camera = Opencv8();
   int inside = 0, total = 0;
-  for (unsigned draw = 0; draw < 120; ++draw) {
+  for (int draw = 0; draw < lasercell::test::Draws(120); ++draw) {
     const Synthetic s = MakeViews(camera, 8, 6, 5, 40.0, 0.2, 1000 + draw);
     const HandEyeResult r = CalibrateHandEye(s.views, camera);
     ASSERT_TRUE(r.covariance_valid);
@@ -284,6 +286,7 @@ TEST(HandEye, CovarianceCoversTruth) {
   }
   const double fraction = static_cast<double>(inside) / total;
   std::printf("truth inside 1 sigma: %.1f %% of %d components\n", 100.0 * fraction, total);
+  if (!lasercell::test::StatisticsAsserted()) return;
   EXPECT_GE(fraction, 0.60);
   EXPECT_LE(fraction, 0.76);
 }

@@ -21,6 +21,7 @@
 #include "datasets/camera_images.hpp"
 #include "datasets/simulate.hpp"
 #include "tests/cli_util.hpp"
+#include "tests/sanitizer_scale.hpp"
 #include "triangulation/profile_io.hpp"
 
 namespace lasercell::calib {
@@ -261,7 +262,7 @@ TEST(LaserPlaneHeights, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
   options.plate_normal_in_sensor = rig.m;
   options.min_peaks_per_column = 1;
   int inside_d = 0, inside_z = 0;
-  const int draws = 100;
+  const int draws = lasercell::test::Draws(100);
   const std::vector<double> heights = {150.0, 250.0, 350.0};
   std::vector<std::vector<Eigen::Vector2d>> exact;
   for (const double h : heights) exact.push_back(ExactStripe(rig, h, 2));
@@ -280,6 +281,7 @@ TEST(LaserPlaneHeights, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
   // sweeps give 0.003 px). At 0.03 px per column coverage drops to ~58 % and at 0.1 px to ~32 %:
   // D0 and d are then biased by ~1 sigma (the 3-height problem is nearly exactly determined and
   // its nonlinearity shows); BENCHMARKS.md says so.
+  if (!lasercell::test::StatisticsAsserted()) return;
   EXPECT_GE(inside_d, 60);
   EXPECT_LE(inside_d, 76);
   EXPECT_GE(inside_z, 60);
@@ -671,7 +673,7 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
     }
   }
   int inside_d = 0, inside_n = 0;
-  const int draws = 100;
+  const int draws = lasercell::test::Draws(100);
   for (int draw = 0; draw < draws; ++draw) {
     std::mt19937_64 rng(500 + draw);
     std::normal_distribution<double> corner_noise(0.0, 0.1), row_noise(0.0, 0.05);
@@ -691,6 +693,7 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
     if (AngleDeg(r.normal, n) <= r.normal_sigma_deg) ++inside_n;
   }
   std::printf("stripe coverage: d %d %%, normal %d %%\n", inside_d, inside_n);
+  if (!lasercell::test::StatisticsAsserted()) return;
   EXPECT_GE(inside_d, 60);
   EXPECT_LE(inside_d, 76);
 }
