@@ -382,6 +382,21 @@ void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& 
     if (same_place != nullptr) {
       const double turn =
           RotationDistance(same_place->scene_from_model, candidate.scene_from_model);
+      // Converged to the same pose (model moved by less than the refined support distance):
+      // one answer found twice, so keep the evidence of the stronger cluster, its coarse pose
+      // included; the supports differ only by ICP's convergence tolerance.
+      const double resolution_mm = options.refined_support_distance_relative * model.diameter_mm();
+      if (candidate.score > same_place->score &&
+          TranslationDistance(same_place->scene_from_model * model.model_from_centered(),
+                              candidate.scene_from_model * model.model_from_centered()) +
+                  turn * 0.5 * model.diameter_mm() <
+              resolution_mm) {
+        LocalizationCandidate& kept = result->candidates[same_place - result->candidates.data()];
+        candidate.rank = kept.rank;
+        std::swap(kept, candidate);
+        candidate.rank = 0;
+        same_place = &kept;
+      }
       if (!result->ambiguous && turn > options.clustering.rotation_threshold_rad &&
           candidate.verification.support >=
               options.ambiguity_score_ratio * same_place->verification.support) {

@@ -18,6 +18,20 @@ struct Voter {
   std::vector<Neighbor> hits;
 };
 
+// Sub-bin offset of an accumulator peak along alpha, in bins within [-0.5, 0.5]: the vertex of
+// the parabola through (-1, left), (0, peak), (1, right), the alpha row being circular.
+double AlphaOffset(const std::uint32_t* acc, std::uint32_t cell, std::size_t alpha_bins) {
+  if (alpha_bins < 3) return 0.0;
+  const std::size_t bin = cell % alpha_bins;
+  const std::uint32_t* row = acc + (cell - bin);
+  const double left = row[bin == 0 ? alpha_bins - 1 : bin - 1];
+  const double right = row[bin + 1 == alpha_bins ? 0 : bin + 1];
+  const double peak = row[bin];
+  const double curvature = left - 2.0 * peak + right;
+  if (!(curvature < 0.0)) return 0.0;  // flat: no vertex to prefer over the bin centre
+  return std::clamp(0.5 * (left - right) / curvature, -0.5, 0.5);
+}
+
 // Bin of a continuous quantized value and its nearer neighbour (-1 when out of range).
 struct BinPair {
   int bin;
@@ -176,8 +190,13 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
         h.scene_reference = static_cast<std::uint32_t>(r);
         h.model_reference = static_cast<std::uint32_t>(cell / alpha_bins);
         h.alpha_bin = static_cast<std::int32_t>(cell % alpha_bins);
-        // scene_from_centered = T(s_r)^-1 R_x(alpha) T(m_r), alpha at the bin centre.
-        const double alpha = (h.alpha_bin + 0.5) * alpha_step;
+        // scene_from_centered = T(s_r)^-1 R_x(alpha) T(m_r), alpha at the bin centre or at the
+        // vertex of the parabola through the peak and its neighbours (options.interpolate_alpha).
+        const double alpha =
+            (h.alpha_bin + 0.5 +
+             (options.interpolate_alpha ? AlphaOffset(acc, cell, alpha_bins) : 0.0)) *
+            alpha_step;
+        h.alpha_rad = alpha;
         const Eigen::Vector3d& m_r = model.points()[h.model_reference];
         const Eigen::Matrix3d rot =
             rot_s.transpose() *

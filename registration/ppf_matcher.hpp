@@ -42,6 +42,11 @@ struct PpfMatchOptions {
   /// Also vote for the nearer neighbouring alpha bin (alpha quantization robustness). Doubles
   /// the voting time; on the UWA data it made no difference to the success rate.
   bool spread_alpha = false;
+  /// Place each peak's alpha between bin centres by a parabola through the peak cell and its two
+  /// alpha neighbours (vertex of the quadratic through three equally spaced samples, clamped to
+  /// the peak's bin), instead of at the bin centre: the accumulator row is a histogram of the
+  /// continuous alphas, so its vertex estimates their mode to a fraction of the step.
+  bool interpolate_alpha = true;
   /// Worker threads: 0 = all cores, 1 = calling thread only.
   int threads = 0;
   /// Throws OptionError naming the field when a value is out of range.
@@ -55,6 +60,7 @@ struct PoseHypothesis {
   std::uint32_t scene_reference = 0;  ///< Index of s_r in the sampled scene.
   std::uint32_t model_reference = 0;  ///< Index of m_r in PpfModel::points().
   std::int32_t alpha_bin = 0;         ///< Alpha bin of the peak.
+  double alpha_rad = 0.0;  ///< Alpha used for the pose (bin centre, or interpolated), rad.
 };
 
 /// Hypotheses and counters from MatchPpf.

@@ -3,9 +3,14 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <random>
+#include <vector>
 
 #include "core/error.hpp"
+#include "core/se3.hpp"
 #include "registration/clustering.hpp"
 #include "registration/filters.hpp"
 #include "registration_test_util.hpp"
@@ -97,6 +102,43 @@ TEST_F(PpfMatcherTest, SpreadingStillFindsThePose) {
   EXPECT_THAT(clusters.clusters[0].scene_from_centered,
               test::PoseNear(truth_ * model_.model_from_centered(), 2 * model_.angle_step_rad(),
                              0.1 * model_.diameter_mm()));
+}
+
+// The alpha of a peak placed at the vertex of the parabola through its cell and the two alpha
+// neighbours, instead of at the bin centre: over the hypotheses that found the part (within two
+// angle steps and 0.1 x diameter of the truth) the median rotation error is smaller, and every
+// alpha stays inside its own bin.
+TEST_F(PpfMatcherTest, InterpolatedAlphaBringsTheHypothesesCloserToTheTruth) {
+  const Eigen::Isometry3d truth = truth_ * model_.model_from_centered();
+  const auto median_rotation_error = [&](const PpfMatchResult& match) {
+    std::vector<double> errors;
+    for (const PoseHypothesis& h : match.hypotheses) {
+      const double rotation = RotationDistance(h.scene_from_centered, truth);
+      if (rotation < 2 * model_.angle_step_rad() &&
+          TranslationDistance(h.scene_from_centered, truth) < 0.1 * model_.diameter_mm())
+        errors.push_back(rotation);
+    }
+    EXPECT_GT(errors.size(), 20U);
+    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+    return errors[errors.size() / 2];
+  };
+  PpfMatchOptions options;
+  options.interpolate_alpha = false;
+  const PpfMatchResult centre = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  options.interpolate_alpha = true;
+  const PpfMatchResult vertex = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  ASSERT_EQ(centre.hypotheses.size(), vertex.hypotheses.size());
+  const double step = model_.alpha_step_rad();
+  for (const PoseHypothesis& h : vertex.hypotheses) {
+    ASSERT_GE(h.alpha_rad, h.alpha_bin * step - 1e-12);
+    ASSERT_LE(h.alpha_rad, (h.alpha_bin + 1) * step + 1e-12);
+  }
+  const double at_centre = median_rotation_error(centre), at_vertex = median_rotation_error(vertex);
+  std::printf(
+      "median rotation error of the part's hypotheses: %.2f deg at the bin centre, %.2f "
+      "deg interpolated\n",
+      at_centre * 180 / M_PI, at_vertex * 180 / M_PI);
+  EXPECT_LT(at_vertex, at_centre);
 }
 
 TEST_F(PpfMatcherTest, IdenticalForAnyThreadCount) {
