@@ -370,11 +370,12 @@ void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& 
       result->rejected.push_back(std::move(candidate));
       continue;
     }
-    const LocalizationCandidate* same_place = nullptr;
-    for (const LocalizationCandidate& kept : result->candidates) {
-      if (TranslationDistance(kept.scene_from_model * model.model_from_centered(),
-                              candidate.scene_from_model * model.model_from_centered()) <
-          same_place_mm) {
+    LocalizationCandidate* same_place = nullptr;
+    double shift_mm = 0.0;  // between the model centres of same_place and candidate
+    for (LocalizationCandidate& kept : result->candidates) {
+      shift_mm = TranslationDistance(kept.scene_from_model * model.model_from_centered(),
+                                     candidate.scene_from_model * model.model_from_centered());
+      if (shift_mm < same_place_mm) {
         same_place = &kept;
         break;
       }
@@ -387,15 +388,9 @@ void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& 
       // included; the supports differ only by ICP's convergence tolerance.
       const double resolution_mm = options.refined_support_distance_relative * model.diameter_mm();
       if (candidate.score > same_place->score &&
-          TranslationDistance(same_place->scene_from_model * model.model_from_centered(),
-                              candidate.scene_from_model * model.model_from_centered()) +
-                  turn * 0.5 * model.diameter_mm() <
-              resolution_mm) {
-        LocalizationCandidate& kept = result->candidates[same_place - result->candidates.data()];
-        candidate.rank = kept.rank;
-        std::swap(kept, candidate);
-        candidate.rank = 0;
-        same_place = &kept;
+          shift_mm + turn * 0.5 * model.diameter_mm() < resolution_mm) {
+        std::swap(same_place->rank, candidate.rank);
+        std::swap(*same_place, candidate);
       }
       if (!result->ambiguous && turn > options.clustering.rotation_threshold_rad &&
           candidate.verification.support >=
