@@ -74,14 +74,9 @@ RigidFitResult FitRigidTransform(const std::vector<Eigen::Vector3d>& p_in_source
                                  const std::vector<Eigen::Matrix3d>& target_covariances = {},
                                  const RigidFitOptions& options = {});
 
-/// Unweighted-or-scalar-weighted closed form (Horn/Umeyama without scale): target_from_source
-/// minimising sum w_i |t_i - (R s_i + t)|^2. Throws InputError for mismatched sizes, fewer than
-/// 3 points or weights that do not sum to a positive number. Collinearity is not checked here
-/// (the correspondence search scores many assignments; a rank-deficient cross-covariance there
-/// means a wrong assignment, not degenerate data): FitRigidTransform checks it.
-Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& p_in_source,
-                                     const std::vector<Eigen::Vector3d>& p_in_target,
-                                     const std::vector<double>& weights = {});
+// The closed form (HornRigidTransform) is core's (core/se3.hpp): the correspondence search
+// scores many assignments with it, and a rank-deficient cross-covariance there means a wrong
+// assignment, not degenerate data; FitRigidTransform checks collinearity.
 
 /// Largest distance of the points from their least-squares line, mm (0 for < 2 points).
 double MaxDistanceFromLine(const std::vector<Eigen::Vector3d>& points);

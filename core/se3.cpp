@@ -203,4 +203,53 @@ void CheckQuaternionPose(const QuaternionPose& pose, const std::string& what) {
   }
 }
 
+Eigen::Matrix3d HornRotation(const Eigen::Matrix3d& cross_covariance,
+                             Eigen::Vector3d* singular_values) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cross_covariance,
+                                              Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d s = Eigen::Matrix3d::Identity();
+  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) s(2, 2) = -1.0;
+  if (singular_values != nullptr) *singular_values = svd.singularValues();
+  return svd.matrixU() * s * svd.matrixV().transpose();
+}
+
+Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& src,
+                                     const std::vector<Eigen::Vector3d>& dst,
+                                     const std::vector<double>& weights) {
+  // Umeyama 1991 without scale: weighted centroids, then the rotation of the cross-covariance.
+  const std::size_t n = src.size();
+  if (dst.size() != n || (!weights.empty() && weights.size() != n)) {
+    throw InputError("rigid fit (closed form): " + std::to_string(n) + " source points, " +
+                     std::to_string(dst.size()) + " target points and " +
+                     std::to_string(weights.size()) + " weights do not correspond");
+  }
+  if (n < 3) {
+    throw InputError("rigid fit (closed form): " + std::to_string(n) +
+                     " points: a rigid transform needs at least 3 non-collinear points");
+  }
+  double wsum = 0;
+  Eigen::Vector3d ms = Eigen::Vector3d::Zero(), md = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w = weights.empty() ? 1.0 : weights[i];
+    ms += w * src[i];
+    md += w * dst[i];
+    wsum += w;
+  }
+  ms /= wsum;
+  md /= wsum;
+  Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < n; ++i) {
+    const double w = weights.empty() ? 1.0 : weights[i];
+    h += w * (dst[i] - md) * (src[i] - ms).transpose();
+  }
+  if (!(wsum > 0) || !std::isfinite(wsum)) {
+    throw InputError("rigid fit (closed form): the weights must be positive (their sum is " +
+                     std::to_string(wsum) + ")");
+  }
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = HornRotation(h);
+  t.translation() = md - t.linear() * ms;
+  return t;
+}
+
 }  // namespace lasercell

@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <span>
 #include <string>
+#include <vector>
 
 namespace lasercell {
 
@@ -51,6 +52,20 @@ Eigen::Isometry3d AveragePoses(std::span<const Eigen::Isometry3d> poses,
 /// Interpolates a -> b at t in [0, 1]: slerp of rotation, linear translation.
 Eigen::Isometry3d InterpolatePoses(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b,
                                    double t);
+
+/// Rotation R maximising trace(R^T H) for a cross-covariance H = sum w_i (t_i - t)(s_i - s)^T
+/// (Umeyama 1991, eqs. 34-43, without scale): U S V^T from the SVD of H with the reflection guard
+/// S = diag(1, 1, det(U V^T)). `singular_values` (optional) receives H's singular values, in
+/// decreasing order (the second near zero: collinear points, the rotation about their line free).
+Eigen::Matrix3d HornRotation(const Eigen::Matrix3d& cross_covariance,
+                             Eigen::Vector3d* singular_values = nullptr);
+/// Weighted closed-form rigid fit (Horn/Umeyama without scale): target_from_source minimising
+/// sum w_i |t_i - (R s_i + t)|^2. Throws InputError for mismatched sizes, fewer than 3 points or
+/// weights that do not sum to a positive number. Collinearity is not checked (callers that need
+/// it test HornRotation's singular values or the points).
+Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& p_in_source,
+                                     const std::vector<Eigen::Vector3d>& p_in_target,
+                                     const std::vector<double>& weights = {});
 
 /// Makes the rotation part orthonormal (nearest rotation by SVD). Used after arithmetic.
 Eigen::Isometry3d Orthonormalized(const Eigen::Isometry3d& pose);

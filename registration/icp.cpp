@@ -183,12 +183,9 @@ bool SolvePointToPoint(const Partial& total, Eigen::Matrix3d* d_rot, Eigen::Vect
   // Weighted Horn/Umeyama (no scale): rotation from the SVD of the cross-covariance.
   const Eigen::Vector3d mean_a = total.sum_a / total.w, mean_b = total.sum_b / total.w;
   const Eigen::Matrix3d cov = total.cross / total.w - mean_b * mean_a.transpose();
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(cov, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d s = Eigen::Matrix3d::Identity();
-  if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0.0) s(2, 2) = -1.0;
-  *d_rot = svd.matrixU() * s * svd.matrixV().transpose();
+  Eigen::Vector3d sv;
+  *d_rot = HornRotation(cov, &sv);
   *d_trans = mean_b - *d_rot * mean_a;
-  const Eigen::Vector3d sv = svd.singularValues();
   *degenerate = sv(1) < 1e-9 * sv(0);
   return true;
 }
