@@ -4,7 +4,9 @@ extern "C" {
 #include <mrcal/mrcal.h>  // C library without extern "C" guards
 }
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <utility>
@@ -173,6 +175,63 @@ std::vector<Eigen::Vector3d> CameraModel::UnprojectMany(
 bool CameraModel::InImage(const Eigen::Vector2d& pixel) const {
   return pixel.x() >= 0.0 && pixel.y() >= 0.0 && pixel.x() <= width_px_ - 1.0 &&
          pixel.y() <= height_px_ - 1.0;
+}
+
+std::string LensInversionProblem(const CameraModel& model, int grid, double tolerance_px) {
+  if (grid < 2) throw InputError("lens inversion check: grid " + std::to_string(grid) + " < 2");
+  if (!(tolerance_px > 0)) {
+    throw InputError("lens inversion check: tolerance_px " + FormatDouble(tolerance_px) +
+                     " must be positive");
+  }
+  std::vector<Eigen::Vector2d> pixels;
+  pixels.reserve(static_cast<std::size_t>(grid) * grid);
+  for (int j = 0; j < grid; ++j) {
+    for (int i = 0; i < grid; ++i) {
+      pixels.emplace_back((model.width_px() - 1.0) * i / (grid - 1),
+                          (model.height_px() - 1.0) * j / (grid - 1));
+    }
+  }
+  std::vector<Eigen::Vector3d> rays;
+  try {
+    rays = model.UnprojectMany(pixels);
+  } catch (const InternalError&) {
+    return "mrcal cannot unproject the imager's pixels through this " + model.lensmodel() +
+           " model";
+  }
+  int bad = 0;
+  double worst = 0;
+  std::size_t first_bad = pixels.size();
+  for (std::size_t k = 0; k < pixels.size(); ++k) {
+    double error = std::numeric_limits<double>::infinity();
+    if (rays[k].allFinite()) error = (model.Project(rays[k]) - pixels[k]).norm();
+    if (!(error <= tolerance_px)) {
+      ++bad;
+      if (first_bad == pixels.size()) first_bad = k;
+      worst = std::max(worst, error);
+    }
+  }
+  if (bad > 0) {
+    return std::to_string(bad) + " of " + std::to_string(pixels.size()) +
+           " pixels on a grid over the imager do not unproject to a ray that projects back "
+           "(worst " +
+           FormatDouble(worst) + " px, first at column " + FormatDouble(pixels[first_bad].x()) +
+           ", row " + FormatDouble(pixels[first_bad].y()) +
+           "): the lens model folds over inside the imager";
+  }
+  // A fold keeps the round trip exact but flips the orientation of the pixel -> ray map: the
+  // triple product of neighbouring rays' differences with the ray changes sign.
+  int flipped = 0;
+  for (int j = 0; j + 1 < grid; ++j) {
+    for (int i = 0; i + 1 < grid; ++i) {
+      const Eigen::Vector3d& r = rays[j * grid + i];
+      const Eigen::Vector3d du = rays[j * grid + i + 1] - r, dv = rays[(j + 1) * grid + i] - r;
+      flipped += du.cross(dv).dot(r) <= 0 ? 1 : 0;
+    }
+  }
+  if (flipped == 0) return "";
+  return std::to_string(flipped) + " of " + std::to_string((grid - 1) * (grid - 1)) +
+         " cells of a grid over the imager map to rays in reversed order: the lens model folds "
+         "over inside the imager";
 }
 
 std::string CameraModelText(const CameraModel& model, const std::string& comment) {

@@ -73,6 +73,15 @@ class CameraModel {
   int height_px_ = 0;
 };
 
+/// Why `model` cannot serve as a measuring camera, or "" when it can: pixels on a grid x grid
+/// lattice over the whole imager (edges and corners included) are unprojected and projected
+/// back; a ray that is not finite, or a round trip off by more than `tolerance_px`, means the
+/// lens model folds over inside the imager (a distortion fit whose high-order terms cancel where
+/// the boards were and diverge elsewhere), so its rays cannot be trusted there. Throws
+/// InputError when grid < 2 or tolerance_px is not positive.
+std::string LensInversionProblem(const CameraModel& model, int grid = 33,
+                                 double tolerance_px = 0.01);
+
 /// The .cameramodel text for a model (extrinsics rt_cam_ref = 0: the camera is its own reference),
 /// with `comment` (may be multi-line; each line is prefixed with "# ") after the version line.
 std::string CameraModelText(const CameraModel& model, const std::string& comment = "");

@@ -18,6 +18,20 @@
 #include "core/error.hpp"
 
 namespace lasercell::calib {
+std::string IntrinsicsResult::RejectionReason() const {
+  if (!camera) return "no lens model was solved";
+  if (!converged) return "the solver did not converge: " + termination;
+  const auto warning_with = [this](const std::string& key, const std::string& fallback) {
+    for (const std::string& w : warnings) {
+      if (w.find(key) != std::string::npos) return w;
+    }
+    return fallback;
+  };
+  if (!focal_observable) return warning_with("focal length", "the focal length is unobservable");
+  if (!invertible) return warning_with("folds over", "the lens model is not invertible");
+  return "";
+}
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -364,7 +378,8 @@ std::string IntrinsicsResult::Summary() const {
     if (!intrinsics_sigma.empty()) s << " +- " << Fmt(intrinsics_sigma[0]);
   }
   s << ", " << iterations << " iterations";
-  s << (converged ? "" : ", NOT CONVERGED") << (focal_observable ? "" : ", FOCAL UNOBSERVABLE");
+  s << (converged ? "" : ", NOT CONVERGED") << (focal_observable ? "" : ", FOCAL UNOBSERVABLE")
+    << (invertible ? "" : ", NOT INVERTIBLE OVER THE IMAGER");
   if (!warnings.empty()) s << ", " << warnings.size() << " warning(s)";
   return s.str();
 }
@@ -769,6 +784,13 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
   FinalStatistics(s, views.size(), options, &cov_all, result);
   std::vector<double> distances = ViewGeometry(s, options, result);
   IntrinsicsCovariance(s, cov_all, options, result);
+  if (const std::string problem = result.camera ? LensInversionProblem(*result.camera) : "";
+      !problem.empty()) {
+    result.invertible = false;
+    result.warnings.push_back(problem +
+                              "; use a lower-order model (OPENCV5) or views that cover the "
+                              "image corners");
+  }
   ProjectionUncertainty(s, cov_all, std::move(distances), options, result);
   return result;
 }

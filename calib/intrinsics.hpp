@@ -133,12 +133,18 @@ struct IntrinsicsResult {
   Eigen::Vector2d board_warp_mm = Eigen::Vector2d::Zero();  ///< When estimated.
   double tilt_spread_deg = 0;    ///< Largest angle of a board normal from their mean.
   bool focal_observable = true;  ///< False: views do not constrain the focal length.
+  /// False: the fitted lens model folds over inside the imager (LensInversionProblem), so some
+  /// pixels have no trustworthy ray; such a model must not be used for measuring.
+  bool invertible = true;
   /// 1-sigma projection uncertainty (worst direction, px) over the image, rows = grid y.
   Eigen::MatrixXd uncertainty_px;
   double uncertainty_range_mm = 0;
   std::vector<std::string> warnings;
 
   std::string Summary() const;
+  /// Why this calibration must not be used as a measuring camera ("" when it may): no model,
+  /// not converged, focal length unobservable or a lens model that is not invertible.
+  std::string RejectionReason() const;
 };
 
 /// The name mrcal uses for the lens model of `options` ("LENSMODEL_OPENCV8",
@@ -150,7 +156,8 @@ std::string MrcalLensModelName(const IntrinsicsOptions& options, double fov_x_de
 /// options.min_views views are usable (the message lists every view's problem) or the inputs are
 /// inconsistent (corner ids out of range, corners outside the image). Unobservable focal length,
 /// nearly parallel views and non-convergence are reported in the result (warnings,
-/// focal_observable, converged), never silently.
+/// focal_observable, converged), never silently; so is a lens model that cannot be inverted over
+/// the whole imager (invertible, with a warning).
 IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const BoardSpec& board,
                                      int width_px, int height_px,
                                      const IntrinsicsOptions& options = {});

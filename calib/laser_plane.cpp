@@ -106,6 +106,10 @@ PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_dista
   double a = tilt0;
   ceres::Problem problem;
   const int count = add(problem, n, &d, &z, &a);
+  if (count == 0 || !problem.HasParameterBlock(n)) {
+    fit.termination = "no observation survived to constrain the plane";
+    return fit;  // converged == false: the caller reports the failure
+  }
   problem.SetManifold(n, new ceres::SphereManifold<3>());
   if (problem.HasParameterBlock(&z) && !estimate_zero_distance)
     problem.SetParameterBlockConstant(&z);

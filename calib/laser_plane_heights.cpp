@@ -14,6 +14,7 @@
 #include "calib/internal/laser_plane_fit.hpp"
 #include "calib/laser_plane.hpp"
 #include "core/error.hpp"
+#include "core/frame_graph.hpp"  // FormatDouble
 #include "core/stats.hpp"
 
 namespace lasercell::calib {
@@ -215,6 +216,12 @@ void UnprojectColumns(const CameraModel& camera, std::vector<ColumnObservation>&
   }
   const std::vector<Eigen::Vector3d> rays = camera.UnprojectMany(pixels);
   for (std::size_t k = 0; k < obs.size(); ++k) {
+    if (!rays[3 * k].allFinite() || !rays[3 * k + 1].allFinite() || !rays[3 * k + 2].allFinite()) {
+      throw InputError("laser plane: the camera model (" + camera.lensmodel() +
+                       ") gives no ray at stripe pixel column " + FormatDouble(obs[k].pixel.x()) +
+                       ", row " + FormatDouble(obs[k].pixel.y()) +
+                       "; its lens model is not invertible there: recalibrate the camera");
+    }
     obs[k].ray = rays[3 * k];
     obs[k].ray_up = rays[3 * k + 1];
     obs[k].ray_down = rays[3 * k + 2];

@@ -39,12 +39,19 @@ calib::CameraModel CalibrateCamera(const std::string& dir, const calib::BoardSpe
   const calib::CalibrationImages images =
       calib::DetectCalibrationImages(io::GlobFiles(glob, "chessboard images"), board, {});
   calib::CheckEnoughViews(images, board, options.min_views, glob);
-  const calib::IntrinsicsResult result =
+  calib::IntrinsicsResult result =
       calib::CalibrateIntrinsics(images.views, board, images.width, images.height, options);
-  if (!result.camera || !result.focal_observable || !result.converged) {
-    throw InputError(glob + ": camera calibration rejected: " + result.Summary());
+  std::string fallback;
+  if (result.camera && result.converged && result.focal_observable && !result.invertible) {
+    fallback = "OPENCV8 folded over inside the imager, refitted as OPENCV5: ";
+    options.model = calib::LensModelKind::kOpenCV5;
+    result = calib::CalibrateIntrinsics(images.views, board, images.width, images.height, options);
   }
-  *summary = result.Summary();
+  if (const std::string reason = result.RejectionReason(); !reason.empty()) {
+    throw InputError(glob + ": camera calibration rejected (" + reason + "): " + fallback +
+                     result.Summary());
+  }
+  *summary = fallback + result.Summary();
   return *result.camera;
 }
 

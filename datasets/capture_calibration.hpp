@@ -3,7 +3,10 @@
 // way a user does with the command line (README: calibrate camera -> calibrate laser -> scan
 // triangulate -> calibrate spheres), reading only what a real cell records (images/, profiles/,
 // records/) and never truth/:
-//   1. camera intrinsics (OPENCV8) from images/chessboard_*.png (board from `board`),
+//   1. camera intrinsics (OPENCV8) from images/chessboard_*.png (board from `board`); when the
+//      OPENCV8 fit folds over inside the imager (its rational terms cancel where the boards were
+//      and diverge elsewhere, calib::LensInversionProblem), OPENCV5 is fitted instead and the
+//      summary says so, as an engineer would do by hand,
 //   2. the laser plane from profiles/plane_<i>.lcp at the heights of records/planes.yaml,
 //   3. handling_base <- sensor (at the linear sweep's t0) from profiles/spheres.lcp, triangulated
 //      with 1-2 and placed by records/linear_sweep.yaml, and records/touches.yaml.

@@ -76,10 +76,9 @@ void Run(const CalibrateCameraArgs& args) {
                                              "images " + args.images + ", board " +
                                                  board.ToString() + ", model " + args.model));
   }
-  if (!result.focal_observable || !result.converged) {
+  if (const std::string reason = result.RejectionReason(); !reason.empty()) {
     throw InputError("--images '" + args.images +
-                     "': calibration rejected, no camera model written: " +
-                     (result.warnings.empty() ? result.Summary() : result.warnings.front()));
+                     "': calibration rejected, no camera model written: " + reason);
   }
   calib::SaveCameraModel(args.out, *result.camera,
                          "lasercell calibrate camera: " + result.Summary() + "\nboard " +

@@ -139,6 +139,24 @@ TEST(CameraModel, BadInputsSayWhatIsWrong) {
   EXPECT_THROW(LoadCameraModel("/nonexistent/x.cameramodel"), FileError);
 }
 
+// A lens whose distortion turns back inside the imager has pixels without a ray (or with a ray
+// that projects elsewhere): r_d = r (1 + k1 r^2) peaks at r = 1 / sqrt(-3 k1), here r = 0.82,
+// while the imager's corners sit at r = 1.03 (fx 700 px, 1024 px square).
+TEST(CameraModel, LensInversionProblemFindsALensThatFoldsOverInsideTheImager) {
+  EXPECT_EQ(LensInversionProblem(Opencv8()), "");
+  const CameraModel mild("LENSMODEL_OPENCV4", {700, 700, 511.5, 511.5, -0.1, 0, 0, 0}, 1024, 1024);
+  EXPECT_EQ(LensInversionProblem(mild), "");
+  const CameraModel folded("LENSMODEL_OPENCV4", {700, 700, 511.5, 511.5, -0.5, 0, 0, 0}, 1024,
+                           1024);
+  const std::string problem = LensInversionProblem(folded);
+  EXPECT_NE(problem.find("folds over inside the imager"), std::string::npos) << problem;
+  // The same lens on a smaller imager (corner radius 0.51 < 0.82) is fine.
+  const CameraModel cropped("LENSMODEL_OPENCV4", {700, 700, 255.5, 255.5, -0.5, 0, 0, 0}, 512, 512);
+  EXPECT_EQ(LensInversionProblem(cropped), "");
+  EXPECT_THROW(LensInversionProblem(mild, 1), InputError);
+  EXPECT_THROW(LensInversionProblem(mild, 33, 0.0), InputError);
+}
+
 // mrcal's lexer reads past the end of a buffer that stops inside a comment or a quoted string (a
 // truncated file crashed `scan triangulate` with SIGSEGV). Every prefix of a valid model, and
 // seeded random edits of it, must either parse or throw a FileError naming the file.

@@ -131,6 +131,8 @@ TEST(CalibrateIntrinsics, RecoversTheTruthWithinThreeSigma) {
   std::printf("%s\n", r.Summary().c_str());
   EXPECT_TRUE(r.converged) << r.termination;
   EXPECT_TRUE(r.focal_observable);
+  EXPECT_TRUE(r.invertible);
+  EXPECT_EQ(r.RejectionReason(), "");
   EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
   ASSERT_EQ(r.intrinsics_sigma.size(), 12u);
   const std::array<double, 12> truth = s.truth.MrcalVector();
@@ -421,6 +423,18 @@ TEST(CalibrateIntrinsics, ParallelViewsFlagTheFocalLengthUnobservable) {
     said_parallel |= w.find("nearly parallel") != std::string::npos;
   EXPECT_TRUE(said_parallel);
   EXPECT_NE(r.Summary().find("FOCAL UNOBSERVABLE"), std::string::npos) << r.Summary();
+  EXPECT_NE(r.RejectionReason().find("focal length"), std::string::npos) << r.RejectionReason();
+}
+
+// A solved model that folds over inside the imager is refused with the inversion check's words.
+TEST(CalibrateIntrinsics, ANonInvertibleModelIsRejectedWithTheReason) {
+  const Synthetic s = MakeSynthetic(12, 3);
+  IntrinsicsResult r = CalibrateIntrinsics(NoisyViews(s, 0.2, 7), s.board, 1024, 1024);
+  ASSERT_EQ(r.RejectionReason(), "");
+  r.invertible = false;
+  r.warnings.push_back("9 of 1089 pixels ...: the lens model folds over inside the imager");
+  EXPECT_NE(r.RejectionReason().find("folds over"), std::string::npos);
+  EXPECT_NE(r.Summary().find("NOT INVERTIBLE"), std::string::npos) << r.Summary();
 }
 
 TEST(IntrinsicsOptions, CheckNamesTheField) {

@@ -338,6 +338,29 @@ TEST(LaserPlaneHeights, TwoHeightsNeedTheSensorDistance) {
   EXPECT_TRUE(std::isnan(r.loo_max_normal_change_deg));  // 1 height left: no refit
 }
 
+// A camera model that has no ray for some stripe pixels (its distortion turns back inside the
+// imager: r (1 - 3 r^2) peaks at 250 px from the centre) is an input error naming the pixel, never
+// a NaN handed to the solver.
+TEST(LaserPlaneHeights, ACameraWithoutRaysAtTheStripeIsRejected) {
+  const SyntheticRig rig;
+  std::mt19937_64 rng(7);
+  std::vector<HeightCapture> captures;
+  for (double h : {150.0, 250.0, 350.0}) captures.push_back(SyntheticCapture(rig, h, 3, 0.05, rng));
+  std::vector<double> folded = rig.camera.intrinsics();
+  std::fill(folded.begin() + 4, folded.end(), 0.0);
+  folded[4] = -3.0;
+  const CameraModel camera("LENSMODEL_OPENCV8", folded, rig.camera.width_px(),
+                           rig.camera.height_px());
+  HeightPlaneOptions options;
+  options.plate_normal_in_sensor = rig.m;
+  try {
+    CalibrateLaserPlaneFromHeights(camera, captures, options);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not invertible there"), std::string::npos) << e.what();
+  }
+}
+
 TEST(LaserPlaneHeights, PlanesAtOneHeightOnlyAreRejected) {
   const SyntheticRig rig;
   std::mt19937_64 rng(8);
