@@ -1,0 +1,90 @@
+// Table I benchmark: its options are checked before anything is simulated, and its Markdown
+// reports a refused calibration instead of hiding it (the full run is `lasercell bench table1`).
+#include "datasets/table1_bench.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "core/error.hpp"
+
+namespace lasercell::datasets {
+namespace {
+
+TEST(Table1Bench, OptionsAreCheckedNamingTheField) {
+  Table1Options o;
+  EXPECT_NO_THROW(o.Check());
+  o.placements = 1000;
+  o.cells = 3;
+  try {
+    o.Check();
+    FAIL() << "expected OptionError";
+  } catch (const OptionError& e) {
+    EXPECT_NE(std::string(e.what()).find("not a multiple of cells 3"), std::string::npos)
+        << e.what();
+  }
+  o.cells = 0;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = Table1Options{};
+  o.threads = -1;
+  EXPECT_THROW(o.Check(), OptionError);
+  o = Table1Options{};
+  o.work_dir.clear();
+  EXPECT_THROW(o.Check(), OptionError);
+  // RunTable1Bench checks before it simulates anything.
+  o = Table1Options{};
+  o.cells = 7;
+  EXPECT_THROW(RunTable1Bench(o), OptionError);
+}
+
+nlohmann::json Result(bool with_accepted_cell) {
+  nlohmann::json stats = {{"mean", 0.5}, {"sd", 0.1}, {"p99", 0.9}, {"max", 1.0}};
+  nlohmann::json j = {
+      {"placements", 4},
+      {"cells", 2},
+      {"seed", 11},
+      {"calibrations", nlohmann::json::array()},
+      {"refused_calibrations", {{{"cell", 1}, {"seed", 12}, {"reason", "lens model folds over"}}}},
+      {"placements_localized", 2},
+      {"found", 2},
+      {"within_10mm", 2},
+      {"graspable", 1},
+      {"ppf_error_mm", stats},
+      {"icp_error_mm", stats},
+      {"sigma_coverage", 0.5},
+      {"beyond_3_sigma", 0},
+      {"beyond_3_sigma_expected", 0.01},
+      {"median_localization_ms", 900.0},
+      {"median_triangulation_ms", 20.0},
+      {"median_run_ms", 950.0},
+      {"job_overhead_fraction", 0.03}};
+  if (with_accepted_cell) {
+    j["calibrations"].push_back(
+        {{"cell", 0}, {"seed", 11}, {"camera", "CAM"}, {"laser", "LASER"}, {"spheres", "SPH"}});
+  } else {
+    j["placements_localized"] = 0;
+    j["found"] = j["within_10mm"] = j["graspable"] = 0;
+    j["ppf_error_mm"] = j["icp_error_mm"] = {
+        {"mean", nullptr}, {"sd", nullptr}, {"p99", nullptr}, {"max", nullptr}};
+    j["median_localization_ms"] = j["median_run_ms"] = nullptr;
+  }
+  return j;
+}
+
+TEST(Table1Bench, MarkdownListsRefusedCalibrationsAndCountsOnlyLocalizedPlacements) {
+  const std::string md = Table1Markdown(Result(true));
+  EXPECT_NE(md.find("--placements 4 --cells 2 --seed 11"), std::string::npos) << md;
+  EXPECT_NE(md.find("the first accepted: CAM; LASER; SPH"), std::string::npos) << md;
+  EXPECT_NE(md.find("1 cell(s) refused their calibration"), std::string::npos) << md;
+  EXPECT_NE(md.find("cell 1 (seed 12): lens model folds over"), std::string::npos) << md;
+  EXPECT_NE(md.find("Found 2 of 2 placements localized"), std::string::npos) << md;
+  EXPECT_NE(md.find("| after ICP | 0.500 | 0.100 | 0.900 | 1.000 |"), std::string::npos) << md;
+  // Every cell refused: still a report, with nothing measured, not an exception.
+  const std::string none = Table1Markdown(Result(false));
+  EXPECT_NE(none.find("Found 0 of 0 placements localized"), std::string::npos) << none;
+  EXPECT_EQ(none.find("the first accepted"), std::string::npos) << none;
+}
+
+}  // namespace
+}  // namespace lasercell::datasets
