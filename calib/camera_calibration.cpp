@@ -198,4 +198,31 @@ nlohmann::json CameraCalibrationJson(const IntrinsicsResult& r, const BoardSpec&
   return j;
 }
 
+IntrinsicsResult CalibrateIntrinsicsFallingBackToOpencv5(const std::vector<BoardView>& views,
+                                                         const BoardSpec& board, int width_px,
+                                                         int height_px,
+                                                         const IntrinsicsOptions& options) {
+  IntrinsicsResult result = CalibrateIntrinsics(views, board, width_px, height_px, options);
+  const bool folds = !result.invertible || result.imager_fraction_without_ray > 0;
+  if (options.model != LensModelKind::kOpenCV8 || !folds || !result.camera || !result.converged ||
+      !result.focal_observable) {
+    return result;
+  }
+  std::string why = "the lens model folds over";
+  for (const std::string& w : result.warnings) {
+    if (w.find("folds over") != std::string::npos) why = w;
+  }
+  IntrinsicsOptions opencv5 = options;
+  opencv5.model = LensModelKind::kOpenCV5;
+  IntrinsicsResult refit = CalibrateIntrinsics(views, board, width_px, height_px, opencv5);
+  // Keep OPENCV8 unless OPENCV5 is usable and leaves fewer of the imager's pixels without a ray.
+  const bool better = refit.RejectionReason().empty() &&
+                      (!result.invertible ||
+                       refit.imager_fraction_without_ray < result.imager_fraction_without_ray);
+  if (!better) return result;
+  refit.warnings.insert(refit.warnings.begin(),
+                        "OPENCV8 was refitted as OPENCV5: " + why.substr(0, why.find(';')));
+  return refit;
+}
+
 }  // namespace lasercell::calib

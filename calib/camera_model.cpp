@@ -177,61 +177,74 @@ bool CameraModel::InImage(const Eigen::Vector2d& pixel) const {
          pixel.y() <= height_px_ - 1.0;
 }
 
-std::string LensInversionProblem(const CameraModel& model, int grid, double tolerance_px) {
+std::string LensInversionCheck::Describe() const {
+  if (ok()) return "";
+  if (without_ray > 0) {
+    return std::to_string(without_ray) + " of " + std::to_string(pixels) +
+           " grid pixels have no ray that projects back (worst " + FormatDouble(worst_px) +
+           " px, first at column " + FormatDouble(first_bad_px.x()) + ", row " +
+           FormatDouble(first_bad_px.y()) + "): the lens model folds over there";
+  }
+  return std::to_string(reversed_cells) + " of " + std::to_string(cells) +
+         " grid cells map to rays in reversed order: the lens model folds over there";
+}
+
+LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::AlignedBox2d& region,
+                                      int grid, double tolerance_px) {
   if (grid < 2) throw InputError("lens inversion check: grid " + std::to_string(grid) + " < 2");
   if (!(tolerance_px > 0)) {
     throw InputError("lens inversion check: tolerance_px " + FormatDouble(tolerance_px) +
                      " must be positive");
   }
+  const Eigen::AlignedBox2d imager(
+      Eigen::Vector2d(0, 0), Eigen::Vector2d(model.width_px() - 1.0, model.height_px() - 1.0));
+  const Eigen::AlignedBox2d box = region.isEmpty() ? imager : region.intersection(imager);
+  LensInversionCheck check;
+  if (box.isEmpty()) return check;
   std::vector<Eigen::Vector2d> pixels;
   pixels.reserve(static_cast<std::size_t>(grid) * grid);
   for (int j = 0; j < grid; ++j) {
     for (int i = 0; i < grid; ++i) {
-      pixels.emplace_back((model.width_px() - 1.0) * i / (grid - 1),
-                          (model.height_px() - 1.0) * j / (grid - 1));
+      pixels.push_back(box.min() + (box.max() - box.min())
+                                       .cwiseProduct(Eigen::Vector2d(double(i) / (grid - 1),
+                                                                     double(j) / (grid - 1))));
     }
   }
+  check.pixels = static_cast<int>(pixels.size());
   std::vector<Eigen::Vector3d> rays;
   try {
     rays = model.UnprojectMany(pixels);
   } catch (const InternalError&) {
-    return "mrcal cannot unproject the imager's pixels through this " + model.lensmodel() +
-           " model";
+    check.without_ray = check.pixels;
+    check.worst_px = std::numeric_limits<double>::infinity();
+    check.first_bad_px = pixels.front();
+    return check;
   }
-  int bad = 0;
-  double worst = 0;
-  std::size_t first_bad = pixels.size();
   for (std::size_t k = 0; k < pixels.size(); ++k) {
     double error = std::numeric_limits<double>::infinity();
     if (rays[k].allFinite()) error = (model.Project(rays[k]) - pixels[k]).norm();
     if (!(error <= tolerance_px)) {
-      ++bad;
-      if (first_bad == pixels.size()) first_bad = k;
-      worst = std::max(worst, error);
+      if (check.without_ray++ == 0) check.first_bad_px = pixels[k];
+      check.worst_px = std::max(check.worst_px, error);
     }
-  }
-  if (bad > 0) {
-    return std::to_string(bad) + " of " + std::to_string(pixels.size()) +
-           " pixels on a grid over the imager do not unproject to a ray that projects back "
-           "(worst " +
-           FormatDouble(worst) + " px, first at column " + FormatDouble(pixels[first_bad].x()) +
-           ", row " + FormatDouble(pixels[first_bad].y()) +
-           "): the lens model folds over inside the imager";
   }
   // A fold keeps the round trip exact but flips the orientation of the pixel -> ray map: the
   // triple product of neighbouring rays' differences with the ray changes sign.
-  int flipped = 0;
   for (int j = 0; j + 1 < grid; ++j) {
     for (int i = 0; i + 1 < grid; ++i) {
       const Eigen::Vector3d& r = rays[j * grid + i];
       const Eigen::Vector3d du = rays[j * grid + i + 1] - r, dv = rays[(j + 1) * grid + i] - r;
-      flipped += du.cross(dv).dot(r) <= 0 ? 1 : 0;
+      if (!r.allFinite() || !du.allFinite() || !dv.allFinite()) continue;  // counted above
+      if (du.squaredNorm() == 0.0 || dv.squaredNorm() == 0.0) continue;    // a degenerate box
+      ++check.cells;
+      check.reversed_cells += du.cross(dv).dot(r) <= 0 ? 1 : 0;
     }
   }
-  if (flipped == 0) return "";
-  return std::to_string(flipped) + " of " + std::to_string((grid - 1) * (grid - 1)) +
-         " cells of a grid over the imager map to rays in reversed order: the lens model folds "
-         "over inside the imager";
+  return check;
+}
+
+std::string LensInversionProblem(const CameraModel& model, int grid, double tolerance_px) {
+  return CheckLensInversion(model, {}, grid, tolerance_px).Describe();
 }
 
 std::string CameraModelText(const CameraModel& model, const std::string& comment) {

@@ -18,6 +18,7 @@ extern "C" {
 }
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <string>
 #include <vector>
 
@@ -73,12 +74,33 @@ class CameraModel {
   int height_px_ = 0;
 };
 
-/// Why `model` cannot serve as a measuring camera, or "" when it can: pixels on a grid x grid
-/// lattice over the whole imager (edges and corners included) are unprojected and projected
-/// back; a ray that is not finite, or a round trip off by more than `tolerance_px`, means the
-/// lens model folds over inside the imager (a distortion fit whose high-order terms cancel where
-/// the boards were and diverge elsewhere), so its rays cannot be trusted there. Throws
-/// InputError when grid < 2 or tolerance_px is not positive.
+/// Whether a lens model inverts over a region of the imager: pixels on a grid x grid lattice
+/// over the region (its edges and corners included) are unprojected and projected back; a ray
+/// that is not finite, or a round trip off by more than tolerance_px, means the model has no
+/// ray there (its distortion turns back before that radius: high-order terms that cancel where
+/// the boards were and diverge beyond). A fold that keeps the round trip exact still reverses
+/// the pixel -> ray map, which the orientation of neighbouring rays shows.
+struct LensInversionCheck {
+  int pixels = 0;          ///< Grid pixels checked.
+  int without_ray = 0;     ///< Of those, no ray that projects back.
+  int cells = 0;           ///< Grid cells checked.
+  int reversed_cells = 0;  ///< Cells whose rays are in reversed order.
+  double worst_px = 0;     ///< Largest round-trip error (inf: no finite ray).
+  Eigen::Vector2d first_bad_px = Eigen::Vector2d::Zero();  ///< First pixel without a ray.
+  bool ok() const { return without_ray == 0 && reversed_cells == 0; }
+  /// Fraction of the checked pixels without a ray.
+  double FractionWithoutRay() const { return pixels > 0 ? double(without_ray) / pixels : 0.0; }
+  /// "" when ok(), else what failed, in words.
+  std::string Describe() const;
+};
+
+/// Checks the pixels of `region_px` (clipped to the imager; empty or absent: the whole imager).
+/// Throws InputError when grid < 2 or tolerance_px is not positive.
+LensInversionCheck CheckLensInversion(const CameraModel& model,
+                                      const Eigen::AlignedBox2d& region_px = {}, int grid = 33,
+                                      double tolerance_px = 0.01);
+
+/// CheckLensInversion over the whole imager, described ("" when the model inverts everywhere).
 std::string LensInversionProblem(const CameraModel& model, int grid = 33,
                                  double tolerance_px = 0.01);
 

@@ -18,19 +18,6 @@
 #include "core/error.hpp"
 
 namespace lasercell::calib {
-std::string IntrinsicsResult::RejectionReason() const {
-  if (!camera) return "no lens model was solved";
-  if (!converged) return "the solver did not converge: " + termination;
-  const auto warning_with = [this](const std::string& key, const std::string& fallback) {
-    for (const std::string& w : warnings) {
-      if (w.find(key) != std::string::npos) return w;
-    }
-    return fallback;
-  };
-  if (!focal_observable) return warning_with("focal length", "the focal length is unobservable");
-  if (!invertible) return warning_with("folds over", "the lens model is not invertible");
-  return "";
-}
 
 namespace {
 
@@ -364,24 +351,6 @@ std::string MrcalLensModelName(const IntrinsicsOptions& options, double fov_x_de
              "_fov_x_deg=" + std::to_string(static_cast<int>(std::ceil(fov_x_deg)));
   }
   return "";
-}
-
-std::string IntrinsicsResult::Summary() const {
-  std::ostringstream s;
-  s << (camera ? camera->lensmodel() : std::string("no model")) << ": rms " << Fmt(rms_px)
-    << " px over " << num_corners << " corners";
-  int used = 0;
-  for (const ViewResult& v : views) used += v.used ? 1 : 0;
-  s << " in " << used << "/" << views.size() << " views, " << num_outliers << " outliers";
-  if (camera) {
-    s << ", fx " << Fmt(camera->intrinsics()[0]);
-    if (!intrinsics_sigma.empty()) s << " +- " << Fmt(intrinsics_sigma[0]);
-  }
-  s << ", " << iterations << " iterations";
-  s << (converged ? "" : ", NOT CONVERGED") << (focal_observable ? "" : ", FOCAL UNOBSERVABLE")
-    << (invertible ? "" : ", NOT INVERTIBLE OVER THE IMAGER");
-  if (!warnings.empty()) s << ", " << warnings.size() << " warning(s)";
-  return s.str();
 }
 
 namespace {
@@ -784,13 +753,7 @@ IntrinsicsResult CalibrateIntrinsics(const std::vector<BoardView>& views, const 
   FinalStatistics(s, views.size(), options, &cov_all, result);
   std::vector<double> distances = ViewGeometry(s, options, result);
   IntrinsicsCovariance(s, cov_all, options, result);
-  if (const std::string problem = result.camera ? LensInversionProblem(*result.camera) : "";
-      !problem.empty()) {
-    result.invertible = false;
-    result.warnings.push_back(problem +
-                              "; use a lower-order model (OPENCV5) or views that cover the "
-                              "image corners");
-  }
+  AssessLensInversion(&result);
   ProjectionUncertainty(s, cov_all, std::move(distances), options, result);
   return result;
 }

@@ -133,9 +133,13 @@ struct IntrinsicsResult {
   Eigen::Vector2d board_warp_mm = Eigen::Vector2d::Zero();  ///< When estimated.
   double tilt_spread_deg = 0;    ///< Largest angle of a board normal from their mean.
   bool focal_observable = true;  ///< False: views do not constrain the focal length.
-  /// False: the fitted lens model folds over inside the imager (LensInversionProblem), so some
-  /// pixels have no trustworthy ray; such a model must not be used for measuring.
+  /// False: the lens model folds over (CheckLensInversion) within the bounding box of the
+  /// observed corners, where the boards should have pinned it down; such a model must not be
+  /// used for measuring (RejectionReason).
   bool invertible = true;
+  /// Fraction of a grid over the whole imager without a ray (the model folds over beyond the
+  /// observed corners: extrapolation, warned about, not refused).
+  double imager_fraction_without_ray = 0;
   /// 1-sigma projection uncertainty (worst direction, px) over the image, rows = grid y.
   Eigen::MatrixXd uncertainty_px;
   double uncertainty_range_mm = 0;
@@ -146,6 +150,10 @@ struct IntrinsicsResult {
   /// not converged, focal length unobservable or a lens model that is not invertible.
   std::string RejectionReason() const;
 };
+
+/// Sets result->invertible, imager_fraction_without_ray and their warnings from the solved camera
+/// and the inlier corners (nothing when no camera was solved). CalibrateIntrinsics calls it.
+void AssessLensInversion(IntrinsicsResult* result);
 
 /// The name mrcal uses for the lens model of `options` ("LENSMODEL_OPENCV8",
 /// "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=10_Ny=8_fov_x_deg=75", ...); `fov_x_deg` is used

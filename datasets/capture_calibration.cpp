@@ -39,19 +39,14 @@ calib::CameraModel CalibrateCamera(const std::string& dir, const calib::BoardSpe
   const calib::CalibrationImages images =
       calib::DetectCalibrationImages(io::GlobFiles(glob, "chessboard images"), board, {});
   calib::CheckEnoughViews(images, board, options.min_views, glob);
-  calib::IntrinsicsResult result =
-      calib::CalibrateIntrinsics(images.views, board, images.width, images.height, options);
-  std::string fallback;
-  if (result.camera && result.converged && result.focal_observable && !result.invertible) {
-    fallback = "OPENCV8 folded over inside the imager, refitted as OPENCV5: ";
-    options.model = calib::LensModelKind::kOpenCV5;
-    result = calib::CalibrateIntrinsics(images.views, board, images.width, images.height, options);
-  }
+  const calib::IntrinsicsResult result = calib::CalibrateIntrinsicsFallingBackToOpencv5(
+      images.views, board, images.width, images.height, options);
   if (const std::string reason = result.RejectionReason(); !reason.empty()) {
-    throw InputError(glob + ": camera calibration rejected (" + reason + "): " + fallback +
-                     result.Summary());
+    throw InputError(glob + ": camera calibration rejected (" + reason + "): " + result.Summary());
   }
-  *summary = fallback + result.Summary();
+  const bool refitted =
+      !result.warnings.empty() && result.warnings.front().rfind("OPENCV8 was refitted", 0) == 0;
+  *summary = (refitted ? result.warnings.front() + "; " : std::string()) + result.Summary();
   return *result.camera;
 }
 

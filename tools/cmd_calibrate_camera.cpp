@@ -5,9 +5,10 @@
 // (calib/camera_calibration.hpp), intrinsics (calib/intrinsics.hpp), result
 // JSON (calib/camera_calibration.hpp) and report (calib/intrinsics_report.hpp).
 // Unreadable images and images without the board are listed with the reason and
-// skipped; too few usable views, or views that leave the focal length
-// unobservable, are an error (exit 2) after the JSON/report are written, and no
-// camera model is written then.
+// skipped; too few usable views, views that leave the focal length
+// unobservable, or a lens model that folds over inside the imager (the default
+// opencv8 is refitted as opencv5 first) are an error (exit 2) after the
+// JSON/report are written, and no camera model is written then.
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -28,6 +29,7 @@ namespace {
 struct CalibrateCameraArgs {
   std::string images, board, model = "opencv8", out, report, json, corners_out;
   bool fix_aspect = false, warp = false, quiet = false;
+  bool model_given = false;  // --model on the command line (else the default may fall back)
   int spline_order = 3, spline_nx = 10, spline_ny = 8;
   double spline_fov_x_deg = 0;
   double outlier_sigma = 4.0;
@@ -65,8 +67,12 @@ void Run(const CalibrateCameraArgs& args) {
   if (!args.corners_out.empty()) {
     io::WriteFileAtomically(args.corners_out, calib::CornersCacheText(board, images.images));
   }
+  // The default model falls back to OPENCV5 when OPENCV8 folds over; an explicit choice stands.
   const calib::IntrinsicsResult result =
-      calib::CalibrateIntrinsics(images.views, board, images.width, images.height, options);
+      args.model_given
+          ? calib::CalibrateIntrinsics(images.views, board, images.width, images.height, options)
+          : calib::CalibrateIntrinsicsFallingBackToOpencv5(images.views, board, images.width,
+                                                           images.height, options);
   json::WriteFile(args.json, calib::CameraCalibrationJson(
                                  result, board, images,
                                  {args.model, args.fix_aspect, args.warp, args.outlier_sigma}));
@@ -97,7 +103,10 @@ void AddCalibrateCameraCommand(CLI::App& calibrate) {
                   "chessboard:COLSxROWS:SQUARE_MM (inner corners) or "
                   "charuco:SXxSY:SQUARE_MM:MARKER_MM[:DICT] (squares)")
       ->required();
-  cmd->add_option("--model", args->model, "opencv8 (default), opencv5 or splined");
+  CLI::Option* model = cmd->add_option(
+      "--model", args->model,
+      "opencv8 (default; refitted as opencv5 when it folds over inside the imager), opencv5 or "
+      "splined");
   cmd->add_flag("--fix-aspect", args->fix_aspect, "Hold fy = fx");
   cmd->add_flag("--warp", args->warp, "Estimate the board's bow (2 terms, mm)");
   cmd->add_option("--spline-order", args->spline_order, "Splined model: B-spline order (2 or 3)");
@@ -117,7 +126,10 @@ void AddCalibrateCameraCommand(CLI::App& calibrate) {
                   "Also write the detections as a mrcal corners cache (vnl) for "
                   "mrcal-calibrate-cameras --corners-cache");
   cmd->add_flag("--quiet", args->quiet, "No per-image lines, no summary");
-  cmd->callback([args] { Run(*args); });
+  cmd->callback([args, model] {
+    args->model_given = model->count() > 0;
+    Run(*args);
+  });
 }
 
 }  // namespace lasercell::tools

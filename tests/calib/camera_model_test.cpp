@@ -149,7 +149,14 @@ TEST(CameraModel, LensInversionProblemFindsALensThatFoldsOverInsideTheImager) {
   const CameraModel folded("LENSMODEL_OPENCV4", {700, 700, 511.5, 511.5, -0.5, 0, 0, 0}, 1024,
                            1024);
   const std::string problem = LensInversionProblem(folded);
-  EXPECT_NE(problem.find("folds over inside the imager"), std::string::npos) << problem;
+  EXPECT_NE(problem.find("the lens model folds over there"), std::string::npos) << problem;
+  // Inside the central 300 px the folded lens still inverts; the check covers a region.
+  EXPECT_TRUE(CheckLensInversion(
+                  folded, Eigen::AlignedBox2d(Eigen::Vector2d(362, 362), Eigen::Vector2d(662, 662)))
+                  .ok());
+  const LensInversionCheck whole = CheckLensInversion(folded);
+  // No ray beyond r_d = 0.544 (381 px): 1 - pi 381^2 / 1024^2 = 57 % of the imager.
+  EXPECT_NEAR(whole.FractionWithoutRay(), 0.57, 0.05);
   // The same lens on a smaller imager (corner radius 0.51 < 0.82) is fine.
   const CameraModel cropped("LENSMODEL_OPENCV4", {700, 700, 255.5, 255.5, -0.5, 0, 0, 0}, 512, 512);
   EXPECT_EQ(LensInversionProblem(cropped), "");

@@ -431,10 +431,13 @@ TEST(CalibrateIntrinsics, ANonInvertibleModelIsRejectedWithTheReason) {
   const Synthetic s = MakeSynthetic(12, 3);
   IntrinsicsResult r = CalibrateIntrinsics(NoisyViews(s, 0.2, 7), s.board, 1024, 1024);
   ASSERT_EQ(r.RejectionReason(), "");
+  EXPECT_EQ(r.imager_fraction_without_ray, 0.0);
   r.invertible = false;
-  r.warnings.push_back("9 of 1089 pixels ...: the lens model folds over inside the imager");
+  r.warnings.push_back(
+      "9 of 1089 grid pixels ...: the lens model folds over there, inside the "
+      "box of the observed corners, where the board pinned it down");
   EXPECT_NE(r.RejectionReason().find("folds over"), std::string::npos);
-  EXPECT_NE(r.Summary().find("NOT INVERTIBLE"), std::string::npos) << r.Summary();
+  EXPECT_NE(r.Summary().find("NOT INVERTIBLE WHERE OBSERVED"), std::string::npos) << r.Summary();
 }
 
 TEST(IntrinsicsOptions, CheckNamesTheField) {
