@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <string>
 
@@ -192,6 +193,10 @@ void VoxelGridOptions::Check() const {
   if (min_points_per_voxel < 1) {
     throw OptionError("VoxelGridOptions.min_points_per_voxel must be >= 1");
   }
+  if (!(normal_split_angle_rad >= 0.0 && normal_split_angle_rad <= std::numbers::pi)) {
+    throw OptionError("VoxelGridOptions.normal_split_angle_rad = " +
+                      std::to_string(normal_split_angle_rad) + ": must be in [0, pi] rad");
+  }
 }
 
 PointCloud VoxelGridDownsample(const PointCloud& cloud, const VoxelGridOptions& options,
@@ -216,18 +221,37 @@ PointCloud VoxelGridDownsample(const PointCloud& cloud, const VoxelGridOptions& 
   std::vector<Eigen::Vector3d> sum_n;
   std::vector<std::uint32_t> count;
   const bool has_normals = cloud.HasNormals() && options.normal_mode != VoxelNormalMode::kNone;
+  // Samples of one voxel split by normal: a chain from the voxel's first sample, each link with
+  // the normal of the point that started it.
+  const bool split = cloud.HasNormals() && options.normal_split_angle_rad > 0.0;
+  const double split_cos = std::cos(options.normal_split_angle_rad);
+  std::vector<std::int32_t> next_sample;
+  std::vector<Eigen::Vector3d> first_normal;
+  const auto add_sample = [&](std::size_t point) {
+    sum_p.push_back(Eigen::Vector3d::Zero());
+    sum_n.push_back(Eigen::Vector3d::Zero());
+    count.push_back(0);
+    if (split) {
+      next_sample.push_back(-1);
+      first_normal.push_back(cloud.normals[point]);
+    }
+  };
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d c = ((cloud.positions[i] - bounds.min) * inv).array().floor();
     const std::uint64_t key = (static_cast<std::uint64_t>(c.x()) << 42) |
                               (static_cast<std::uint64_t>(c.y()) << 21) |
                               static_cast<std::uint64_t>(c.z());
     bool inserted = false;
-    const std::uint32_t id =
-        map.FindOrInsert(key, static_cast<std::uint32_t>(count.size()), &inserted);
-    if (inserted) {
-      sum_p.push_back(Eigen::Vector3d::Zero());
-      sum_n.push_back(Eigen::Vector3d::Zero());
-      count.push_back(0);
+    std::uint32_t id = map.FindOrInsert(key, static_cast<std::uint32_t>(count.size()), &inserted);
+    if (inserted) add_sample(i);
+    if (split && !inserted) {
+      while (cloud.normals[i].dot(first_normal[id]) < split_cos) {
+        if (next_sample[id] < 0) {
+          next_sample[id] = static_cast<std::int32_t>(count.size());
+          add_sample(i);
+        }
+        id = static_cast<std::uint32_t>(next_sample[id]);
+      }
     }
     voxel[i] = id;
     sum_p[id] += cloud.positions[i];

@@ -67,14 +67,20 @@ struct VoxelGridOptions {
   /// on a sharp edge); 0 keeps every voxel. In [0, 1].
   double min_normal_coherence = 0.0;
   std::size_t min_points_per_voxel = 1;  ///< Voxels with fewer points are dropped (>= 1).
+  /// 0: one sample per voxel. > 0 (rad, at most pi): a point whose normal is more than this
+  /// angle from the first normal of each of its voxel's samples starts a sample of its own, so
+  /// the two faces of a wall thinner than the voxel stay apart instead of averaging to a point
+  /// inside the wall with a meaningless normal. Needs normals; ignored without them.
+  double normal_split_angle_rad = 0.0;
   /// Throws OptionError naming the field when a value is out of range.
   void Check() const;
 };
 
 /// Voxel-grid centroid subsampling: one point per occupied voxel at the centroid of its points
-/// (Skotheim IV-C). Output order is the order in which voxels are first hit by the input, so it
-/// is deterministic. `voxel_of_point`, when given, receives for every input point the index of
-/// its output point (or -1 when its voxel was dropped). Output keeps positions and normals only.
+/// (Skotheim IV-C), or one per normal group of a voxel with normal_split_angle_rad > 0. Output
+/// order is the order in which voxels are first hit by the input, so it is deterministic.
+/// `voxel_of_point`, when given, receives for every input point the index of its output point (or
+/// -1 when its voxel was dropped). Output keeps positions and normals only.
 PointCloud VoxelGridDownsample(const PointCloud& cloud, const VoxelGridOptions& options,
                                std::vector<std::int32_t>* voxel_of_point = nullptr);
 

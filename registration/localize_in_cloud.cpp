@@ -12,6 +12,7 @@
 #include "core/error.hpp"
 #include "core/pose_covariance.hpp"
 #include "core/se3.hpp"
+#include "registration/internal/rank_candidates.hpp"
 
 namespace lasercell::registration {
 namespace {
@@ -169,6 +170,10 @@ LocalizeOptions DerivedOptions(const LocalizeOptions& options_in, const PpfModel
     options.clustering.translation_radius_mm = options.cluster_radius_relative * diameter;
     options.clustering.duplicate_radius_mm = options.cluster_radius_relative * diameter;
   }
+  if (options.cluster_refinement_inlier_steps > 0.0) {
+    options.clustering.refinement_inlier_mm =
+        options.cluster_refinement_inlier_steps * model.sampling_step_mm();
+  }
   if (options.support_distance_relative > 0.0)
     options.verification.support_distance_mm = options.support_distance_relative * diameter;
   if (options.icp_max_distance_relative > 0.0) {
@@ -219,6 +224,7 @@ ClusteringResult MatchAndCluster(const PointCloud& scene, const PpfModel& model,
   voxel.normal_mode = options.scene_normal_mode == VoxelNormalMode::kNone
                           ? VoxelNormalMode::kAverage
                           : options.scene_normal_mode;
+  voxel.normal_split_angle_rad = options.scene_normal_split_angle_rad;
   PointCloud sampled = VoxelGridDownsample(scene, voxel);
   result->sampled_points = sampled.size();
   result->timings.subsample_ms = MillisecondsSince(t);
@@ -238,6 +244,12 @@ ClusteringResult MatchAndCluster(const PointCloud& scene, const PpfModel& model,
 
   t = Clock::now();
   ClusteringResult clustering = ClusterPoses(match.hypotheses, options.clustering);
+  if (options.clustering.refine_poses) {
+    for (PoseCluster& cluster : clustering.clusters) {
+      RefineClusterPose(match.hypotheses, scene_tree.points(), sampled.normals, model.points(),
+                        options.clustering, &cluster);
+    }
+  }
   result->clusters = clustering.clusters.size();
   result->timings.clustering_ms = MillisecondsSince(t);
   ReportProgress(options.progress, "clustering", 1.0);
@@ -342,6 +354,10 @@ std::vector<LocalizationCandidate> VerifyAndRefine(const RefineContext& ctx,
   return refined;
 }
 
+}  // namespace
+
+namespace internal {
+
 // Ranking by support after refinement (ties: cluster score); one instance per place. A second
 // orientation at the same place with nearly the winner's support makes the result ambiguous; so
 // does a planar model, whatever the scene (rotations about its normal are unobservable).
@@ -417,6 +433,10 @@ void RankCandidates(std::vector<LocalizationCandidate> refined, const PpfModel& 
   result->found = !result->candidates.empty();
 }
 
+}  // namespace internal
+
+namespace {
+
 // Why nothing was found. The strongest candidate is the one with the highest cluster score,
 // whatever stage rejected it: supports before and after ICP use different distances and cannot
 // be compared.
@@ -473,6 +493,11 @@ void LocalizeOptions::Check() const {
                         ": must be >= 0");
   };
   non_negative(cluster_radius_relative, "cluster_radius_relative");
+  non_negative(cluster_refinement_inlier_steps, "cluster_refinement_inlier_steps");
+  if (!(scene_normal_split_angle_rad >= 0.0 && scene_normal_split_angle_rad <= std::numbers::pi)) {
+    throw OptionError("LocalizeOptions.scene_normal_split_angle_rad = " +
+                      std::to_string(scene_normal_split_angle_rad) + ": must be in [0, pi] rad");
+  }
   non_negative(support_distance_relative, "support_distance_relative");
   non_negative(icp_max_distance_relative, "icp_max_distance_relative");
   non_negative(verification_cell_relative, "verification_cell_relative");
@@ -563,7 +588,7 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
   std::vector<LocalizationCandidate> refined = VerifyAndRefine(ctx, clustering, &result);
   ReportProgress(options.progress, "refinement", 1.0);
 
-  RankCandidates(std::move(refined), model, options, &result);
+  internal::RankCandidates(std::move(refined), model, options, &result);
   if (!result.found) result.message = NotFoundMessage(result, clustering);
   result.timings.total_ms = MillisecondsSince(start);
   return result;

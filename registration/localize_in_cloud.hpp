@@ -16,6 +16,7 @@
 
 #include <Eigen/Geometry>
 #include <cstddef>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -58,12 +59,19 @@ struct LocalizeOptions {
   /// Normals of the subsampled scene: voxel mean (default) or carried from the dense point
   /// nearest the voxel centroid, as the seed does.
   VoxelNormalMode scene_normal_mode = VoxelNormalMode::kAverage;
+  /// Scene voxels split by normal as the model's are (PpfModelOptions::normal_split_angle_rad),
+  /// rad in [0, pi]; 0 = one point per voxel.
+  double scene_normal_split_angle_rad = std::numbers::pi / 2.0;
 
   // Steps 4-5: voting and clustering.
   PpfMatchOptions matching;
   PoseClusteringOptions clustering;
   double cluster_radius_relative =
       0.1;  ///< -> clustering.translation_radius_mm and duplicate_radius_mm.
+  /// -> clustering.refinement_inlier_mm, in model sampling steps (0: keep the absolute value).
+  /// A correct correspondence pairs points of one surface patch sampled on two voxel grids, so
+  /// it is off by up to about one step; 1.5 steps also admits the average pose's own error.
+  double cluster_refinement_inlier_steps = 1.5;
 
   // Step 6: verification (coarse pose, before ICP) and after ICP.
   VerificationOptions verification;

@@ -127,6 +127,7 @@ void ReadPreprocessing(yaml::Fields& r, LocalizeOptions* o) {
   ReadNormals(r, "normals", &o->normals);
   r.Read("scene_sampling_step_mm", &o->scene_sampling_step_mm);
   ReadEnum(r, "scene_normal_mode", kNormalModes, &o->scene_normal_mode);
+  r.Read("scene_normal_split_angle_rad", &o->scene_normal_split_angle_rad);
 }
 
 // Steps 4-5: voting and clustering.
@@ -146,8 +147,14 @@ void ReadMatching(yaml::Fields& r, LocalizeOptions* o) {
   c.Read("rotation_threshold_rad", &o->clustering.rotation_threshold_rad);
   c.Read("max_clusters", &o->clustering.max_clusters);
   c.Read("duplicate_radius_mm", &o->clustering.duplicate_radius_mm);
+  c.Read("refine_poses", &o->clustering.refine_poses);
+  c.Read("refinement_inlier_mm", &o->clustering.refinement_inlier_mm);
+  c.Read("refinement_rounds", &o->clustering.refinement_rounds);
+  c.Read("refinement_min_members", &o->clustering.refinement_min_members);
+  c.Read("refinement_tangent_weight", &o->clustering.refinement_tangent_weight);
   c.Done();
   r.Read("cluster_radius_relative", &o->cluster_radius_relative);
+  r.Read("cluster_refinement_inlier_steps", &o->cluster_refinement_inlier_steps);
 }
 
 // Step 6: verification and its pose constraints.
@@ -209,6 +216,7 @@ void ReadPpfModelOptionFields(yaml::Fields& s, PpfModelOptions* m) {
   s.Read("angle_step_rad", &m->angle_step_rad);
   s.Read("refinement_step_relative", &m->refinement_step_relative);
   ReadEnum(s, "normal_mode", kNormalModes, &m->normal_mode);
+  s.Read("normal_split_angle_rad", &m->normal_split_angle_rad);
   s.Read("max_model_points", &m->max_model_points);
   ReadNormals(s, "normals", &m->normals);
   s.Done();
@@ -230,6 +238,7 @@ std::string PpfModelOptionsYaml(const PpfModelOptions& m, const std::string& ind
          line("angle_step_rad", num(m.angle_step_rad)) +
          line("refinement_step_relative", num(m.refinement_step_relative)) +
          line("normal_mode", normal_mode) +
+         line("normal_split_angle_rad", num(m.normal_split_angle_rad)) +
          line("max_model_points", std::to_string(m.max_model_points)) + indent + "normals:\n" +
          line("  k", std::to_string(m.normals.k)) + line("  radius_mm", num(m.normals.radius_mm)) +
          line("  use_grid_when_organized", m.normals.use_grid_when_organized ? "true" : "false") +

@@ -12,6 +12,9 @@
 namespace lasercell::registration {
 namespace {
 
+// pair_key of an ordered model pair that has no feature (coincident points).
+constexpr std::uint32_t kNoPair = 0xFFFFFFFFU;
+
 constexpr std::size_t kMaxKeySpace = std::size_t{1} << 25;
 
 double StepFrom(double absolute_mm, double relative, double diameter_mm) {
@@ -75,6 +78,10 @@ void PpfModelOptions::Check() const {
     throw OptionError("PpfModelOptions.max_model_points = " + std::to_string(max_model_points) +
                       ": must be in [2, 65535]");
   }
+  if (!(normal_split_angle_rad >= 0.0 && normal_split_angle_rad <= std::numbers::pi)) {
+    throw OptionError("PpfModelOptions.normal_split_angle_rad = " +
+                      std::to_string(normal_split_angle_rad) + ": must be in [0, pi] rad");
+  }
   normals.Check();
 }
 
@@ -132,6 +139,7 @@ PpfModel PpfModel::Build(const PointCloud& model_cloud, const PpfModelOptions& o
   voxel.voxel_size_mm = model.sampling_step_mm_;
   voxel.normal_mode = options.normal_mode == VoxelNormalMode::kNone ? VoxelNormalMode::kAverage
                                                                     : options.normal_mode;
+  voxel.normal_split_angle_rad = options.normal_split_angle_rad;
   const PointCloud sampled = VoxelGridDownsample(oriented, voxel);
   if (sampled.size() > options.max_model_points) {
     throw OptionError("PpfModelOptions.sampling_step: the model subsampled at " +
@@ -208,7 +216,10 @@ PpfModel PpfModel::Build(const PointCloud& model_cloud, const PpfModelOptions& o
         if (i == r) continue;
         const bool in_range = model.PairKey(model.points_[r], model.normals_[r], model.points_[i],
                                             model.normals_[i], &pair_key[slot]);
-        LASERCELL_CHECK(in_range, "model pair beyond max_pair_distance or coincident");
+        // Two faces' samples of one voxel (normal split) can share a position: no feature.
+        const bool coincident = model.points_[r] == model.points_[i];
+        LASERCELL_CHECK(in_range || coincident, "model pair beyond max_pair_distance");
+        if (!in_range) pair_key[slot] = kNoPair;
         pair_angle[slot] =
             PlaneAngleToTurn16(PairPlaneAngle(rot, model.points_[r], model.points_[i]));
         ++slot;
@@ -218,11 +229,17 @@ PpfModel PpfModel::Build(const PointCloud& model_cloud, const PpfModelOptions& o
 
   // Counting sort by key (stable: pairs keep (reference, other) order within a key).
   std::vector<std::uint32_t> start(key_space + 1, 0);
-  for (std::uint32_t k : pair_key) ++start[k + 1];
+  std::size_t pairs = 0;
+  for (std::uint32_t k : pair_key) {
+    if (k == kNoPair) continue;
+    ++start[k + 1];
+    ++pairs;
+  }
   for (std::size_t k = 0; k < key_space; ++k) start[k + 1] += start[k];
-  model.entries_.resize(pair_key.size());
+  model.entries_.resize(pairs);
   std::vector<std::uint32_t> cursor(start.begin(), start.end() - 1);
   for (std::size_t p = 0; p < pair_key.size(); ++p) {
+    if (pair_key[p] == kNoPair) continue;
     model.entries_[cursor[pair_key[p]]++] = {static_cast<std::uint16_t>(p / row), pair_angle[p]};
   }
   for (std::size_t k = 0; k < key_space; ++k) {

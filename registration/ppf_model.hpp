@@ -48,6 +48,11 @@ struct PpfModelOptions {
   double refinement_step_relative = 0.005;
   /// Voxel normal handling when subsampling (see VoxelGridOptions).
   VoxelNormalMode normal_mode = VoxelNormalMode::kAverage;
+  /// Subsampling keeps the faces of walls thinner than a voxel apart: normals more than this far
+  /// apart in one voxel give separate model points (VoxelGridOptions::normal_split_angle_rad;
+  /// 0 = one point per voxel). Facing-away faces (> 90 deg) average to a point inside the wall
+  /// with a meaningless normal otherwise. In [0, pi].
+  double normal_split_angle_rad = std::numbers::pi / 2.0;
   /// Subsampled models larger than this are refused (pairs grow quadratically); <= 65535.
   std::size_t max_model_points = 4000;
   /// Used only when the model cloud has no normals.

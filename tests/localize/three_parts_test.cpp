@@ -81,13 +81,11 @@ class ThreeParts : public ::testing::Test {
 test::TestDir* ThreeParts::dir_ = nullptr;
 FrameGraph* ThreeParts::truth_ = nullptr;
 
-// Every part is reported at most once, seat and back every time with their grasps within 1 mm,
-// and no instance is reported graspable unless its grasp is within 1 mm. The armrest (the
-// smallest part, ~4.5k sweep points, its upright walls barely lit by the vertical laser plane)
-// is not always found: in pallet_000 the best pose left after verification lies 502 mm off
-// (support 0.45, ICP RMSE 2.07 mm) and is reported not graspable; the true pose is not among
-// the verified clusters. That miss is an open defect, not an accepted tolerance.
-TEST_F(ThreeParts, EachPartIsReportedOnceAndEveryGraspableGraspIsWithinAMillimetre) {
+// Every part is reported exactly once with its grasps within 1 mm and graspable (Skotheim et
+// al., Fig. 4, and the three-part target). The armrest is the hard one: the smallest part
+// (~4.5k sweep points), its upright walls barely lit by the vertical laser plane, a thin shell
+// whose two faces share the model's voxels.
+TEST_F(ThreeParts, EachPartIsFoundOnceWithItsGraspWithinAMillimetre) {
   for (int scene = 0; scene < kScenes; ++scene) {
     SCOPED_TRACE("pallet_" + std::to_string(scene));
     const Job job = ReadJobFile(WriteJob(scene));
@@ -96,10 +94,9 @@ TEST_F(ThreeParts, EachPartIsReportedOnceAndEveryGraspableGraspIsWithinAMillimet
     const JobResult result = RunJob(job, options);
     std::map<std::string, int> found;
     for (const PartInstance& inst : result.parts.instances) ++found[inst.part];
-    for (const char* part : {"seat", "back"}) {
+    for (const char* part : {"seat", "back", "armrest"}) {
       EXPECT_EQ(found[part], 1) << part << ": " << result.Summary();
     }
-    EXPECT_LE(found["armrest"], 1) << result.Summary();
     for (const PartInstance& inst : result.parts.instances) {
       SCOPED_TRACE(inst.frame);
       char frame[32];
@@ -118,14 +115,9 @@ TEST_F(ThreeParts, EachPartIsReportedOnceAndEveryGraspableGraspIsWithinAMillimet
             std::acos(std::clamp(
                 g.target_from_grasp.linear().col(2).dot(grasp_truth.linear().col(2)), -1.0, 1.0)) *
             180.0 / M_PI;
-        const bool must_hit = inst.part != "armrest" || inst.graspable;
-        if (must_hit) {
-          EXPECT_LT(error_mm, 1.0) << g.name;
-          EXPECT_LT(axis_deg, 1.0) << g.name;
-          EXPECT_TRUE(inst.graspable) << inst.not_graspable_reason;
-        } else if (error_mm >= 1.0) {
-          EXPECT_FALSE(inst.not_graspable_reason.empty());  // a miss is never a confident answer
-        }
+        EXPECT_LT(error_mm, 1.0) << g.name;
+        EXPECT_LT(axis_deg, 1.0) << g.name;
+        EXPECT_TRUE(inst.graspable) << inst.not_graspable_reason;
         RecordProperty("scene" + std::to_string(scene) + "_" + inst.part + "_grasp_error_mm",
                        std::to_string(error_mm));
       }

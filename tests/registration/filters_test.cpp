@@ -3,6 +3,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <numbers>
 #include <random>
 
 #include "core/error.hpp"
@@ -169,6 +170,41 @@ TEST(VoxelGridTest, OneCentroidPerOccupiedVoxelOnRandomData) {
   EXPECT_GT(out.size(), 14U * 14U * 14U);
 }
 
+// A 4 mm wall in 10 mm voxels: without the split each voxel averages both faces into a point
+// inside the wall whose normal is meaningless (here the two normals cancel); with it, each face
+// keeps its own sample on the face with its own normal.
+TEST(VoxelGridTest, NormalSplitKeepsTheTwoFacesOfAThinWallApart) {
+  PointCloud wall;
+  for (int x = 0; x < 10; ++x) {
+    for (int y = 0; y < 10; ++y) {
+      wall.positions.push_back({x + 0.5, y + 0.5, 2.0});
+      wall.normals.push_back({0, 0, 1});
+      wall.positions.push_back({x + 0.5, y + 0.5, -2.0});
+      wall.normals.push_back({0, 0, -1});
+    }
+  }
+  VoxelGridOptions options;
+  options.voxel_size_mm = 10.0;
+  options.min_normal_coherence = 0.5;
+  EXPECT_EQ(VoxelGridDownsample(wall, options).size(), 0U);  // every voxel incoherent
+  options.normal_split_angle_rad = std::numbers::pi / 2;
+  std::vector<std::int32_t> voxel_of_point;
+  const PointCloud split = VoxelGridDownsample(wall, options, &voxel_of_point);
+  ASSERT_EQ(split.size(), 2U);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_NEAR(std::abs(split.positions[k].z()), 2.0, 1e-12);
+    EXPECT_NEAR(split.normals[k].z(), split.positions[k].z() > 0 ? 1.0 : -1.0, 1e-12);
+  }
+  for (std::size_t i = 0; i < wall.size(); ++i) {
+    EXPECT_EQ(split.positions[static_cast<std::size_t>(voxel_of_point[i])].z(),
+              wall.positions[i].z());
+  }
+  // Normals within the angle share a sample.
+  wall.normals[1] = Eigen::Vector3d(0, 1, 1).normalized();
+  for (std::size_t i = 1; i < wall.size(); i += 2) wall.normals[i] = wall.normals[1];
+  EXPECT_EQ(VoxelGridDownsample(wall, options).size(), 1U);
+}
+
 TEST(VoxelGridTest, RejectsBadOptions) {
   VoxelGridOptions options;
   options.voxel_size_mm = 0.0;
@@ -178,6 +214,10 @@ TEST(VoxelGridTest, RejectsBadOptions) {
   options.min_normal_coherence = 2.0;
   EXPECT_THAT([&] { options.Check(); },
               ::testing::ThrowsMessage<OptionError>(HasSubstr("min_normal_coherence")));
+  options.min_normal_coherence = 0.0;
+  options.normal_split_angle_rad = 4.0;
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("normal_split_angle_rad")));
   // Voxels far too small for the extent.
   PointCloud cloud;
   cloud.positions = {{0, 0, 0}, {1e6, 0, 0}};

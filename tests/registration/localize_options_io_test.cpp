@@ -30,6 +30,7 @@ normals: {k: 17, radius_mm: 1.5, use_grid_when_organized: false, grid_window: 3,
           grid_max_distance_mm: 2.5, min_neighbors: 5}
 scene_sampling_step_mm: 1.25
 scene_normal_mode: nearest_point
+scene_normal_split_angle_rad: 1.25
 model:
   sampling_step_relative: 0.03
   sampling_step_mm: 2.5
@@ -38,14 +39,17 @@ model:
   angle_step_rad: 0.25
   refinement_step_relative: 0.007
   normal_mode: nearest_point
+  normal_split_angle_rad: 2.5
   max_model_points: 3000
   normals: {k: 9, radius_mm: 0.5, use_grid_when_organized: false, grid_window: 4,
             grid_max_distance_mm: 1.5, min_neighbors: 4}
 matching: {reference_stride: 7, max_reference_points: 900, peaks_per_reference: 4,
            peak_min_relative: 0.6, min_votes: 5, spread_features: true, spread_alpha: true}
 clustering: {translation_radius_mm: 12, rotation_threshold_rad: 0.3, max_clusters: 20,
-             duplicate_radius_mm: 8}
+             duplicate_radius_mm: 8, refine_poses: false, refinement_inlier_mm: 22,
+             refinement_rounds: 4, refinement_min_members: 9, refinement_tangent_weight: 0.3}
 cluster_radius_relative: 0.15
+cluster_refinement_inlier_steps: 2.25
 verification:
   grid_rows: 30
   grid_cols: 31
@@ -107,6 +111,7 @@ TEST(ReadLocalizeOptions, EveryKeyReachesItsField) {
   EXPECT_EQ(o.normals.min_neighbors, 5u);
   EXPECT_EQ(o.scene_sampling_step_mm, 1.25);
   EXPECT_EQ(o.scene_normal_mode, VoxelNormalMode::kNearestPoint);
+  EXPECT_EQ(o.scene_normal_split_angle_rad, 1.25);
 
   const PpfModelOptions& m = s.model;
   EXPECT_EQ(m.sampling_step_relative, 0.03);
@@ -116,6 +121,7 @@ TEST(ReadLocalizeOptions, EveryKeyReachesItsField) {
   EXPECT_EQ(m.angle_step_rad, 0.25);
   EXPECT_EQ(m.refinement_step_relative, 0.007);
   EXPECT_EQ(m.normal_mode, VoxelNormalMode::kNearestPoint);
+  EXPECT_EQ(m.normal_split_angle_rad, 2.5);
   EXPECT_EQ(m.max_model_points, 3000u);
   EXPECT_EQ(m.normals.k, 9u);
   EXPECT_EQ(m.normals.radius_mm, 0.5);
@@ -135,7 +141,13 @@ TEST(ReadLocalizeOptions, EveryKeyReachesItsField) {
   EXPECT_EQ(o.clustering.rotation_threshold_rad, 0.3);
   EXPECT_EQ(o.clustering.max_clusters, 20u);
   EXPECT_EQ(o.clustering.duplicate_radius_mm, 8);
+  EXPECT_FALSE(o.clustering.refine_poses);
+  EXPECT_EQ(o.clustering.refinement_inlier_mm, 22);
+  EXPECT_EQ(o.clustering.refinement_rounds, 4);
+  EXPECT_EQ(o.clustering.refinement_min_members, 9u);
+  EXPECT_EQ(o.clustering.refinement_tangent_weight, 0.3);
   EXPECT_EQ(o.cluster_radius_relative, 0.15);
+  EXPECT_EQ(o.cluster_refinement_inlier_steps, 2.25);
 
   const VerificationOptions& v = o.verification;
   EXPECT_EQ(v.grid_rows, 30);

@@ -5,6 +5,8 @@
 #include <random>
 
 #include "core/error.hpp"
+#include "core/se3.hpp"
+#include "registration/internal/rank_candidates.hpp"
 #include "registration/localize_in_cloud.hpp"
 #include "registration_test_util.hpp"
 
@@ -41,6 +43,53 @@ TEST(LocalizeRealTest, FindsTheParasaurolophusInRs1) {
   EXPECT_GT(result.timings.total_ms, 0.0);
   EXPECT_GE(result.timings.total_ms, result.timings.matching_ms + result.timings.icp_ms);
   EXPECT_THAT(result.Summary(), HasSubstr("found 1 instance"));
+}
+
+// Several clusters can converge to one pose under ICP; their refined supports then differ only by
+// ICP's tolerance. The answer keeps the stronger cluster's evidence (score, coarse pose) and rank;
+// the weaker one is its duplicate. A second orientation at the same place stays a duplicate of
+// the better-supported one whatever its cluster score.
+TEST(RankCandidatesTest, OneAnswerFoundTwiceKeepsTheStrongerClusterEvidence) {
+  LASERCELL_REQUIRE_UWA();
+  const PpfModel& model = UwaPpfModel();
+  LocalizeOptions options;
+  options.clustering.duplicate_radius_mm = 0.1 * model.diameter_mm();
+  const Eigen::Isometry3d pose = test::Rs1ReferencePose();
+  std::mt19937_64 rng(1);
+  const auto candidate = [&](const Eigen::Isometry3d& at, double support, double score) {
+    LocalizationCandidate c;
+    c.scene_from_model = at;
+    c.coarse_scene_from_model = at * test::RandomPerturbation(rng, 0.1, 5.0);
+    c.verification.accepted = true;
+    c.verification.support = support;
+    c.score = score;
+    c.icp_run = true;
+    return c;
+  };
+  // Same pose within 0.01 mm: the weaker cluster has the (insignificantly) higher support.
+  Eigen::Isometry3d nudged = pose;
+  nudged.translation() += Eigen::Vector3d(0.01, 0, 0);
+  LocalizationResult same;
+  internal::RankCandidates({candidate(pose, 0.9938, 80.0), candidate(nudged, 0.9930, 200.0)}, model,
+                           options, &same);
+  ASSERT_EQ(same.candidates.size(), 1u);
+  EXPECT_EQ(same.candidates[0].score, 200.0);
+  EXPECT_EQ(same.candidates[0].rank, 1);
+  ASSERT_EQ(same.rejected.size(), 1u);
+  EXPECT_EQ(same.rejected[0].score, 80.0);
+  EXPECT_THAT(same.rejected[0].rejection_reason, HasSubstr("duplicate of rank 1"));
+  // A different orientation at the same place (30 deg about z): the better support wins.
+  const Eigen::Isometry3d turned =
+      pose * model.model_from_centered() *
+      Eigen::Isometry3d(Eigen::AngleAxisd(0.52, Eigen::Vector3d::UnitZ())) *
+      model.model_from_centered().inverse();
+  LocalizationResult other;
+  internal::RankCandidates({candidate(pose, 0.99, 80.0), candidate(turned, 0.5, 200.0)}, model,
+                           options, &other);
+  ASSERT_EQ(other.candidates.size(), 1u);
+  EXPECT_EQ(other.candidates[0].score, 80.0);
+  EXPECT_EQ(other.rejected[0].score, 200.0);
+  EXPECT_FALSE(other.ambiguous);
 }
 
 // The reference is a fixed point of careful ICP: starts 2 deg / 4 mm away come back to it.
