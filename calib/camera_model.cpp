@@ -222,7 +222,11 @@ LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::Ali
   }
   for (std::size_t k = 0; k < pixels.size(); ++k) {
     double error = std::numeric_limits<double>::infinity();
-    if (rays[k].allFinite()) error = (model.Project(rays[k]) - pixels[k]).norm();
+    // A ray that does not point forward (z <= 1e-6) is no ray for lasercell's forward-looking
+    // sensors (the triangulator's tables need z > 0), even when it projects back onto its pixel:
+    // it counts as a pixel without a ray.
+    if (rays[k].allFinite() && rays[k].z() > 1e-6)
+      error = (model.Project(rays[k]) - pixels[k]).norm();
     if (!(error <= tolerance_px)) {
       if (check.without_ray++ == 0) check.first_bad_px = pixels[k];
       check.worst_px = std::max(check.worst_px, error);
