@@ -351,6 +351,10 @@ std::string Table1Markdown(const nlohmann::json& j) {
     md += buf;
   }
   const int localized = j.at("placements_localized").get<int>();
+  const int thread_count = j.value("threads", 1);
+  const std::string threads = thread_count == 1   ? std::string("one thread")
+                              : thread_count == 0 ? std::string("all cores")
+                                                  : std::to_string(thread_count) + " threads";
   const auto num = [&](const char* key) {
     return j.at(key).is_number() ? j.at(key).get<double>() : NAN;  // null: nothing measured
   };
@@ -360,15 +364,15 @@ std::string Table1Markdown(const nlohmann::json& j) {
       "paper: 10 of 10); reported graspable: %d. Reported 1-sigma of the hole centre covers the "
       "error %.1f %% of the time per axis (a Gaussian: 68.3 %%), %d of %d found "
       "placements exceed 3 sigma on some axis (three independent Gaussian axes: %.1f). "
-      "Time per part, one thread: localization "
+      "Time per part, %s: localization "
       "median %.1f ms, triangulation median %.1f ms, job run median %.1f ms (the job's "
       "own work: %.1f %% of triangulation + localization); the paper: ~1.7 s.\n",
       j.at("found").get<int>(), localized, j.at("within_10mm").get<int>(),
       localized > 0 ? 100.0 * j.at("within_10mm").get<int>() / localized : 0.0,
       j.at("graspable").get<int>(), 100.0 * num("sigma_coverage"),
       j.at("beyond_3_sigma").get<int>(), j.at("found").get<int>(), num("beyond_3_sigma_expected"),
-      num("median_localization_ms"), num("median_triangulation_ms"), num("median_run_ms"),
-      100.0 * num("job_overhead_fraction"));
+      threads.c_str(), num("median_localization_ms"), num("median_triangulation_ms"),
+      num("median_run_ms"), 100.0 * num("job_overhead_fraction"));
   return md + buf;
 }
 

@@ -55,8 +55,26 @@ std::optional<Matrix6d> PlacementCovariance(const FrameGraph& cell, const Job& j
                      " <- sensor passes a robot: joint and kinematic uncertainty are not in the "
                      "pose covariances");
   }
-  notes->push_back("camera intrinsics and laser plane uncertainty are not in the pose covariances");
   return placement.covariance;
+}
+
+// The laser plane's uncertainty when the plane came from the cell with a covariance; otherwise
+// unset, with a note.
+std::optional<LaserPlaneUncertainty> PlaneUncertainty(const FrameGraph& cell, const Job& job,
+                                                      const triangulation::ScanSetup& setup,
+                                                      const triangulation::SweepResult& sweep,
+                                                      std::vector<std::string>* notes) {
+  const auto it = cell.laser_planes().find(job.laser);
+  if (it == cell.laser_planes().end() || !it->second.covariance) {
+    notes->push_back("laser plane '" + job.laser +
+                     "' has no covariance in the cell: its uncertainty is not in the poses");
+    return std::nullopt;
+  }
+  LaserPlaneUncertainty u;
+  u.plane_in_sensor = setup.laser_plane;
+  u.covariance = *it->second.covariance;
+  u.target_from_sensor = sweep.frame_from_sensor;
+  return u;
 }
 
 LocalizePartsOptions PartsOptionsOf(const Job& job, int threads) {
@@ -89,6 +107,9 @@ nlohmann::json InstanceJson(const PartInstance& inst, const std::string& target)
   j["matrix"] = json::MatrixRows(inst.target_from_part);
   j["covariance_valid"] = inst.covariance_valid;
   j["covariance"] = inst.covariance_valid ? json::Covariance(inst.covariance) : nlohmann::json();
+  j["covariance_terms"] = {{"icp", json::Covariance(inst.covariance_terms.icp)},
+                           {"placement", json::Covariance(inst.covariance_terms.placement)},
+                           {"laser_plane", json::Covariance(inst.covariance_terms.laser_plane)}};
   j["grasps"] = nlohmann::json::array();
   for (const GraspPose& g : inst.grasps) j["grasps"].push_back(GraspJson(g, target));
   j["graspable"] = inst.graspable;
@@ -199,6 +220,8 @@ JobResult JobRunner::Run(const triangulation::ProfileSet& profiles,
   LocalizePartsOptions parts_options = PartsOptionsOf(job_, threads_);
   parts_options.placement_covariance =
       PlacementCovariance(cell_, job_, profiles, setup_.options, &result.notes);
+  parts_options.laser_plane = PlaneUncertainty(cell_, job_, setup_, result.sweep, &result.notes);
+  result.notes.push_back("camera intrinsics uncertainty is not in the pose covariances");
   parts_options.progress = options_.progress;
   std::vector<PartRequest> requests;
   for (std::size_t i = 0; i < job_.parts.size(); ++i) {

@@ -41,25 +41,34 @@ registration::PoseConstraints ConstraintsFor(const PartDefinition& part,
   return c;
 }
 
-// Removes the scene points within `distance` of the posed model's refinement points.
-void RemoveExplained(const registration::PpfModel& model, const Eigen::Isometry3d& scene_from_model,
-                     double distance, PointCloud* scene) {
+// Splits the scene into the points within `distance` of the posed model's refinement points
+// (returned) and the rest (left in *scene).
+PointCloud SplitExplained(const registration::PpfModel& model,
+                          const Eigen::Isometry3d& scene_from_model, double distance,
+                          PointCloud* scene) {
   std::vector<Eigen::Vector3d> posed;
   posed.reserve(model.refinement_points().size());
   const Eigen::Isometry3d scene_from_centered = scene_from_model * model.model_from_centered();
   for (const Eigen::Vector3d& p : model.refinement_points())
     posed.push_back(scene_from_centered * p);
   const registration::KdTree tree(std::move(posed));
-  std::vector<std::size_t> keep;
+  std::vector<std::size_t> keep, explained;
   keep.reserve(scene->size());
   registration::Neighbor nearest;
   const double d_sq = distance * distance;
   for (std::size_t i = 0; i < scene->size(); ++i) {
-    if (!tree.Nearest(scene->positions[i], &nearest) || nearest.distance_sq > d_sq) {
-      keep.push_back(i);
-    }
+    const bool near = tree.Nearest(scene->positions[i], &nearest) && nearest.distance_sq <= d_sq;
+    (near ? explained : keep).push_back(i);
   }
+  PointCloud out = scene->Subset(explained);
   *scene = scene->Subset(keep);
+  return out;
+}
+
+// The laser plane's share of an instance's pose covariance, from the points it explains.
+Matrix6d LaserPlaneTerm(const LaserPlaneUncertainty& plane, const PointCloud& explained) {
+  if (explained.size() < 6) return Matrix6d::Zero();
+  return LaserPlanePoseCovariance(plane, explained.positions, explained.normals, explained.profile);
 }
 
 // Grasp poses and the graspability verdict of an instance.
@@ -168,6 +177,7 @@ void LocalizePartsOptions::Check() const {
   if (placement_covariance && !placement_covariance->allFinite()) {
     fail("placement_covariance", "must be finite");
   }
+  if (laser_plane) laser_plane->Check();
   localize.Check();
 }
 
@@ -206,6 +216,11 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
   if (!line_of_sight.empty() && line_of_sight.size() != scene.size()) {
     throw InputError("LocalizeParts: " + std::to_string(line_of_sight.size()) +
                      " lines of sight for " + std::to_string(scene.size()) + " points");
+  }
+  if (options.laser_plane && !scene.HasProfile()) {
+    throw InputError(
+        "LocalizeParts: the laser plane's uncertainty needs each point's profile, but the "
+        "scene has no profile attribute");
   }
   for (const PartRequest& r : requests) {
     if (r.model == nullptr) throw InputError("LocalizeParts: a part request has no model");
@@ -278,14 +293,22 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
             "the part file declares a symmetry: the rotation about its axis "
             "is not determined by the scan";
       }
-      inst.covariance_valid = IcpPoseCovariance(inst.candidate, &inst.covariance);
-      if (inst.covariance_valid && options.placement_covariance) {
-        inst.covariance += *options.placement_covariance;
+      inst.covariance_valid = IcpPoseCovariance(inst.candidate, &inst.covariance_terms.icp);
+      const PointCloud explained =
+          SplitExplained(model.ppf, inst.target_from_part,
+                         options.explained_distance_relative * model.ppf.diameter_mm(), &remaining);
+      if (options.placement_covariance) {
+        inst.covariance_terms.placement = *options.placement_covariance;
+      }
+      if (options.laser_plane) {
+        inst.covariance_terms.laser_plane = LaserPlaneTerm(*options.laser_plane, explained);
+      }
+      if (inst.covariance_valid) {
+        inst.covariance = inst.covariance_terms.icp + inst.covariance_terms.placement +
+                          inst.covariance_terms.laser_plane;
       }
       JudgeInstance(model, options, &inst);
       inst.search_ms = MsSince(search_start);
-      RemoveExplained(model.ppf, inst.target_from_part,
-                      options.explained_distance_relative * model.ppf.diameter_mm(), &remaining);
       result.instances.push_back(std::move(inst));
       ++search.found;
     }

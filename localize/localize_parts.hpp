@@ -11,8 +11,9 @@
 //      next search, so they do not vote again and no part is reported twice,
 //   4. poses target_from_<part> and grasps target_from_<grasp> = target_from_part *
 //      part_from_grasp, with a 6x6 covariance (left perturbation in the target frame, [rotation
-//      rad; translation mm]) that adds the ICP pose covariance and the covariance of the
-//      calibrated edges that put the sweep into the target frame (first order, independent),
+//      rad; translation mm]) that adds the ICP pose covariance, the covariance of the
+//      calibrated edges that put the sweep into the target frame and the laser plane's
+//      (laser_plane_uncertainty.hpp), first order, independent,
 //   5. graspability: accepted, not ambiguous (flat or symmetric parts are flagged, not posed
 //      silently), ICP RMSE within max_rmse_factor x scan_noise_mm, and the grasp position's
 //      3-sigma radius within grasp_tolerance_mm; otherwise the reason is given.
@@ -27,6 +28,7 @@
 #include "core/progress.hpp"
 #include "core/se3.hpp"
 #include "localize/job.hpp"
+#include "localize/laser_plane_uncertainty.hpp"
 #include "localize/part_model.hpp"
 #include "registration/localize_in_cloud.hpp"
 #include "triangulation/sweep.hpp"
@@ -49,6 +51,10 @@ struct LocalizePartsOptions {
   /// Covariance of the target frame <- sensor placement (the calibrated edges on the path), left
   /// perturbation in the target frame; unset when unknown. Added to every pose covariance.
   std::optional<Matrix6d> placement_covariance;
+  /// The calibrated laser plane's covariance and the sweep's sensor poses; unset when unknown.
+  /// Each pose then gains the plane's share over the points its part explains (the scene must
+  /// carry the `profile` attribute).
+  std::optional<LaserPlaneUncertainty> laser_plane;
   int threads = 0;            ///< 0 = all cores.
   ProgressCallback progress;  ///< Called after each search ("<part> #k") with its fraction.
   /// Throws OptionError naming the field.
@@ -70,6 +76,13 @@ struct GraspPose {
   bool within_tolerance = false;   ///< 3 x position_sigma_mm <= grasp tolerance.
 };
 
+/// The terms `PartInstance::covariance` adds (same convention; zero when absent).
+struct PoseCovarianceTerms {
+  Matrix6d icp = Matrix6d::Zero();          ///< ICP normal equations x residual variance.
+  Matrix6d placement = Matrix6d::Zero();    ///< Calibrated edges target <- sensor.
+  Matrix6d laser_plane = Matrix6d::Zero();  ///< Laser plane calibration.
+};
+
 /// One found part instance.
 struct PartInstance {
   std::string part;   ///< Part name.
@@ -77,6 +90,7 @@ struct PartInstance {
   Eigen::Isometry3d target_from_part = Eigen::Isometry3d::Identity();
   Matrix6d covariance = Matrix6d::Zero();  ///< See the file comment.
   bool covariance_valid = false;           ///< False when ICP gave none.
+  PoseCovarianceTerms covariance_terms;    ///< What `covariance` is made of.
   std::vector<GraspPose> grasps;
   bool graspable = false;
   std::string not_graspable_reason;  ///< Empty when graspable.

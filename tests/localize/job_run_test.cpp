@@ -118,6 +118,13 @@ TEST_F(SeatJob, TheHoleGraspOfEachSeatIsWithinAMillimetreAndAHalfAndGraspable) {
       noted |= note.find("edge handling_base <- sensor has no covariance") != std::string::npos;
     }
     EXPECT_TRUE(noted);
+    // Nor does its laser plane: that term is zero and noted too.
+    EXPECT_EQ(inst.covariance_terms.laser_plane.norm(), 0.0);
+    noted = false;
+    for (const std::string& note : result.notes) {
+      noted |= note.find("laser plane 'laser' has no covariance") != std::string::npos;
+    }
+    EXPECT_TRUE(noted);
     EXPECT_GT(inst.candidate.verification.support, 0.5);
     EXPECT_TRUE(result.parts.AllFound());
     EXPECT_EQ(result.sweep.frame, "handling_base");
@@ -136,6 +143,42 @@ TEST_F(SeatJob, TheHoleGraspOfEachSeatIsWithinAMillimetreAndAHalfAndGraspable) {
                   .norm(),
               1e-9);
   }
+}
+
+TEST_F(SeatJob, ALaserPlaneCovarianceInTheCellWidensThePoseCovariance) {
+  // The same cell with a plane covariance: 0.1 mrad tilt and 0.05 mm offset, 1 sigma.
+  FrameGraph cell = LoadFrameGraph(dir_->File("cell.yaml"));
+  LaserPlaneEntry plane = cell.laser_planes().at("laser");
+  const Eigen::Vector3d n = plane.normal.normalized();
+  Eigen::Matrix4d cov = Eigen::Matrix4d::Zero();
+  cov.topLeftCorner<3, 3>() = 1e-8 * (Eigen::Matrix3d::Identity() - n * n.transpose());
+  cov(3, 3) = 0.05 * 0.05;
+  plane.covariance = cov;
+  cell.SetLaserPlane("laser", plane);
+  SaveFrameGraph(dir_->File("cell_plane_cov.yaml"), cell);
+  const std::string path = WriteJob("seat_000");
+  std::string text = io::ReadFileBytes(path);
+  text.replace(text.find("cell: cell.yaml"), 15, "cell: cell_plane_cov.yaml");
+  io::WriteFileAtomically(dir_->File("plane_cov.job.yaml"), text);
+  JobRunOptions options;
+  options.threads = 2;
+  const JobResult result = RunJob(ReadJobFile(dir_->File("plane_cov.job.yaml")), options);
+  ASSERT_EQ(result.parts.instances.size(), 1u) << result.Summary();
+  const PartInstance& inst = result.parts.instances[0];
+  ASSERT_TRUE(inst.covariance_valid);
+  const PoseCovarianceTerms& terms = inst.covariance_terms;
+  EXPECT_LT((inst.covariance - (terms.icp + terms.placement + terms.laser_plane)).norm(),
+            1e-12 * (1.0 + inst.covariance.norm()));
+  // A 0.05 mm offset error at ~300 mm range moves the seat by a few hundredths of a mm along
+  // the lines of sight: the term must be of that size, not zero and not millimetres.
+  const double plane_sigma = std::sqrt(terms.laser_plane.bottomRightCorner<3, 3>().trace());
+  EXPECT_GT(plane_sigma, 0.005);
+  EXPECT_LT(plane_sigma, 0.5);
+  for (const std::string& note : result.notes) {
+    EXPECT_EQ(note.find("laser plane"), std::string::npos) << note;
+  }
+  const nlohmann::json j = JobResultJson(result);
+  EXPECT_TRUE(j["instances"][0]["covariance_terms"].contains("laser_plane"));
 }
 
 TEST_F(SeatJob, TheSecondRunLoadsTheModelFromTheCacheAndGivesTheSamePose) {
