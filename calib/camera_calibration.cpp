@@ -208,9 +208,14 @@ IntrinsicsResult CalibrateIntrinsicsFallingBackToOpencv5(const std::vector<Board
       !result.focal_observable) {
     return result;
   }
-  std::string why = "the lens model folds over";
-  for (const std::string& w : result.warnings) {
-    if (w.find("folds over") != std::string::npos) why = w;
+  std::string why = result.inversion_problem;
+  if (why.empty()) {
+    char buf[120];
+    std::snprintf(buf, sizeof buf,
+                  "it folds over beyond the observed corners (no ray at %.1f %% "
+                  "of the imager)",
+                  100.0 * result.imager_fraction_without_ray);
+    why = buf;
   }
   IntrinsicsOptions opencv5 = options;
   opencv5.model = LensModelKind::kOpenCV5;
@@ -220,8 +225,8 @@ IntrinsicsResult CalibrateIntrinsicsFallingBackToOpencv5(const std::vector<Board
                       (!result.invertible ||
                        refit.imager_fraction_without_ray < result.imager_fraction_without_ray);
   if (!better) return result;
-  refit.warnings.insert(refit.warnings.begin(),
-                        "OPENCV8 was refitted as OPENCV5: " + why.substr(0, why.find(';')));
+  refit.refitted_because = "OPENCV8 was refitted as OPENCV5: " + why.substr(0, why.find(';'));
+  refit.warnings.insert(refit.warnings.begin(), refit.refitted_because);
   return refit;
 }
 

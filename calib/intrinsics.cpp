@@ -16,6 +16,7 @@
 
 #include "calib/cost_functions/reprojection.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 
 namespace lasercell::calib {
 
@@ -34,14 +35,6 @@ Eigen::Isometry3d ToIsometry(const Pose6& p) {
   T.linear() = Eigen::Map<const Eigen::Matrix3d>(R);
   T.translation() = Eigen::Vector3d(p.v[3], p.v[4], p.v[5]);
   return T;
-}
-
-std::string Fmt(double v, int precision = 3) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
 }
 
 // State of the optimisation shared by the stages.
@@ -378,9 +371,9 @@ void SelectViews(const std::vector<BoardView>& views, const BoardSpec& board, in
       }
       if (!q.allFinite() || q.x() < -0.5 || q.y() < -0.5 || q.x() > width_px - 0.5 ||
           q.y() > height_px - 0.5) {
-        throw InputError("camera calibration: " + vr.name + " has a corner at (" + Fmt(q.x()) +
-                         ", " + Fmt(q.y()) + ") outside the " + std::to_string(width_px) + "x" +
-                         std::to_string(height_px) + " image");
+        throw InputError("camera calibration: " + vr.name + " has a corner at (" +
+                         FormatFixed(q.x(), 3) + ", " + FormatFixed(q.y(), 3) + ") outside the " +
+                         std::to_string(width_px) + "x" + std::to_string(height_px) + " image");
       }
     }
     if (static_cast<int>(view.corners_px.size()) < options.min_corners_per_view) {
@@ -583,6 +576,13 @@ void FinalStatistics(State& s, std::size_t num_views, const IntrinsicsOptions& o
   }
 }
 
+// The focal length is not observable: flagged, the first reason kept, every reason warned.
+void MarkFocalUnobservable(const std::string& why, IntrinsicsResult* result) {
+  result->focal_observable = false;
+  if (result->focal_problem.empty()) result->focal_problem = why;
+  result->warnings.push_back(why);
+}
+
 // Views: pose, tilt and the spread of the board normals (parallel views leave the focal length
 // unobservable). Returns the board distances.
 std::vector<double> ViewGeometry(const State& s, const IntrinsicsOptions& options,
@@ -606,12 +606,12 @@ std::vector<double> ViewGeometry(const State& s, const IntrinsicsOptions& option
         result.tilt_spread_deg, std::acos(std::clamp(n.dot(mean_normal), -1.0, 1.0)) * 180.0 / kPi);
   }
   if (result.tilt_spread_deg < options.min_tilt_spread_deg) {
-    result.focal_observable = false;
-    result.warnings.push_back(
-        "all views nearly parallel: every board normal lies within " +
-        Fmt(result.tilt_spread_deg, 1) + " deg of their mean (need " +
-        Fmt(options.min_tilt_spread_deg, 1) +
-        "); the focal length is not observable from parallel views: tilt the board");
+    MarkFocalUnobservable("all views nearly parallel: every board normal lies within " +
+                              FormatFixed(result.tilt_spread_deg, 1) + " deg of their mean (need " +
+                              FormatFixed(options.min_tilt_spread_deg, 1) +
+                              "); the focal length is not observable from parallel views: tilt "
+                              "the board",
+                          &result);
   }
   return distances;
 }
@@ -645,18 +645,18 @@ void IntrinsicsCovariance(const State& s, const Eigen::MatrixXd& cov_all,
     }
     const double rel = result.intrinsics_sigma[0] / std::abs(full[0]);
     if (!(rel <= options.max_focal_relative_sigma)) {
-      result.focal_observable = false;
-      result.warnings.push_back("focal length poorly observed: 1-sigma " + Fmt(100 * rel, 2) +
+      MarkFocalUnobservable("focal length poorly observed: 1-sigma " + FormatFixed(100 * rel, 2) +
                                 " % of fx (limit " +
-                                Fmt(100 * options.max_focal_relative_sigma, 2) +
-                                " %); add views with the board tilted in different directions");
+                                FormatFixed(100 * options.max_focal_relative_sigma, 2) +
+                                " %); add views with the board tilted in different directions",
+                            &result);
     }
   } else {
-    result.focal_observable = false;
-    result.warnings.push_back(
+    MarkFocalUnobservable(
         "parameter covariance not computable: the calibration problem is rank deficient (the "
         "views do not constrain every intrinsic; nearly parallel views make the focal length "
-        "unobservable)");
+        "unobservable)",
+        &result);
   }
   if (!result.converged) {
     result.warnings.push_back("the solver did not converge: " + result.termination);

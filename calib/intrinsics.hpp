@@ -133,10 +133,12 @@ struct IntrinsicsResult {
   Eigen::Vector2d board_warp_mm = Eigen::Vector2d::Zero();  ///< When estimated.
   double tilt_spread_deg = 0;    ///< Largest angle of a board normal from their mean.
   bool focal_observable = true;  ///< False: views do not constrain the focal length.
+  std::string focal_problem;     ///< Why not (the first reason found), "" when observable.
   /// False: the lens model folds over (CheckLensInversion) within the bounding box of the
   /// observed corners, where the boards should have pinned it down; such a model must not be
   /// used for measuring (RejectionReason).
   bool invertible = true;
+  std::string inversion_problem;  ///< Where and how it folds inside them, "" when invertible.
   /// Fraction of a grid over the whole imager without a ray (the model folds over beyond the
   /// observed corners: extrapolation, warned about, not refused).
   double imager_fraction_without_ray = 0;
@@ -144,6 +146,9 @@ struct IntrinsicsResult {
   Eigen::MatrixXd uncertainty_px;
   double uncertainty_range_mm = 0;
   std::vector<std::string> warnings;
+  /// Set by CalibrateIntrinsicsFallingBackToOpencv5 when this is its OPENCV5 refit: why the
+  /// OPENCV8 fit was not kept ("" otherwise).
+  std::string refitted_because;
 
   std::string Summary() const;
   /// Why this calibration must not be used as a measuring camera ("" when it may): no model,

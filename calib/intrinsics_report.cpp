@@ -4,17 +4,10 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/format.hpp"
+
 namespace lasercell::calib {
 namespace {
-
-std::string Fmt(double v, int precision = 3) {
-  if (!std::isfinite(v)) return "n/a";
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
 
 std::string Sci(double v) {
   std::ostringstream s;
@@ -37,19 +30,20 @@ report::HtmlReport IntrinsicsReport(const IntrinsicsResult& r, const std::string
   page.AddParagraph(inputs);
   page.AddKeyValues({
       {"lens model", r.camera ? r.camera->lensmodel() : "none"},
-      {"image size", Fmt(w, 0) + " x " + Fmt(h, 0) + " px"},
+      {"image size", FormatFixed(w, 0) + " x " + FormatFixed(h, 0) + " px"},
       {"RMS reprojection error",
-       Fmt(r.rms_px, 4) + " px (per corner, OpenCV's definition; mrcal's per-coordinate RMS is " +
-           Fmt(r.rms_px / std::sqrt(2.0), 4) + " px)"},
-      {"residual sigma", Fmt(r.residual_sigma_px, 4) + " px per coordinate"},
+       FormatFixed(r.rms_px, 4) +
+           " px (per corner, OpenCV's definition; mrcal's per-coordinate RMS is " +
+           FormatFixed(r.rms_px / std::sqrt(2.0), 4) + " px)"},
+      {"residual sigma", FormatFixed(r.residual_sigma_px, 4) + " px per coordinate"},
       {"views used", std::to_string(used) + " of " + std::to_string(r.views.size())},
       {"corners used / outliers",
        std::to_string(r.num_corners) + " / " + std::to_string(r.num_outliers)},
       {"converged", r.converged ? "yes" : "NO: " + r.termination},
       {"focal length observable", r.focal_observable ? "yes" : "NO"},
-      {"spread of board normals", Fmt(r.tilt_spread_deg, 1) + " deg"},
+      {"spread of board normals", FormatFixed(r.tilt_spread_deg, 1) + " deg"},
       {"board warp (x, y)",
-       Fmt(r.board_warp_mm.x(), 3) + ", " + Fmt(r.board_warp_mm.y(), 3) + " mm"},
+       FormatFixed(r.board_warp_mm.x(), 3) + ", " + FormatFixed(r.board_warp_mm.y(), 3) + " mm"},
   });
   for (const std::string& warning : r.warnings) page.AddWarning(warning);
 
@@ -97,8 +91,8 @@ report::HtmlReport IntrinsicsReport(const IntrinsicsResult& r, const std::string
   const double median = sorted.empty() ? 1.0 : std::max(1e-6, sorted[sorted.size() / 2]);
   const double scale = 0.02 * std::max(w, h) / median;
   page.AddVectorField("Residual vectors over the image", origins, vectors, scale, w, h,
-                      "residuals magnified " + Fmt(scale, 0) + "x (the median residual is " +
-                          Fmt(median, 3) + " px)");
+                      "residuals magnified " + FormatFixed(scale, 0) +
+                          "x (the median residual is " + FormatFixed(median, 3) + " px)");
 
   page.AddHeading("Views");
   std::vector<std::string> labels;
@@ -113,10 +107,10 @@ report::HtmlReport IntrinsicsReport(const IntrinsicsResult& r, const std::string
   std::vector<std::vector<std::string>> view_rows;
   for (const ViewResult& v : r.views) {
     view_rows.push_back(
-        {v.name, v.used ? "yes" : "no: " + v.rejection_reason, v.used ? Fmt(v.rms_px, 3) : "",
-         v.used ? std::to_string(v.num_corners) : "", v.used ? std::to_string(v.num_outliers) : "",
-         v.used ? Fmt(v.tilt_deg, 1) : "",
-         v.used ? Fmt(v.camera_from_board.translation().norm(), 0) : ""});
+        {v.name, v.used ? "yes" : "no: " + v.rejection_reason,
+         v.used ? FormatFixed(v.rms_px, 3) : "", v.used ? std::to_string(v.num_corners) : "",
+         v.used ? std::to_string(v.num_outliers) : "", v.used ? FormatFixed(v.tilt_deg, 1) : "",
+         v.used ? FormatFixed(v.camera_from_board.translation().norm(), 0) : ""});
   }
   page.AddTable({"image", "used", "RMS (px)", "corners", "outliers", "tilt (deg)", "distance (mm)"},
                 view_rows);
@@ -132,7 +126,7 @@ report::HtmlReport IntrinsicsReport(const IntrinsicsResult& r, const std::string
   if (!outliers.x.empty()) series.push_back(outliers);
   page.AddScatter("Coverage of the image by the observed corners", series, coverage);
   page.AddHeatmap("Projection uncertainty (1 sigma, worst direction) at " +
-                      Fmt(r.uncertainty_range_mm, 0) + " mm",
+                      FormatFixed(r.uncertainty_range_mm, 0) + " mm",
                   r.uncertainty_px, w, h, "px");
   page.AddParagraph(
       "Projection uncertainty: a point at the given range on each cell's ray, held fixed in the "

@@ -5,35 +5,26 @@
 
 #include "calib/camera_model.hpp"
 #include "calib/intrinsics.hpp"
+#include "core/format.hpp"
 
 namespace lasercell::calib {
-namespace {
-
-std::string Fixed(double v, int digits = 3) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
-}  // namespace
-
 std::string IntrinsicsResult::Summary() const {
   std::string s = (camera ? camera->lensmodel() : std::string("no model")) + ": rms " +
-                  Fixed(rms_px) + " px over " + std::to_string(num_corners) + " corners";
+                  FormatFixed(rms_px, 3) + " px over " + std::to_string(num_corners) + " corners";
   int used = 0;
   for (const ViewResult& v : views) used += v.used ? 1 : 0;
   s += " in " + std::to_string(used) + "/" + std::to_string(views.size()) + " views, " +
        std::to_string(num_outliers) + " outliers";
   if (camera) {
-    s += ", fx " + Fixed(camera->intrinsics()[0]);
-    if (!intrinsics_sigma.empty()) s += " +- " + Fixed(intrinsics_sigma[0]);
+    s += ", fx " + FormatFixed(camera->intrinsics()[0], 3);
+    if (!intrinsics_sigma.empty()) s += " +- " + FormatFixed(intrinsics_sigma[0], 3);
   }
   s += ", " + std::to_string(iterations) + " iterations";
   if (!converged) s += ", NOT CONVERGED";
   if (!focal_observable) s += ", FOCAL UNOBSERVABLE";
   if (!invertible) s += ", NOT INVERTIBLE WHERE OBSERVED";
   if (imager_fraction_without_ray > 0)
-    s += ", no ray at " + Fixed(100 * imager_fraction_without_ray, 1) + " % of the imager";
+    s += ", no ray at " + FormatFixed(100 * imager_fraction_without_ray, 1) + " % of the imager";
   if (!warnings.empty()) s += ", " + std::to_string(warnings.size()) + " warning(s)";
   return s;
 }
@@ -41,14 +32,12 @@ std::string IntrinsicsResult::Summary() const {
 std::string IntrinsicsResult::RejectionReason() const {
   if (!camera) return "no lens model was solved";
   if (!converged) return "the solver did not converge: " + termination;
-  const auto warning_with = [this](const std::string& key, const std::string& fallback) {
-    for (const std::string& w : warnings) {
-      if (w.find(key) != std::string::npos) return w;
-    }
-    return fallback;
-  };
-  if (!focal_observable) return warning_with("focal length", "the focal length is unobservable");
-  if (!invertible) return warning_with("where the board", "the lens model is not invertible");
+  if (!focal_observable) {
+    return focal_problem.empty() ? "the focal length is unobservable" : focal_problem;
+  }
+  if (!invertible) {
+    return inversion_problem.empty() ? "the lens model is not invertible" : inversion_problem;
+  }
   return "";
 }
 
@@ -63,9 +52,10 @@ void AssessLensInversion(IntrinsicsResult* result) {
   result->imager_fraction_without_ray = imager.FractionWithoutRay();
   if (!observed.isEmpty() && !inside.ok()) {
     result->invertible = false;
-    result->warnings.push_back(inside.Describe() +
-                               ", inside the box of the observed corners, where the board "
-                               "pinned it down; use a lower-order model (OPENCV5)");
+    result->inversion_problem = inside.Describe() +
+                                ", inside the box of the observed corners, where the board "
+                                "pinned it down; use a lower-order model (OPENCV5)";
+    result->warnings.push_back(result->inversion_problem);
   } else if (!imager.ok()) {
     result->warnings.push_back(
         imager.Describe() +

@@ -6,6 +6,7 @@
 #include <map>
 #include <vector>
 
+#include "core/format.hpp"
 #include "core/json_io.hpp"
 
 namespace lasercell::calib {
@@ -13,13 +14,6 @@ namespace lasercell::calib {
 namespace {
 
 nlohmann::json Number(double v) { return json::FiniteOrNull(v); }
-
-std::string Fmt(double v, int precision = 4) {
-  if (!std::isfinite(v)) return "n/a";
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*g", precision, v);
-  return buf;
-}
 
 }  // namespace
 
@@ -91,30 +85,35 @@ report::HtmlReport LaserPlaneReport(const LaserPlaneResult& r, const CameraModel
   page.AddKeyValues({
       {"method", r.method == "heights" ? "white plane at known heights"
                                        : "laser stripe on a chessboard (Zhou & Zhang 2005)"},
-      {"plane (sensor frame)", "n = [" + Fmt(r.normal.x(), 9) + ", " + Fmt(r.normal.y(), 9) + ", " +
-                                   Fmt(r.normal.z(), 9) + "], d = " + Fmt(r.offset_mm, 9) + " mm"},
-      {"p0 (nearest the sensor origin)", "[" + Fmt(r.point_mm.x(), 7) + ", " +
-                                             Fmt(r.point_mm.y(), 7) + ", " +
-                                             Fmt(r.point_mm.z(), 7) + "] mm"},
-      {"1 sigma normal / offset",
-       Fmt(r.normal_sigma_deg, 3) + " deg / " + Fmt(r.offset_sigma_mm, 3) + " mm"},
+      {"plane (sensor frame)", "n = [" + FormatSignificant(r.normal.x(), 9) + ", " +
+                                   FormatSignificant(r.normal.y(), 9) + ", " +
+                                   FormatSignificant(r.normal.z(), 9) +
+                                   "], d = " + FormatSignificant(r.offset_mm, 9) + " mm"},
+      {"p0 (nearest the sensor origin)", "[" + FormatSignificant(r.point_mm.x(), 7) + ", " +
+                                             FormatSignificant(r.point_mm.y(), 7) + ", " +
+                                             FormatSignificant(r.point_mm.z(), 7) + "] mm"},
+      {"1 sigma normal / offset", FormatSignificant(r.normal_sigma_deg, 3) + " deg / " +
+                                      FormatSignificant(r.offset_sigma_mm, 3) + " mm"},
       {"RMS residual",
-       Fmt(r.rms_mm, 4) + " mm" +
-           (r.method == "heights" ? " (" + Fmt(r.rms_px, 3) + " px of peak row)" : "")},
+       FormatSignificant(r.rms_mm, 4) + " mm" +
+           (r.method == "heights" ? " (" + FormatSignificant(r.rms_px, 3) + " px of peak row)"
+                                  : "")},
       {"points", std::to_string(r.points)},
-      {"median ray-to-plane angle", Fmt(r.median_triangulation_angle_deg, 4) + " deg"},
-      {"leave-one-out: max normal / offset change", Fmt(r.loo_max_normal_change_deg, 3) +
-                                                        " deg / " +
-                                                        Fmt(r.loo_max_offset_change_mm, 3) + " mm"},
+      {"median ray-to-plane angle",
+       FormatSignificant(r.median_triangulation_angle_deg, 4) + " deg"},
+      {"leave-one-out: max normal / offset change",
+       FormatSignificant(r.loo_max_normal_change_deg, 3) + " deg / " +
+           FormatSignificant(r.loo_max_offset_change_mm, 3) + " mm"},
       {"converged", r.converged ? "yes (" + std::to_string(r.iterations) + " iterations)"
                                 : "NO: " + r.termination},
   });
   if (r.zero_distance_mm) {
-    page.AddParagraph(
-        "Distance from the sensor origin to the height-0 plate: " + Fmt(*r.zero_distance_mm, 8) +
-        " mm (1 sigma " + Fmt(r.zero_distance_sigma_mm, 3) +
-        " mm). Plate normal tilted from the given one towards the laser line by " +
-        Fmt(r.plate_tilt_deg, 4) + " deg (1 sigma " + Fmt(r.plate_tilt_sigma_deg, 3) + " deg).");
+    page.AddParagraph("Distance from the sensor origin to the height-0 plate: " +
+                      FormatSignificant(*r.zero_distance_mm, 8) + " mm (1 sigma " +
+                      FormatSignificant(r.zero_distance_sigma_mm, 3) +
+                      " mm). Plate normal tilted from the given one towards the laser line by " +
+                      FormatSignificant(r.plate_tilt_deg, 4) + " deg (1 sigma " +
+                      FormatSignificant(r.plate_tilt_sigma_deg, 3) + " deg).");
   }
   const bool heights = r.method == "heights";
   page.AddHeading(heights ? "Per height" : "Per image");
@@ -123,9 +122,12 @@ report::HtmlReport LaserPlaneReport(const LaserPlaneResult& r, const CameraModel
   std::vector<double> rms;
   for (const auto& it : r.items) {
     rows.push_back({it.name, it.used ? "yes" : "no",
-                    heights ? Fmt(it.height_mm) : Fmt(it.reprojection_rms_px, 3),
-                    std::to_string(it.points), Fmt(it.rms_mm, 4), Fmt(it.loo_normal_change_deg, 3),
-                    Fmt(it.loo_offset_change_mm, 3), Fmt(it.loo_max_displacement_mm, 3), it.note});
+                    heights ? FormatSignificant(it.height_mm, 4)
+                            : FormatSignificant(it.reprojection_rms_px, 3),
+                    std::to_string(it.points), FormatSignificant(it.rms_mm, 4),
+                    FormatSignificant(it.loo_normal_change_deg, 3),
+                    FormatSignificant(it.loo_offset_change_mm, 3),
+                    FormatSignificant(it.loo_max_displacement_mm, 3), it.note});
     if (it.used) {
       labels.push_back(std::filesystem::path(it.name).filename().string());
       rms.push_back(it.rms_mm);
@@ -182,10 +184,10 @@ LaserPlaneEntry LaserPlaneCellEntry(const LaserPlaneResult& result, EdgeProvenan
   entry.normal = result.normal;
   entry.point_mm = result.point_mm;
   entry.covariance = result.covariance;
-  provenance.residual_summary = result.method + ": rms " + Fmt(result.rms_mm, 3) + " mm over " +
-                                std::to_string(result.points) + " points, 1-sigma " +
-                                Fmt(result.normal_sigma_deg, 3) + " deg / " +
-                                Fmt(result.offset_sigma_mm, 3) + " mm";
+  provenance.residual_summary = result.method + ": rms " + FormatSignificant(result.rms_mm, 3) +
+                                " mm over " + std::to_string(result.points) + " points, 1-sigma " +
+                                FormatSignificant(result.normal_sigma_deg, 3) + " deg / " +
+                                FormatSignificant(result.offset_sigma_mm, 3) + " mm";
   entry.provenance = std::move(provenance);
   return entry;
 }

@@ -44,9 +44,8 @@ calib::CameraModel CalibrateCamera(const std::string& dir, const calib::BoardSpe
   if (const std::string reason = result.RejectionReason(); !reason.empty()) {
     throw InputError(glob + ": camera calibration rejected (" + reason + "): " + result.Summary());
   }
-  const bool refitted =
-      !result.warnings.empty() && result.warnings.front().rfind("OPENCV8 was refitted", 0) == 0;
-  *summary = (refitted ? result.warnings.front() + "; " : std::string()) + result.Summary();
+  *summary = (result.refitted_because.empty() ? std::string() : result.refitted_because + "; ") +
+             result.Summary();
   return *result.camera;
 }
 

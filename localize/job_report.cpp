@@ -7,19 +7,15 @@
 #include <string>
 #include <vector>
 
+#include "core/format.hpp"
 #include "core/html_scene3d.hpp"
 
 namespace lasercell::localize {
 namespace {
 
-std::string Fixed(double v, int digits = 2) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
 std::string Triple(const Eigen::Vector3d& v, int digits = 2) {
-  return Fixed(v.x(), digits) + ", " + Fixed(v.y(), digits) + ", " + Fixed(v.z(), digits);
+  return FormatFixed(v.x(), digits) + ", " + FormatFixed(v.y(), digits) + ", " +
+         FormatFixed(v.z(), digits);
 }
 
 // 1-sigma of the rotation (deg) and translation (mm) parts of a 6x6 covariance.
@@ -40,14 +36,14 @@ void AddInstances(const JobResult& result, report::HtmlReport* report) {
     rows.push_back({inst.frame, Triple(inst.target_from_part.translation()),
                     PoseToFileNotation(inst.target_from_part),
                     inst.covariance_valid ? SigmaText(inst.covariance) : "unavailable",
-                    Fixed(inst.candidate.verification.support, 3),
-                    inst.candidate.icp_run ? Fixed(inst.candidate.icp.rmse_mm, 3) : "-",
+                    FormatFixed(inst.candidate.verification.support, 3),
+                    inst.candidate.icp_run ? FormatFixed(inst.candidate.icp.rmse_mm, 3) : "-",
                     inst.graspable ? "yes" : "no: " + inst.not_graspable_reason,
                     inst.ambiguous ? inst.ambiguity_reason : "no"});
     for (const GraspPose& g : inst.grasps) {
       grasps.push_back({inst.frame + "." + g.name, Triple(g.target_from_grasp.translation()),
-                        PoseToFileNotation(g.target_from_grasp), Fixed(g.position_sigma_mm, 3),
-                        g.within_tolerance ? "yes" : "no"});
+                        PoseToFileNotation(g.target_from_grasp),
+                        FormatFixed(g.position_sigma_mm, 3), g.within_tolerance ? "yes" : "no"});
     }
   }
   if (rows.empty()) {
@@ -60,7 +56,7 @@ void AddInstances(const JobResult& result, report::HtmlReport* report) {
   if (!grasps.empty()) {
     report->AddHeading("Grasp frames (gripper_tcp targets)");
     report->AddTable({"grasp", "position (mm)", target + "_from_grasp", "position 1-sigma (mm)",
-                      "3-sigma within " + Fixed(result.job.grasp_tolerance_mm, 1) + " mm"},
+                      "3-sigma within " + FormatFixed(result.job.grasp_tolerance_mm, 1) + " mm"},
                      grasps);
   }
   for (const PartSearch& s : result.parts.searches) {
@@ -76,8 +72,8 @@ void AddModelsAndTimings(const JobResult& result, report::HtmlReport* report) {
   std::vector<std::vector<std::string>> rows;
   for (const PartModel& m : *result.models) {
     rows.push_back({m.part.name, m.part.model_path, m.source_format + " (" + m.source_unit + ")",
-                    std::to_string(m.ppf.points().size()), Fixed(m.ppf.diameter_mm(), 1),
-                    m.from_cache ? "cache" : "built", Fixed(m.load_ms, 1)});
+                    std::to_string(m.ppf.points().size()), FormatFixed(m.ppf.diameter_mm(), 1),
+                    m.from_cache ? "cache" : "built", FormatFixed(m.load_ms, 1)});
   }
   report->AddTable({"part", "model", "format", "PPF points", "diameter (mm)", "source", "ms"},
                    rows);

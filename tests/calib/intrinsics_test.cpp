@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <random>
 
+#include "calib/camera_calibration.hpp"
 #include "calib/cost_functions/reprojection.hpp"
 #include "calib/target_detection.hpp"
 #include "core/error.hpp"
@@ -433,10 +434,10 @@ TEST(CalibrateIntrinsics, ANonInvertibleModelIsRejectedWithTheReason) {
   ASSERT_EQ(r.RejectionReason(), "");
   EXPECT_EQ(r.imager_fraction_without_ray, 0.0);
   r.invertible = false;
-  r.warnings.push_back(
+  r.inversion_problem =
       "9 of 1089 grid pixels ...: the lens model folds over there, inside the "
-      "box of the observed corners, where the board pinned it down");
-  EXPECT_NE(r.RejectionReason().find("folds over"), std::string::npos);
+      "box of the observed corners, where the board pinned it down";
+  EXPECT_EQ(r.RejectionReason(), r.inversion_problem);
   EXPECT_NE(r.Summary().find("NOT INVERTIBLE WHERE OBSERVED"), std::string::npos) << r.Summary();
 }
 
@@ -489,6 +490,31 @@ TEST(CalibrateIntrinsicsRealData, MatchesOpenCvOnItsSampleImages) {
   std::printf("%s\n", r8.Summary().c_str());
   EXPECT_LT(r8.rms_px, r5.rms_px);
   EXPECT_TRUE(r8.uncertainty_px.allFinite());
+}
+
+// On seven of those views OPENCV8 folds over inside the observed corners: refused with the
+// inversion check's words, and the fallback refits OPENCV5, saying why.
+TEST(CalibrateIntrinsicsRealData, AFoldingOpencv8IsRefittedAsOpencv5) {
+  const BoardSpec board = ParseBoardSpec("chessboard:9x6:25");
+  std::vector<BoardView> views;
+  for (const BoardView& v : OpenCvSampleViews(board)) {
+    for (const char* keep : {"left01", "left03", "left04", "left05", "left06", "left07", "left08"})
+      if (v.name.rfind(keep, 0) == 0) views.push_back(v);
+  }
+  ASSERT_EQ(views.size(), 7u);
+  const IntrinsicsResult r8 = CalibrateIntrinsics(views, board, 640, 480);
+  EXPECT_FALSE(r8.invertible) << r8.Summary();
+  EXPECT_NE(r8.inversion_problem.find("inside the box of the observed corners"), std::string::npos)
+      << r8.inversion_problem;
+  EXPECT_EQ(r8.RejectionReason(), r8.inversion_problem);
+  const IntrinsicsResult r = CalibrateIntrinsicsFallingBackToOpencv5(views, board, 640, 480, {});
+  ASSERT_TRUE(r.camera);
+  EXPECT_EQ(r.camera->lensmodel(), "LENSMODEL_OPENCV5");
+  EXPECT_EQ(r.RejectionReason(), "");
+  EXPECT_EQ(r.refitted_because.rfind("OPENCV8 was refitted as OPENCV5: ", 0), 0u)
+      << r.refitted_because;
+  ASSERT_FALSE(r.warnings.empty());
+  EXPECT_EQ(r.warnings.front(), r.refitted_because);
 }
 
 TEST(CalibrateIntrinsicsRealData, SplinedModelOnTheOpenCvSamples) {
