@@ -203,7 +203,7 @@ IntrinsicsResult CalibrateIntrinsicsFallingBackToOpencv5(const std::vector<Board
                                                          int height_px,
                                                          const IntrinsicsOptions& options) {
   IntrinsicsResult result = CalibrateIntrinsics(views, board, width_px, height_px, options);
-  const bool folds = !result.invertible || result.imager_fraction_without_ray > 0;
+  const bool folds = !result.invertible || result.imager_folds;
   if (options.model != LensModelKind::kOpenCV8 || !folds || !result.camera || !result.converged ||
       !result.focal_observable) {
     return result;
@@ -220,9 +220,10 @@ IntrinsicsResult CalibrateIntrinsicsFallingBackToOpencv5(const std::vector<Board
   IntrinsicsOptions opencv5 = options;
   opencv5.model = LensModelKind::kOpenCV5;
   IntrinsicsResult refit = CalibrateIntrinsics(views, board, width_px, height_px, opencv5);
-  // Keep OPENCV8 unless OPENCV5 is usable and leaves fewer of the imager's pixels without a ray.
+  // Keep OPENCV8 unless OPENCV5 is usable and does not fold, or leaves fewer of the imager's
+  // pixels without a ray.
   const bool better = refit.RejectionReason().empty() &&
-                      (!result.invertible ||
+                      (!result.invertible || !refit.imager_folds ||
                        refit.imager_fraction_without_ray < result.imager_fraction_without_ray);
   if (!better) return result;
   refit.refitted_because = "OPENCV8 was refitted as OPENCV5: " + why.substr(0, why.find(';'));

@@ -49,10 +49,11 @@ std::string CornersCacheText(const BoardSpec& board, const std::vector<Calibrati
 
 /// CalibrateIntrinsics with the fallback an engineer applies by hand: when an OPENCV8 fit is
 /// otherwise usable but folds over somewhere in the imager (IntrinsicsResult::invertible or
-/// imager_fraction_without_ray: its rational terms cancel where the boards were and diverge
-/// beyond), OPENCV5, with fewer terms to cancel, is fitted too and kept, with a first warning
-/// saying so, when it is usable and leaves fewer pixels without a ray. Any other model, or an
-/// OPENCV8 fit that inverts everywhere or fails for another reason, is returned as fitted.
+/// imager_folds: its rational terms cancel where the boards were and diverge beyond), OPENCV5,
+/// with fewer terms to cancel, is fitted too and kept, with a first warning saying so
+/// (refitted_because), when it is usable and does not fold or leaves fewer pixels without a ray.
+/// Any other model, or an OPENCV8 fit that inverts everywhere or fails for another reason, is
+/// returned as fitted.
 IntrinsicsResult CalibrateIntrinsicsFallingBackToOpencv5(const std::vector<BoardView>& views,
                                                          const BoardSpec& board, int width_px,
                                                          int height_px,

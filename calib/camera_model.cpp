@@ -196,8 +196,11 @@ LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::Ali
     throw InputError("lens inversion check: tolerance_px " + FormatDouble(tolerance_px) +
                      " must be positive");
   }
+  // The imager's full extent: pixel centres are integers, so its edges lie half a pixel beyond
+  // the outer centres (the triangulator's lookup tables reach them too).
   const Eigen::AlignedBox2d imager(
-      Eigen::Vector2d(0, 0), Eigen::Vector2d(model.width_px() - 1.0, model.height_px() - 1.0));
+      Eigen::Vector2d(-0.5, -0.5),
+      Eigen::Vector2d(model.width_px() - 0.5, model.height_px() - 0.5));
   const Eigen::AlignedBox2d box = region.isEmpty() ? imager : region.intersection(imager);
   LensInversionCheck check;
   if (box.isEmpty()) return check;

@@ -94,14 +94,15 @@ struct LensInversionCheck {
   std::string Describe() const;
 };
 
-/// Checks the pixels of `region_px` (clipped to the imager; empty or absent: the whole imager).
+/// Checks the pixels of `region_px` (clipped to the imager, [-0.5, width - 0.5] x [-0.5,
+/// height - 0.5]: pixel centres are integers; empty or absent: the whole imager).
 /// Throws InputError when grid < 2 or tolerance_px is not positive.
 LensInversionCheck CheckLensInversion(const CameraModel& model,
-                                      const Eigen::AlignedBox2d& region_px = {}, int grid = 33,
+                                      const Eigen::AlignedBox2d& region_px = {}, int grid = 129,
                                       double tolerance_px = 0.01);
 
 /// CheckLensInversion over the whole imager, described ("" when the model inverts everywhere).
-std::string LensInversionProblem(const CameraModel& model, int grid = 33,
+std::string LensInversionProblem(const CameraModel& model, int grid = 129,
                                  double tolerance_px = 0.01);
 
 /// The .cameramodel text for a model (extrinsics rt_cam_ref = 0: the camera is its own reference),

@@ -142,6 +142,9 @@ struct IntrinsicsResult {
   /// Fraction of a grid over the whole imager without a ray (the model folds over beyond the
   /// observed corners: extrapolation, warned about, not refused).
   double imager_fraction_without_ray = 0;
+  /// The model folds over somewhere on the imager (pixels without a ray or rays in reversed
+  /// order: CheckLensInversion over the whole imager fails).
+  bool imager_folds = false;
   /// 1-sigma projection uncertainty (worst direction, px) over the image, rows = grid y.
   Eigen::MatrixXd uncertainty_px;
   double uncertainty_range_mm = 0;
@@ -156,8 +159,9 @@ struct IntrinsicsResult {
   std::string RejectionReason() const;
 };
 
-/// Sets result->invertible, imager_fraction_without_ray and their warnings from the solved camera
-/// and the inlier corners (nothing when no camera was solved). CalibrateIntrinsics calls it.
+/// Sets result->invertible, imager_fraction_without_ray, imager_folds and their warnings from the
+/// solved camera and the inlier corners (nothing when no camera was solved). CalibrateIntrinsics
+/// calls it.
 void AssessLensInversion(IntrinsicsResult* result);
 
 /// The name mrcal uses for the lens model of `options` ("LENSMODEL_OPENCV8",

@@ -23,8 +23,11 @@ std::string IntrinsicsResult::Summary() const {
   if (!converged) s += ", NOT CONVERGED";
   if (!focal_observable) s += ", FOCAL UNOBSERVABLE";
   if (!invertible) s += ", NOT INVERTIBLE WHERE OBSERVED";
-  if (imager_fraction_without_ray > 0)
+  if (imager_fraction_without_ray > 0) {
     s += ", no ray at " + FormatFixed(100 * imager_fraction_without_ray, 1) + " % of the imager";
+  } else if (imager_folds) {
+    s += ", folds over beyond the observed corners";
+  }
   if (!warnings.empty()) s += ", " + std::to_string(warnings.size()) + " warning(s)";
   return s;
 }
@@ -50,6 +53,7 @@ void AssessLensInversion(IntrinsicsResult* result) {
   const LensInversionCheck inside = CheckLensInversion(*result->camera, observed);
   const LensInversionCheck imager = CheckLensInversion(*result->camera);
   result->imager_fraction_without_ray = imager.FractionWithoutRay();
+  result->imager_folds = !imager.ok();
   if (!observed.isEmpty() && !inside.ok()) {
     result->invertible = false;
     result->inversion_problem = inside.Describe() +

@@ -217,3 +217,22 @@ TEST(CameraModel, TruncatedOrMangledTextIsAFileErrorNotACrash) {
 
 }  // namespace
 }  // namespace lasercell::calib
+
+// An OPENCV8 fit of a simulated cell (seed 103) whose fold is a sliver at the bottom of the
+// imager: a 33 x 33 grid (32 px steps) stepped over it and the triangulator then refused the
+// camera; the default grid (8 px steps) finds it.
+namespace lasercell::calib {
+TEST(CameraModel, LensInversionCheckFindsANarrowFold) {
+  const CameraModel m(
+      "LENSMODEL_OPENCV8",
+      {1131.9808287438336, 1131.9805639738659, 515.3141447602065, 508.58591037210203,
+       -8.243658142967805, 14.558034061666534, 0.00022565673964037192, -0.00014926363647190332,
+       10.242592125125572, -8.12071436120108, 13.478289513137199, 12.610510814922677},
+      1024, 1024);
+  EXPECT_TRUE(CheckLensInversion(m, {}, 33).ok());
+  const LensInversionCheck check = CheckLensInversion(m);
+  EXPECT_FALSE(check.ok());
+  EXPECT_GT(check.reversed_cells, 0) << check.Describe();
+  EXPECT_NE(LensInversionProblem(m), "");
+}
+}  // namespace lasercell::calib
