@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/io/file_util.hpp"
 #include "core/json_io.hpp"
 
@@ -208,15 +209,11 @@ IntrinsicsResult CalibrateIntrinsicsFallingBackToOpencv5(const std::vector<Board
       !result.focal_observable) {
     return result;
   }
-  std::string why = result.inversion_problem;
-  if (why.empty()) {
-    char buf[120];
-    std::snprintf(buf, sizeof buf,
-                  "it folds over beyond the observed corners (no ray at %.1f %% "
-                  "of the imager)",
-                  100.0 * result.imager_fraction_without_ray);
-    why = buf;
-  }
+  const std::string why = !result.inversion_problem.empty()
+                              ? result.inversion_problem
+                              : "it folds over beyond the observed corners (no ray at " +
+                                    FormatFixed(100.0 * result.imager_fraction_without_ray, 1) +
+                                    " % of the imager)";
   IntrinsicsOptions opencv5 = options;
   opencv5.model = LensModelKind::kOpenCV5;
   IntrinsicsResult refit = CalibrateIntrinsics(views, board, width_px, height_px, opencv5);

@@ -41,28 +41,29 @@ registration::PoseConstraints ConstraintsFor(const PartDefinition& part,
   return c;
 }
 
-// Splits the scene into the points within `distance` of the posed model's refinement points
-// (returned) and the rest (left in *scene).
-PointCloud SplitExplained(const registration::PpfModel& model,
-                          const Eigen::Isometry3d& scene_from_model, double distance,
-                          PointCloud* scene) {
+// Removes from *scene the points within `distance` of the posed model's refinement points; when
+// `explained` is given it receives them.
+void RemoveExplained(const registration::PpfModel& model, const Eigen::Isometry3d& scene_from_model,
+                     double distance, PointCloud* scene, PointCloud* explained) {
   std::vector<Eigen::Vector3d> posed;
   posed.reserve(model.refinement_points().size());
   const Eigen::Isometry3d scene_from_centered = scene_from_model * model.model_from_centered();
   for (const Eigen::Vector3d& p : model.refinement_points())
     posed.push_back(scene_from_centered * p);
   const registration::KdTree tree(std::move(posed));
-  std::vector<std::size_t> keep, explained;
+  std::vector<std::size_t> keep, near;
   keep.reserve(scene->size());
   registration::Neighbor nearest;
   const double d_sq = distance * distance;
   for (std::size_t i = 0; i < scene->size(); ++i) {
-    const bool near = tree.Nearest(scene->positions[i], &nearest) && nearest.distance_sq <= d_sq;
-    (near ? explained : keep).push_back(i);
+    if (tree.Nearest(scene->positions[i], &nearest) && nearest.distance_sq <= d_sq) {
+      near.push_back(i);
+    } else {
+      keep.push_back(i);
+    }
   }
-  PointCloud out = scene->Subset(explained);
+  if (explained != nullptr) *explained = scene->Subset(near);
   *scene = scene->Subset(keep);
-  return out;
 }
 
 // The laser plane's share of an instance's pose covariance, from the points it explains.
@@ -294,9 +295,10 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
             "is not determined by the scan";
       }
       inst.covariance_valid = IcpPoseCovariance(inst.candidate, &inst.covariance_terms.icp);
-      const PointCloud explained =
-          SplitExplained(model.ppf, inst.target_from_part,
-                         options.explained_distance_relative * model.ppf.diameter_mm(), &remaining);
+      PointCloud explained;
+      RemoveExplained(model.ppf, inst.target_from_part,
+                      options.explained_distance_relative * model.ppf.diameter_mm(), &remaining,
+                      options.laser_plane ? &explained : nullptr);
       if (options.placement_covariance) {
         inst.covariance_terms.placement = *options.placement_covariance;
       }
