@@ -1,5 +1,6 @@
 #include "datasets/table1_bench.hpp"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -10,6 +11,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/json_io.hpp"
@@ -26,6 +28,9 @@
 namespace lasercell::datasets {
 namespace {
 
+// The chi-square quantile with 3 degrees of freedom at P = 0.9973 (the Gaussian's 3 sigma).
+constexpr double kChiSquare3Dof3Sigma = 14.156;
+
 struct Trial {
   int cell = 0;
   std::string seat;
@@ -37,6 +42,12 @@ struct Trial {
   std::string reason;
   Eigen::Vector3d error = Eigen::Vector3d::Zero();  // found - true hole centre, handling_base
   Eigen::Vector3d sigma = Eigen::Vector3d::Zero();  // reported 1-sigma of the hole centre
+  // The hole centre's reported covariance (mm^2, handling_base) and its terms; the squared
+  // Mahalanobis distance of the error under it (chi-square with 3 dof if the covariance is right).
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d icp_term = Eigen::Matrix3d::Zero(), placement_term = Eigen::Matrix3d::Zero(),
+                  laser_plane_term = Eigen::Matrix3d::Zero();
+  double mahalanobis_sq = NAN;
   double localization_ms = 0, triangulation_ms = 0, run_ms = 0;
 };
 
@@ -126,6 +137,17 @@ Trial RunTrial(localize::JobRunner& runner, const std::string& sim, const std::s
     const Eigen::Matrix3d cov =
         PointCovariance(inst.target_from_part, inst.covariance, hole_in_part);
     t.sigma = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+    t.covariance = cov;
+    const auto term = [&](const Matrix6d& c) {
+      return PointCovariance(inst.target_from_part, c, hole_in_part);
+    };
+    t.icp_term = term(inst.covariance_terms.icp);
+    t.placement_term = term(inst.covariance_terms.placement);
+    t.laser_plane_term = term(inst.covariance_terms.laser_plane);
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(cov);
+    if (ldlt.info() == Eigen::Success && ldlt.isPositive()) {
+      t.mahalanobis_sq = t.error.dot(ldlt.solve(t.error));
+    }
   }
   return t;
 }
@@ -162,6 +184,12 @@ nlohmann::json Summary(const Table1Options& options, const std::vector<Trial>& t
                     {"reason", t.reason},
                     {"error_mm", json::Vector(t.error)},
                     {"sigma_mm", json::Vector(t.sigma)},
+                    {"covariance_mm2",
+                     {{"total", json::Rows(t.covariance)},
+                      {"icp", json::Rows(t.icp_term)},
+                      {"placement", json::Rows(t.placement_term)},
+                      {"laser_plane", json::Rows(t.laser_plane_term)}}},
+                    {"mahalanobis_sq", json::FiniteOrNull(t.mahalanobis_sq)},
                     {"localization_ms", t.localization_ms}});
     if (!t.found) continue;
     ppf.push_back(t.ppf_error_mm);
@@ -219,6 +247,44 @@ nlohmann::json Summary(const Table1Options& options, const std::vector<Trial>& t
           {"median_run_ms", Median(run)},
           {"job_overhead_fraction", Median(overhead) / (median_tri + median_loc)},
           {"trials", rows}};
+}
+
+// The reported covariance against the error over the found trials, added to `summary`:
+// beyond_3_sigma_ellipsoid (squared Mahalanobis distance above the chi-square quantile at
+// 99.73 %, 3 dof) and the count a correct Gaussian covariance would give, mahalanobis_sq_mean
+// (3 for a correct covariance) and median_sigma_mm (the median reported 1-sigma of the hole
+// centre per axis of handling_base, mm: in all and per term).
+void AddUncertaintySummary(const std::vector<Trial>& trials, nlohmann::json* summary) {
+  int tested = 0, beyond = 0;
+  double sum = 0.0;
+  const char* names[4] = {"total", "icp", "placement", "laser_plane"};
+  std::vector<double> sigma[4][3];
+  for (const Trial& t : trials) {
+    if (!t.found || !std::isfinite(t.mahalanobis_sq)) continue;
+    ++tested;
+    beyond += t.mahalanobis_sq > kChiSquare3Dof3Sigma ? 1 : 0;
+    sum += t.mahalanobis_sq;
+    const Eigen::Matrix3d* terms[4] = {&t.covariance, &t.icp_term, &t.placement_term,
+                                       &t.laser_plane_term};
+    for (int term = 0; term < 4; ++term) {
+      for (int k = 0; k < 3; ++k) {
+        sigma[term][k].push_back(std::sqrt(std::max(0.0, (*terms[term])(k, k))));
+      }
+    }
+  }
+  nlohmann::json medians = nlohmann::json::object();
+  for (int term = 0; term < 4; ++term) {
+    nlohmann::json axes = nlohmann::json::array();
+    for (int k = 0; k < 3; ++k) {
+      axes.push_back(json::FiniteOrNull(sigma[term][k].empty() ? NAN : Median(sigma[term][k])));
+    }
+    medians[names[term]] = axes;
+  }
+  (*summary)["beyond_3_sigma_ellipsoid"] = beyond;
+  (*summary)["beyond_3_sigma_ellipsoid_expected"] =
+      (1.0 - std::erf(3.0 / std::sqrt(2.0))) * static_cast<double>(tested);
+  (*summary)["mahalanobis_sq_mean"] = json::FiniteOrNull(tested > 0 ? sum / tested : NAN);
+  (*summary)["median_sigma_mm"] = medians;
 }
 
 // One simulated cell: its captures and `seats` placements, calibrated from the captures alone,
@@ -295,7 +361,9 @@ nlohmann::json RunTable1Bench(const Table1Options& options, const ProgressCallba
         RunCell(options, cell, options.placements / options.cells, progress, &cals);
     trials.insert(trials.end(), t.begin(), t.end());
   }
-  return Summary(options, trials, cals);
+  nlohmann::json summary = Summary(options, trials, cals);
+  AddUncertaintySummary(trials, &summary);
+  return summary;
 }
 
 std::string Table1Markdown(const nlohmann::json& j) {
@@ -373,7 +441,36 @@ std::string Table1Markdown(const nlohmann::json& j) {
       j.at("beyond_3_sigma").get<int>(), j.at("found").get<int>(), num("beyond_3_sigma_expected"),
       threads.c_str(), num("median_localization_ms"), num("median_triangulation_ms"),
       num("median_run_ms"), 100.0 * num("job_overhead_fraction"));
-  return md + buf;
+  md += buf;
+  if (j.contains("beyond_3_sigma_ellipsoid")) {
+    std::snprintf(buf, sizeof buf,
+                  "\nOutside the reported covariance's 3-sigma ellipsoid (squared Mahalanobis "
+                  "distance > 14.156, chi-square with 3 dof): %d placements (a correct "
+                  "Gaussian covariance: %.1f).\n",
+                  j.at("beyond_3_sigma_ellipsoid").get<int>(),
+                  num("beyond_3_sigma_ellipsoid_expected"));
+    md += buf;
+  }
+  if (j.contains("median_sigma_mm") && j.contains("mahalanobis_sq_mean")) {
+    const nlohmann::json& m = j.at("median_sigma_mm");
+    const auto axes = [&](const char* term) {
+      std::string out;
+      for (int k = 0; k < 3; ++k) {
+        const nlohmann::json& v = m.at(term).at(k);
+        out += (k ? " / " : "") + (v.is_number() ? FormatFixed(v.get<double>(), 4) : "-");
+      }
+      return out;
+    };
+    md += "\nMedian reported 1-sigma of the hole centre along handling_base x / y / z (mm): " +
+          axes("total") + " in all; ICP " + axes("icp") + ", calibrated placement " +
+          axes("placement") + ", laser plane " + axes("laser_plane") +
+          ". Mean squared Mahalanobis distance of the error: " +
+          (j.at("mahalanobis_sq_mean").is_number()
+               ? FormatFixed(j.at("mahalanobis_sq_mean").get<double>(), 2)
+               : std::string("-")) +
+          " (3 for a correct covariance).\n";
+  }
+  return md;
 }
 
 }  // namespace lasercell::datasets

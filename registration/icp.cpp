@@ -2,9 +2,12 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -242,10 +245,38 @@ double InfluenceSlope(RobustKernel kernel, double r, double sigma) {
 // Sums of the sandwich estimator (file comment of icp.hpp) about the matched centroid c.
 struct Sandwich {
   Matrix6d a = Matrix6d::Zero();  // sum J^T psi'(r) J: the estimator's Hessian
-  Matrix6d b = Matrix6d::Zero();  // sum J^T psi(r) psi(r)^T J: the scatter of its gradient
+  Matrix6d b = Matrix6d::Zero();  // sum J^T psi psi^T J over independent residuals (no blocks)
   double weighted_sq = 0.0;       // sum w r^2
   std::size_t residuals = 0;      // scalar residuals m
+  // With blocks: per group its gradient sum g = sum J^T psi and its share of a, A_g.
+  std::map<std::uint64_t, std::pair<Vector6d, Matrix6d>> groups;  // ordered: no hash order
 };
+
+// The group of source point `x`: its cube of side `block` (covariance_block_mm), packed into
+// one key (21 bits per axis, cube indices offset to stay positive for |x| < 1e6 blocks).
+std::uint64_t BlockKey(const Eigen::Vector3d& x, double block) {
+  const auto axis = [&](double v) {
+    const auto k = static_cast<std::int64_t>(std::floor(v / block)) + (std::int64_t{1} << 20);
+    return static_cast<std::uint64_t>(std::clamp<std::int64_t>(k, 0, (1 << 21) - 1));
+  };
+  return (axis(x.x()) << 42) | (axis(x.y()) << 21) | axis(x.z());
+}
+
+// Adds one source point's Hessian share `a_i` and gradient `g_i` = J^T psi.
+void AddResidual(const IcpProblem& p, std::size_t i, const Matrix6d& a_i, const Vector6d& g_i,
+                 Sandwich* s) {
+  s->a.noalias() += a_i;
+  const double block = p.options.covariance_block_mm;
+  if (block <= 0.0) {
+    s->b.noalias() += g_i * g_i.transpose();
+    return;
+  }
+  auto& group =
+      s->groups.try_emplace(BlockKey(p.source[i], block), Vector6d::Zero(), Matrix6d::Zero())
+          .first->second;
+  group.first += g_i;
+  group.second += a_i;
+}
 
 Sandwich AccumulateSandwich(const IcpProblem& p, double sigma, const Eigen::Vector3d& c) {
   const auto& target_points = p.target.points();
@@ -261,8 +292,7 @@ Sandwich AccumulateSandwich(const IcpProblem& p, double sigma, const Eigen::Vect
       const Eigen::Vector3d& nq = p.target_normals[m.target];
       Vector6d j;
       j << a.cross(nq), nq;
-      s.a.noalias() += slope * j * j.transpose();
-      s.b.noalias() += (w * m.residual) * (w * m.residual) * j * j.transpose();
+      AddResidual(p, i, slope * j * j.transpose(), (w * m.residual) * j, &s);
       s.weighted_sq += w * m.residual * m.residual;
       s.residuals += 1;
     } else {
@@ -273,14 +303,32 @@ Sandwich AccumulateSandwich(const IcpProblem& p, double sigma, const Eigen::Vect
       j << -Skew(a), Eigen::Matrix3d::Identity();
       Eigen::Matrix3d d_psi = w * Eigen::Matrix3d::Identity();
       if (e.squaredNorm() > 0.0) d_psi += (slope - w) * e * e.transpose() / e.squaredNorm();
-      s.a.noalias() += j.transpose() * d_psi * j;
-      const Eigen::Matrix<double, 6, 1> g = j.transpose() * (w * e);
-      s.b.noalias() += g * g.transpose();
+      AddResidual(p, i, j.transpose() * d_psi * j, j.transpose() * (w * e), &s);
       s.weighted_sq += w * e.squaredNorm();
       s.residuals += 3;
     }
   }
   return s;
+}
+
+// The grouped gradient scatter with each group's gradient taken as if the group had been left
+// out of the fit (CR3, the cluster jackknife; Bell & McCaffrey 2002): the fit absorbs part of a
+// group's shared error into the pose, so its residuals understate that error, the more the
+// larger the group's leverage A_g A^+. By the push-through identity the leave-one-group-out
+// gradient is (I - A_g A^+)^-1 g. Times (G - 1) / G.
+Matrix6d JackknifeScatter(const Sandwich& s, const Matrix6d& a_plus) {
+  Matrix6d b = Matrix6d::Zero();
+  for (const auto& [key, group] : s.groups) {
+    const Matrix6d leverage = group.second * a_plus;
+    const Eigen::PartialPivLU<Matrix6d> lu(Matrix6d::Identity() - leverage);
+    Vector6d g = lu.solve(group.first);
+    // A group that alone determines a direction (leverage ~1) cannot be left out: keep its
+    // plain gradient there.
+    if (!g.allFinite() || std::abs(lu.determinant()) < 1e-6) g = group.first;
+    b.noalias() += g * g.transpose();
+  }
+  const double n = static_cast<double>(s.groups.size());
+  return b * ((n - 1.0) / n);
 }
 
 // Pose covariance at the returned pose (file comment of icp.hpp), from the matches ReportFit
@@ -293,29 +341,32 @@ void EstimateCovariance(const IcpProblem& p, IcpResult& result) {
   // target origin at the end.
   const Eigen::Vector3d c = MatchedCentroid(p);
   const Sandwich s = AccumulateSandwich(p, result.kernel_scale_mm, c);
-  if (s.residuals <= 6) return;
+  const bool blocks = p.options.covariance_block_mm > 0.0;
+  if (s.residuals <= 6 || (blocks && s.groups.size() <= 6)) return;
   const double dof = static_cast<double>(s.residuals - 6);
   result.residual_sigma_mm = std::sqrt(s.weighted_sq / dof);
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(s.a);
   const double max_eig = eig.eigenvalues().maxCoeff();
   if (!(max_eig > 0.0)) return;
-  // A^-1 B A^-1 in A's eigenbasis, times the HC1 small-sample factor m / (m - 6) (MacKinnon &
-  // White 1985); directions A does not determine get only the placeholder variance.
   const Matrix6d& v = eig.eigenvectors();
   const Vector6d lambda = eig.eigenvalues();
-  const double hc1 = static_cast<double>(s.residuals) / dof;
-  const Matrix6d scatter = v.transpose() * s.b * v;
-  Matrix6d middle = Matrix6d::Zero();
+  Vector6d inverse = Vector6d::Zero();  // A^+ in its eigenbasis
   bool observable = true;
   for (int k = 0; k < 6; ++k) {
-    if (!(lambda(k) > 1e-9 * max_eig)) {
-      middle(k, k) = kIcpUnobservableVariance;
+    if (lambda(k) > 1e-9 * max_eig) {
+      inverse(k) = 1.0 / lambda(k);
+    } else {
       observable = false;
-      continue;
     }
-    for (int l = 0; l < 6; ++l) {
-      if (lambda(l) > 1e-9 * max_eig) middle(k, l) = hc1 * scatter(k, l) / (lambda(k) * lambda(l));
-    }
+  }
+  // A^+ B A^+, B with the small-sample factor m / (m - 6) (HC1, MacKinnon & White 1985) for
+  // independent residuals or the jackknife over groups; directions A does not determine get
+  // only the placeholder variance.
+  const Matrix6d b = blocks ? JackknifeScatter(s, v * inverse.asDiagonal() * v.transpose())
+                            : Matrix6d(s.b * (static_cast<double>(s.residuals) / dof));
+  Matrix6d middle = inverse.asDiagonal() * (v.transpose() * b * v) * inverse.asDiagonal();
+  for (int k = 0; k < 6; ++k) {
+    if (inverse(k) == 0.0) middle(k, k) = kIcpUnobservableVariance;
   }
   const Matrix6d about_c = v * middle * v.transpose();
   // A perturbation about c, p -> c + Exp(w)(p - c) + u, is Exp([w; u + c x w]) about the
@@ -345,6 +396,10 @@ void IcpOptions::Check() const {
   positive(rotation_tolerance_rad, "rotation_tolerance_rad");
   if (max_iterations < 1) throw OptionError("IcpOptions.max_iterations must be >= 1");
   if (min_correspondences < 3) throw OptionError("IcpOptions.min_correspondences must be >= 3");
+  if (!(covariance_block_mm >= 0.0) || !std::isfinite(covariance_block_mm)) {
+    throw OptionError("IcpOptions.covariance_block_mm = " + std::to_string(covariance_block_mm) +
+                      ": must be >= 0 mm (0 = every residual independent)");
+  }
 }
 
 const char* ToString(IcpTermination t) {

@@ -21,13 +21,24 @@
 // sight: projected on the surface normal it scales with cos(incidence), so faces seen at
 // different angles have different residual variances, and one pooled s^2 gave some directions
 // a sigma 1.5x too small and others one 2x too large (tests/registration/icp_covariance_test.cpp).
-// Assumptions: first order in xi; independent residuals of zero mean at the true pose. Not in
-// the covariance: spatially correlated scan errors (the ICP source is thinned, which weakens but
-// does not remove them), and the bias of point-to-plane against a point-sampled curved model
-// (curvature x spacing^2 / 2 per residual): both make it optimistic. Point-to-point is far
-// more so: its tangential residuals come from the model's sampling, not from noise, and its
-// slow convergence stops short; in the point-to-plane coverage test's setting its sigmas were
-// 2-6x too small. Use point-to-plane where the covariance matters.
+// Assumptions: first order in xi; independent residuals of zero mean at the true pose.
+// Point-to-point is far more optimistic than point-to-plane: its tangential residuals come from
+// the model's sampling, not from noise, and its slow convergence stops short; in the
+// point-to-plane coverage test's setting its sigmas were 2-6x too small. Use point-to-plane
+// where the covariance matters.
+// Spatially correlated errors (a model's facets against the real surface, a scan's ripple, the
+// bias of point-to-plane against a point-sampled curved model: curvature x spacing^2 / 2 per
+// residual) break the independence and make the estimate optimistic: neighbouring residuals
+// push the pose the same way. With covariance_block_mm > 0 the source points are grouped into
+// cubes of that side and B sums each group's gradient before the outer product (the
+// cluster-robust sandwich, Liang & Zeger 1986):
+//   B = (G - 1) / G x sum_g gt_g gt_g^T,  gt_g = (I - A_g A^+)^-1 sum_{i in g} J_i^T psi_i,
+// for G groups, A_g the group's share of A: each group's gradient as if the group had been
+// left out of the fit (CR3, the cluster jackknife; Bell & McCaffrey 2002), since the fit
+// absorbs part of a group's shared error into the pose and its residuals understate it.
+// Errors correlated over less than a block are then counted at their real weight; errors
+// shared by the whole part (a calibration's) still are not: they are other terms of a pose's
+// covariance. At least 7 groups are needed, else covariance_valid is false.
 // Unobservable directions (a plane, a cylinder, a sphere: eigenvalues of A below 1e-9 of the
 // largest) get the variance kIcpUnobservableVariance instead of an inverse, and
 // covariance_valid is false; so do fits with m <= 6 scalar residuals. The matrix stays finite.
@@ -76,7 +87,10 @@ struct IcpOptions {
   double translation_tolerance_mm = 1e-3;  ///< Converged when the update moves less than this...
   double rotation_tolerance_rad = 1e-5;    ///< ... and turns less than this.
   std::size_t min_correspondences = 6;     ///< Fewer: terminate (>= 3).
-  int threads = 1;                         ///< 0 = all cores, 1 = calling thread.
+  /// Side of the cubes (source frame) whose residuals the covariance treats as one correlated
+  /// group, mm; 0 = every residual independent. >= 0. See the file comment.
+  double covariance_block_mm = 0.0;
+  int threads = 1;  ///< 0 = all cores, 1 = calling thread.
   /// Throws OptionError naming the field when a value is out of range.
   void Check() const;
 };
@@ -102,8 +116,8 @@ struct IcpResult {
   /// see the file comment for the estimator. Finite; meaningful only when covariance_valid.
   Matrix6d covariance = Matrix6d::Identity() * kIcpUnobservableVariance;
   /// False when the covariance could not be estimated: unobservable directions at the final
-  /// pose (they carry kIcpUnobservableVariance), at most 6 scalar residuals, or too few
-  /// correspondences.
+  /// pose (they carry kIcpUnobservableVariance), at most 6 scalar residuals or groups, or too
+  /// few correspondences.
   bool covariance_valid = false;
   /// Pooled residual scale s = sqrt(sum w r^2 / (m - 6)), mm (for information; the covariance
   /// uses each residual's own scatter, see the file comment).

@@ -180,6 +180,9 @@ LocalizeOptions DerivedOptions(const LocalizeOptions& options_in, const PpfModel
     options.icp.max_correspondence_distance_mm = options.icp_max_distance_relative * diameter;
     options.verification.overlap_band_mm = options.icp.max_correspondence_distance_mm;
   }
+  if (options.icp_covariance_block_relative > 0.0) {
+    options.icp.covariance_block_mm = options.icp_covariance_block_relative * diameter;
+  }
   options.matching.threads = options.normals.threads = options.icp.threads = options.threads;
   options.normals.viewpoint = options.viewpoint;
   return options;
@@ -500,6 +503,7 @@ void LocalizeOptions::Check() const {
   }
   non_negative(support_distance_relative, "support_distance_relative");
   non_negative(icp_max_distance_relative, "icp_max_distance_relative");
+  non_negative(icp_covariance_block_relative, "icp_covariance_block_relative");
   non_negative(verification_cell_relative, "verification_cell_relative");
   if (!(refined_support_distance_relative > 0.0) ||
       !std::isfinite(refined_support_distance_relative)) {

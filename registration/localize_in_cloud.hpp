@@ -92,6 +92,13 @@ struct LocalizeOptions {
   IcpOptions icp;
   double icp_max_distance_relative =
       0.03;  ///< -> icp.max_correspondence_distance_mm and overlap band.
+  /// -> icp.covariance_block_mm (0: keep the absolute value). Neighbouring scene points share
+  /// local errors (the model's facets against the real surface, a scan's ripple), so the pose
+  /// covariance groups their residuals in cubes of this side (icp.hpp, cluster-robust
+  /// sandwich): about 3x the length over which errors are shared, yet small enough that a part
+  /// leaves dozens of groups (a 0.05 x diameter grid over a part seen from one side gives
+  /// ~50-100). >= 0.
+  double icp_covariance_block_relative = 0.05;
   /// ICP rounds; each round after the first re-selects the overlapping scene points around the
   /// refined pose (clutter selected by a coarse pose drops out). In [1, 10].
   int icp_rounds = 2;

@@ -198,8 +198,10 @@ void ReadIcp(yaml::Fields& r, LocalizeOptions* o) {
   s.Read("translation_tolerance_mm", &i.translation_tolerance_mm);
   s.Read("rotation_tolerance_rad", &i.rotation_tolerance_rad);
   s.Read("min_correspondences", &i.min_correspondences);
+  s.Read("covariance_block_mm", &i.covariance_block_mm);
   s.Done();
   r.Read("icp_max_distance_relative", &o->icp_max_distance_relative);
+  r.Read("icp_covariance_block_relative", &o->icp_covariance_block_relative);
   r.Read("icp_rounds", &o->icp_rounds);
   r.Read("max_icp_source_points", &o->max_icp_source_points);
   r.Read("extra_refined_candidates", &o->extra_refined_candidates);

@@ -84,6 +84,29 @@ TEST(Table1Bench, MarkdownListsRefusedCalibrationsAndCountsOnlyLocalizedPlacemen
   const std::string none = Table1Markdown(Result(false));
   EXPECT_NE(none.find("Found 0 of 0 placements localized"), std::string::npos) << none;
   EXPECT_EQ(none.find("the first accepted"), std::string::npos) << none;
+  EXPECT_EQ(none.find("3-sigma ellipsoid"), std::string::npos) << "an older result has no count";
+}
+
+TEST(Table1Bench, MarkdownGivesTheEllipsoidCountBesideItsExpectation) {
+  nlohmann::json j = Result(true);
+  j["beyond_3_sigma_ellipsoid"] = 3;
+  j["beyond_3_sigma_ellipsoid_expected"] = 0.0054;
+  j["mahalanobis_sq_mean"] = 3.75;
+  j["median_sigma_mm"] = {{"total", {0.05, 0.045, nullptr}},
+                          {"icp", {0.04, 0.03, 0.01}},
+                          {"placement", {0.027, 0.028, 0.028}},
+                          {"laser_plane", {0.007, 0.001, 0.009}}};
+  const std::string md = Table1Markdown(j);
+  EXPECT_NE(md.find("x / y / z (mm): 0.0500 / 0.0450 / - in all; ICP 0.0400 / 0.0300 / 0.0100"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("Mean squared Mahalanobis distance of the error: 3.75 (3 for a correct"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("3-sigma ellipsoid (squared Mahalanobis distance > 14.156, chi-square with 3 "
+                    "dof): 3 placements (a correct Gaussian covariance: 0.0)"),
+            std::string::npos)
+      << md;
 }
 
 }  // namespace
