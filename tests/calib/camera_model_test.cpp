@@ -235,4 +235,24 @@ TEST(CameraModel, LensInversionCheckFindsANarrowFold) {
   EXPECT_GT(check.reversed_cells, 0) << check.Describe();
   EXPECT_NE(LensInversionProblem(m), "");
 }
+
+// A ray that points sideways or backwards is no ray for a triangulator that looks ahead, even
+// when it projects back exactly. A stereographic lens (r = 2 f tan(theta / 2)) with f = 100 px
+// on a 1000 px imager sees theta = 2 atan(499.5 / 200) = 136 deg at its edge midpoints: the
+// outer ring of pixels (beyond theta = 90 deg, r = 200 px) has rays with z <= 0, the centre
+// has none.
+TEST(CameraModel, LensInversionCheckRefusesRaysThatPointBackwards) {
+  const CameraModel m("LENSMODEL_STEREOGRAPHIC", {100.0, 100.0, 499.5, 499.5}, 1000, 1000);
+  const Eigen::Vector3d edge = m.Unproject({0.0, 499.5});
+  ASSERT_LT(edge.z(), 0.0) << "the test's lens should see behind itself at the edge";
+  const LensInversionCheck whole = CheckLensInversion(m, {}, 33);
+  EXPECT_FALSE(whole.ok());
+  EXPECT_GT(whole.without_ray, 0) << whole.Describe();
+  EXPECT_LT(whole.without_ray, whole.pixels) << whole.Describe();
+  EXPECT_NE(whole.Describe().find("no ray"), std::string::npos) << whole.Describe();
+  // Within 150 px of the centre (theta <= 74 deg) every ray looks ahead.
+  const LensInversionCheck centre = CheckLensInversion(
+      m, Eigen::AlignedBox2d(Eigen::Vector2d(400, 400), Eigen::Vector2d(600, 600)), 33);
+  EXPECT_TRUE(centre.ok()) << centre.Describe();
+}
 }  // namespace lasercell::calib
