@@ -31,6 +31,9 @@ namespace {
 // The chi-square quantile with 3 degrees of freedom at P = 0.9973 (the Gaussian's 3 sigma).
 constexpr double kChiSquare3Dof3Sigma = 14.156;
 
+// P(|z| <= 3) of a standard normal: the share a correct sigma keeps within 3 sigma.
+double Within3Sigma() { return std::erf(3.0 / std::sqrt(2.0)); }
+
 struct Trial {
   int cell = 0;
   std::string seat;
@@ -41,14 +44,16 @@ struct Trial {
   bool graspable = false;
   std::string reason;
   Eigen::Vector3d error = Eigen::Vector3d::Zero();  // found - true hole centre, handling_base
-  Eigen::Vector3d sigma = Eigen::Vector3d::Zero();  // reported 1-sigma of the hole centre
-  // The hole centre's reported covariance (mm^2, handling_base) and its terms; the squared
-  // Mahalanobis distance of the error under it (chi-square with 3 dof if the covariance is right).
+  // The hole centre's reported covariance (mm^2, handling_base; zero when the pose has none)
+  // and its terms; the squared Mahalanobis distance of the error under it (chi-square with 3
+  // dof if the covariance is right).
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d icp_term = Eigen::Matrix3d::Zero(), placement_term = Eigen::Matrix3d::Zero(),
                   laser_plane_term = Eigen::Matrix3d::Zero();
   double mahalanobis_sq = NAN;
   double localization_ms = 0, triangulation_ms = 0, run_ms = 0;
+  // The reported 1-sigma of the hole centre per axis.
+  Eigen::Vector3d Sigma() const { return covariance.diagonal().cwiseMax(0.0).cwiseSqrt(); }
 };
 
 // What one cell's calibration gave: the calibration, or why it was refused.
@@ -136,7 +141,6 @@ Trial RunTrial(localize::JobRunner& runner, const std::string& sim, const std::s
   if (inst.covariance_valid) {
     const Eigen::Matrix3d cov =
         PointCovariance(inst.target_from_part, inst.covariance, hole_in_part);
-    t.sigma = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
     t.covariance = cov;
     const auto term = [&](const Matrix6d& c) {
       return PointCovariance(inst.target_from_part, c, hole_in_part);
@@ -183,7 +187,7 @@ nlohmann::json Summary(const Table1Options& options, const std::vector<Trial>& t
                     {"graspable", t.graspable},
                     {"reason", t.reason},
                     {"error_mm", json::Vector(t.error)},
-                    {"sigma_mm", json::Vector(t.sigma)},
+                    {"sigma_mm", json::Vector(t.Sigma())},
                     {"covariance_mm2",
                      {{"total", json::Rows(t.covariance)},
                       {"icp", json::Rows(t.icp_term)},
@@ -198,11 +202,12 @@ nlohmann::json Summary(const Table1Options& options, const std::vector<Trial>& t
     within += t.icp_error_mm <= 10.0 ? 1 : 0;
     graspable += t.graspable ? 1 : 0;
     bool out3 = false;
+    const Eigen::Vector3d sigma = t.Sigma();
     for (int k = 0; k < 3; ++k) {
-      if (!(t.sigma[k] > 0)) continue;
+      if (!(sigma[k] > 0)) continue;
       ++axes;
-      covered += std::abs(t.error[k]) <= t.sigma[k] ? 1 : 0;
-      out3 |= std::abs(t.error[k]) > 3.0 * t.sigma[k];
+      covered += std::abs(t.error[k]) <= sigma[k] ? 1 : 0;
+      out3 |= std::abs(t.error[k]) > 3.0 * sigma[k];
     }
     beyond += out3 ? 1 : 0;
   }
@@ -241,7 +246,7 @@ nlohmann::json Summary(const Table1Options& options, const std::vector<Trial>& t
           {"beyond_3_sigma", beyond},
           // P(some |z_k| > 3 of three independent standard normals) x found.
           {"beyond_3_sigma_expected",
-           (1.0 - std::pow(std::erf(3.0 / std::sqrt(2.0)), 3)) * static_cast<double>(icp.size())},
+           (1.0 - std::pow(Within3Sigma(), 3)) * static_cast<double>(icp.size())},
           {"median_localization_ms", median_loc},
           {"median_triangulation_ms", median_tri},
           {"median_run_ms", Median(run)},
@@ -282,7 +287,7 @@ void AddUncertaintySummary(const std::vector<Trial>& trials, nlohmann::json* sum
   }
   (*summary)["beyond_3_sigma_ellipsoid"] = beyond;
   (*summary)["beyond_3_sigma_ellipsoid_expected"] =
-      (1.0 - std::erf(3.0 / std::sqrt(2.0))) * static_cast<double>(tested);
+      (1.0 - Within3Sigma()) * static_cast<double>(tested);
   (*summary)["mahalanobis_sq_mean"] = json::FiniteOrNull(tested > 0 ? sum / tested : NAN);
   (*summary)["median_sigma_mm"] = medians;
 }
@@ -445,9 +450,9 @@ std::string Table1Markdown(const nlohmann::json& j) {
   if (j.contains("beyond_3_sigma_ellipsoid")) {
     std::snprintf(buf, sizeof buf,
                   "\nOutside the reported covariance's 3-sigma ellipsoid (squared Mahalanobis "
-                  "distance > 14.156, chi-square with 3 dof): %d placements (a correct "
+                  "distance > %.3f, chi-square with 3 dof): %d placements (a correct "
                   "Gaussian covariance: %.1f).\n",
-                  j.at("beyond_3_sigma_ellipsoid").get<int>(),
+                  kChiSquare3Dof3Sigma, j.at("beyond_3_sigma_ellipsoid").get<int>(),
                   num("beyond_3_sigma_ellipsoid_expected"));
     md += buf;
   }
