@@ -85,13 +85,7 @@ RobotPoses LoadHandEyePoses(const HandEyePoseSource& source, const FrameGraph& g
       (source.format == "auto" && text.find("lasercell.hand_eye_images") != std::string::npos)) {
     return PosesFromRecord(text, source, graph, cell);
   }
-  const std::string format = source.format == "auto"
-                                 ? (text.find("format:") != std::string::npos ? "yaml" : "kuka")
-                                 : source.format;
-  if (format == "kuka") return ParseKukaPoses(text, source.path);
-  if (format == "yaml") return ParseYamlPoses(text, source.path);
-  throw OptionError("--pose-format must be auto, kuka, yaml or record, not '" + source.format +
-                    "'");
+  return ParseRobotPoses(text, source.path, source.format);
 }
 
 ChessboardDetections DetectHandEyeImages(const std::vector<std::string>& files,

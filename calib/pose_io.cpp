@@ -3,8 +3,11 @@
 
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -36,7 +39,191 @@ yaml::Fields RecordFields(const std::string& text, const std::string& name, cons
   return top;
 }
 
+// An Euler angle beyond this is not in degrees: swapped columns or another unit. (Radians stay
+// within +-2 pi and pass; nothing in the file tells them apart from small angles in degrees.)
+constexpr double kMaxAngleDeg = 360.0;
+
+// Splits a line at whitespace and commas.
+std::vector<std::string> Tokens(std::string line) {
+  std::replace(line.begin(), line.end(), ',', ' ');
+  std::istringstream ls(line);
+  std::vector<std::string> out;
+  for (std::string t; ls >> t;) out.push_back(t);
+  return out;
+}
+
+// The whole token as a number ("nan" and "inf" included: the callers check finiteness); false
+// for text or a number out of double range.
+bool ParseNumber(const std::string& token, double* value) {
+  const char* first = token.data();
+  const char* last = token.data() + token.size();
+  if (token.size() > 1 && token[0] == '+' && token[1] != '-') ++first;  // from_chars rejects '+'
+  const auto r = std::from_chars(first, last, *value);
+  return r.ec == std::errc() && r.ptr == last && first != last;
+}
+
+// The first character that is not blank or a UTF-8 byte order mark, '\0' for none.
+char FirstNonBlank(const std::string& text) {
+  std::size_t i = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
+  i = text.find_first_not_of(" \t\r\n", i);
+  return i == std::string::npos ? '\0' : text[i];
+}
+
+// Names of the three angles of a convention, in the order they appear on a line.
+std::array<const char*, 3> AngleLabels(EulerConvention convention) {
+  if (convention == EulerConvention::kFanucXyzwpr) return {"w", "p", "r"};
+  return {"A", "B", "C"};
+}
+
+// x y z (mm) + three angles (degrees) as base_from_flange; `where` locates the pose in errors.
+Eigen::Isometry3d EulerPose(const std::array<double, 6>& v, EulerConvention convention,
+                            const std::string& name, const std::string& where) {
+  const std::array<const char*, 3> angle = AngleLabels(convention);
+  const std::array<const char*, 6> label = {"x", "y", "z", angle[0], angle[1], angle[2]};
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (!std::isfinite(v[i])) {
+      throw FileError(name, where + ": " + label[i] + " is not a finite number; expected 6 " +
+                                "finite numbers for " + EulerConventionName(convention));
+    }
+  }
+  for (std::size_t i = 3; i < v.size(); ++i) {
+    if (std::abs(v[i]) > kMaxAngleDeg) {
+      throw FileError(name, where + ": angle " + label[i] + " = " + Fmt("%g", v[i]) +
+                                " is beyond +-360: angles must be degrees (" +
+                                EulerConventionName(convention) + ")");
+    }
+  }
+  // Both conventions are R = Rz * Ry * Rx (rotations about the fixed base axes, x first);
+  // Fanuc lists the angles x-first (w p r), KUKA z-first (A B C).
+  const bool fanuc = convention == EulerConvention::kFanucXyzwpr;
+  const double deg = EIGEN_PI / 180.0;
+  const double rx = (fanuc ? v[3] : v[5]) * deg;
+  const double rz = (fanuc ? v[5] : v[3]) * deg;
+  const double ry = v[4] * deg;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = (Eigen::AngleAxisd(rz, Eigen::Vector3d::UnitZ()) *
+                   Eigen::AngleAxisd(ry, Eigen::Vector3d::UnitY()) *
+                   Eigen::AngleAxisd(rx, Eigen::Vector3d::UnitX()))
+                      .toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
+  return pose;
+}
+
+// The text layout: one pose per line.
+RobotPoses ParseEulerText(const std::string& text, const std::string& name,
+                          EulerConvention convention) {
+  RobotPoses out;
+  std::istringstream in(text);
+  int line_no = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_no;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::string where = "line " + std::to_string(line_no);
+    const std::vector<std::string> tokens = Tokens(line);
+    std::array<double, 6> v{};
+    for (std::size_t i = 0; i < tokens.size(); ++i) {
+      double x = 0;
+      if (!ParseNumber(tokens[i], &x)) {
+        throw FileError(name, where + ": '" + tokens[i] + "' is not a number; expected 6 " +
+                                  "numbers for " + EulerConventionName(convention));
+      }
+      if (i < v.size()) v[i] = x;
+    }
+    if (tokens.size() != v.size()) {
+      throw FileError(
+          name, where + ": expected 6 numbers for " + EulerConventionName(convention) + ", got " +
+                    std::to_string(tokens.size()) +
+                    (tokens.size() == 16 ? " (a 4x4 matrix: use the kuka format)" : ""));
+    }
+    out.base_from_flange.push_back(EulerPose(v, convention, name, where));
+  }
+  return out;
+}
+
+// The JSON layout of RobCalibrator's .rob files: {"RobPoses": [[x, y, z, a1, a2, a3], ...]}.
+RobotPoses ParseEulerJson(const std::string& text, const std::string& name,
+                          EulerConvention convention) {
+  const std::string expected = R"(expected {"RobPoses": [[x, y, z, angle, angle, angle], ...]})";
+  nlohmann::json top;
+  try {
+    top = nlohmann::json::parse(text);
+  } catch (const nlohmann::json::exception& e) {
+    throw FileError(name, std::string("not valid JSON (") + e.what() + "); " + expected);
+  }
+  if (!top.is_object()) throw FileError(name, "not a JSON object; " + expected);
+  for (auto it = top.begin(); it != top.end(); ++it) {
+    if (it.key() != "RobPoses") {
+      throw FileError(name, "unknown key \"" + it.key() + "\"; " + expected);
+    }
+  }
+  if (!top.contains("RobPoses") || !top["RobPoses"].is_array()) {
+    throw FileError(name, "\"RobPoses\" must be a list of poses; " + expected);
+  }
+  const nlohmann::json& rows = top["RobPoses"];
+  RobotPoses out;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const std::string where =
+        "pose " + std::to_string(i + 1) + " (RobPoses[" + std::to_string(i) + "])";
+    const nlohmann::json& row = rows[i];
+    bool numbers = row.is_array() && row.size() == 6;
+    for (std::size_t k = 0; numbers && k < row.size(); ++k) numbers = row[k].is_number();
+    if (!numbers) {
+      std::string got = row.dump();
+      if (got.size() > 80) got = got.substr(0, 77) + "...";
+      throw FileError(name, where + ": expected 6 numbers for " + EulerConventionName(convention) +
+                                ", got " + got);
+    }
+    std::array<double, 6> v{};
+    for (std::size_t k = 0; k < v.size(); ++k) v[k] = row[k].get<double>();
+    out.base_from_flange.push_back(EulerPose(v, convention, name, where));
+  }
+  return out;
+}
+
+// How the text gives x y z + Euler-angle poses ("" when it does not): a RobPoses JSON, or a
+// first pose line of exactly 6 numbers.
+std::string EulerLayout(const std::string& text) {
+  if (FirstNonBlank(text) == '{') {
+    return text.find("\"RobPoses\"") != std::string::npos ? "a RobCalibrator RobPoses JSON" : "";
+  }
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::vector<std::string> tokens = Tokens(line);
+    double x = 0;
+    const bool six = tokens.size() == 6 &&
+                     std::all_of(tokens.begin(), tokens.end(),
+                                 [&x](const std::string& t) { return ParseNumber(t, &x); });
+    return six ? "lines of 6 numbers" : "";
+  }
+  return "";
+}
+
 }  // namespace
+
+std::string EulerConventionName(EulerConvention convention) {
+  switch (convention) {
+    case EulerConvention::kFanucXyzwpr:
+      return "xyzwpr (Fanuc: x y z mm, w p r degrees, R = Rz(r) Ry(p) Rx(w))";
+    case EulerConvention::kKukaXyzabc:
+      return "xyzabc (KUKA: x y z mm, A B C degrees, R = Rz(A) Ry(B) Rx(C))";
+  }
+  return "unknown Euler convention";
+}
+
+RobotPoses ParseEulerPoses(const std::string& text, const std::string& name,
+                           EulerConvention convention) {
+  RobotPoses out = FirstNonBlank(text) == '{' ? ParseEulerJson(text, name, convention)
+                                              : ParseEulerText(text, name, convention);
+  if (out.base_from_flange.empty()) {
+    throw FileError(name, "no poses; expected one pose per line (or a RobPoses JSON) for " +
+                              EulerConventionName(convention));
+  }
+  CheckPoseUnits(out.base_from_flange, name);
+  return out;
+}
 
 void CheckPoseUnits(const std::vector<Eigen::Isometry3d>& base_from_flange,
                     const std::string& name) {
@@ -265,12 +452,32 @@ std::string ChessboardDetectionsText(const ChessboardDetections& d, const std::s
 }
 
 RobotPoses LoadRobotPoses(const std::string& path, const std::string& format) {
-  const std::string text = io::ReadFileBytes(path);
+  return ParseRobotPoses(io::ReadFileBytes(path), path, format);
+}
+
+RobotPoses ParseRobotPoses(const std::string& text, const std::string& path,
+                           const std::string& format) {
   std::string f = format;
-  if (f == "auto") f = text.find("format:") != std::string::npos ? "yaml" : "kuka";
+  if (f == "auto") {
+    const std::string euler = EulerLayout(text);
+    if (text.find("format:") != std::string::npos) {
+      f = "yaml";
+    } else if (!euler.empty()) {
+      // The same six numbers give different rotations in the two conventions: never guess.
+      throw FileError(path, "holds x y z + Euler-angle poses (" + euler +
+                                ") but does not state its Euler convention; pass the format "
+                                "explicitly: xyzwpr for Fanuc (x y z w p r) or xyzabc for "
+                                "KUKA (x y z A B C)");
+    } else {
+      f = "kuka";
+    }
+  }
   if (f == "kuka") return ParseKukaPoses(text, path);
   if (f == "yaml") return ParseYamlPoses(text, path);
-  throw OptionError("--pose-format must be kuka, yaml or auto, not '" + format + "'");
+  if (f == "xyzwpr") return ParseEulerPoses(text, path, EulerConvention::kFanucXyzwpr);
+  if (f == "xyzabc") return ParseEulerPoses(text, path, EulerConvention::kKukaXyzabc);
+  throw OptionError("--pose-format must be kuka, yaml, xyzwpr, xyzabc or auto, not '" + format +
+                    "'");
 }
 
 }  // namespace lasercell::calib

@@ -14,6 +14,16 @@
 //    (`image` optional). The simulator's records/hand_eye_images.yaml (format
 //    lasercell.hand_eye_images) holds joints instead; ParseHandEyeImagesRecord reads those and
 //    the caller turns them into poses through the cell's kinematic model.
+//  - xyzwpr (Fanuc) and xyzabc (KUKA): base_from_flange as x y z in mm and three Euler angles
+//    in DEGREES. Fanuc x y z w p r: R = Rz(r) * Ry(p) * Rx(w); KUKA x y z A B C: R = Rz(A) *
+//    Ry(B) * Rx(C) (the same fixed-axis product, the angles in the opposite order on the line).
+//    Two layouts, told apart by the first non-blank character:
+//      text: one pose per line, 6 numbers separated by whitespace or commas; blank lines and
+//            lines starting with '#' are skipped;
+//      JSON ('{' first, RobCalibrator's .rob file): {"RobPoses": [[x, y, z, w, p, r], ...]},
+//            no other key, every row exactly 6 numbers.
+//    Such a file does not say which controller wrote it, so "auto" refuses it: pass xyzwpr or
+//    xyzabc. An angle beyond +-360 is rejected (not degrees: swapped columns or another unit).
 //
 // Every reader checks: rotations orthonormal (|R^T R - I| <= 1e-6 for kuka; for yaml |q| within
 // kUnitQuaternionTolerance of 1, core/se3.hpp, the one tolerance of every lasercell file; the
@@ -40,6 +50,21 @@ struct RobotPoses {
 RobotPoses ParseKukaPoses(const std::string& text, const std::string& name);
 /// Parses the lasercell YAML form (mm); `name` appears in errors.
 RobotPoses ParseYamlPoses(const std::string& text, const std::string& name);
+
+/// Euler-angle conventions of robot controllers for x y z (mm) + three angles (degrees).
+enum class EulerConvention {
+  kFanucXyzwpr,  ///< Fanuc x y z w p r: R = Rz(r) * Ry(p) * Rx(w).
+  kKukaXyzabc,   ///< KUKA x y z A B C: R = Rz(A) * Ry(B) * Rx(C).
+};
+/// The convention's name for messages: the format string, the controller, units and product,
+/// e.g. "xyzwpr (Fanuc: x y z mm, w p r degrees, R = Rz(r) Ry(p) Rx(w))".
+std::string EulerConventionName(EulerConvention convention);
+/// Parses x y z + Euler-angle poses (mm, degrees), either layout (text lines or RobPoses JSON,
+/// see the file comment), as base_from_flange; throws FileError(name, ...) naming the line
+/// (text) or the pose (JSON) for a pose without exactly 6 finite numbers, an angle beyond
+/// +-360 degrees, no poses, or translations that are not mm (CheckPoseUnits).
+RobotPoses ParseEulerPoses(const std::string& text, const std::string& name,
+                           EulerConvention convention);
 
 /// records/hand_eye_images.yaml of the simulator: robot name, board and per-image joints.
 struct HandEyeImagesRecord {
@@ -81,7 +106,12 @@ ChessboardDetections ParseChessboardDetections(const std::string& text, const st
 std::string ChessboardDetectionsText(const ChessboardDetections& detections,
                                      const std::string& comment = "");
 
-/// Reads a pose file; format "kuka", "yaml" or "auto" (yaml when the text has a `format:` key).
+/// Reads a pose file; format "kuka", "yaml", "xyzwpr", "xyzabc" or "auto" (yaml when the text
+/// has a `format:` key, else kuka; a RobPoses JSON or lines of 6 numbers throw FileError asking
+/// for xyzwpr or xyzabc, since the file does not say which). Other formats throw OptionError.
 RobotPoses LoadRobotPoses(const std::string& path, const std::string& format = "auto");
+/// LoadRobotPoses on text already read; `path` appears in errors.
+RobotPoses ParseRobotPoses(const std::string& text, const std::string& path,
+                           const std::string& format = "auto");
 
 }  // namespace lasercell::calib

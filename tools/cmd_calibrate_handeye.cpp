@@ -99,7 +99,9 @@ void AddCalibrateHandEyeCommand(CLI::App& calibrate) {
                   "YAML (mm) or a "
                   "simulator records/hand_eye_images.yaml (joints)")
       ->required();
-  cmd->add_option("--pose-format", args->poses.format, "auto, kuka, yaml or record")
+  cmd->add_option(
+         "--pose-format", args->poses.format,
+         "auto, kuka (4x4, metres), yaml, xyzwpr (Fanuc, deg), xyzabc (KUKA, deg) or record")
       ->capture_default_str();
   cmd->add_option("--method", args->method,
                   "Closed form that starts the refinement: tsai-lenz, "

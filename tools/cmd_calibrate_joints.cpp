@@ -28,6 +28,7 @@
 #include "core/io/file_util.hpp"
 #include "core/json_io.hpp"
 #include "core/number_list.hpp"
+#include "tools/cmd_calibrate_handeye_sections.hpp"
 #include "tools/commands.hpp"
 #include "triangulation/sphere_sweeps.hpp"
 
@@ -127,12 +128,19 @@ void RunHandEyeLaser(const JointsArgs& a) {
   std::printf("%s -> %s\n", r.Summary().c_str(), out.c_str());
 }
 
-void AddShared(CLI::App* cmd, JointsArgs& a) {
-  cmd->add_option("--cell", a.cell, "cell.yaml with the robot and the flange<->sensor edge")
-      ->required();
-  cmd->add_option("--camera", a.camera, "Sensor camera model (.cameramodel)")->required();
-  cmd->add_option("--sweeps", a.sweeps, "Sphere-sweep list (records/sphere_sweeps.yaml)")
-      ->required();
+// `required`: --cell, --camera and --sweeps are CLI-required (joints); handeye-laser checks them
+// itself because its sections variant needs none of them.
+void AddShared(CLI::App* cmd, JointsArgs& a, bool required = true) {
+  CLI::Option* cell =
+      cmd->add_option("--cell", a.cell, "cell.yaml with the robot and the flange<->sensor edge");
+  CLI::Option* camera = cmd->add_option("--camera", a.camera, "Sensor camera model (.cameramodel)");
+  CLI::Option* sweeps =
+      cmd->add_option("--sweeps", a.sweeps, "Sphere-sweep list (records/sphere_sweeps.yaml)");
+  if (required) {
+    cell->required();
+    camera->required();
+    sweeps->required();
+  }
   cmd->add_option("--laser-plane", a.laser_plane,
                   "Laser plane nx,ny,nz,d in the sensor frame (n.p + d = 0, "
                   "mm); default: the "
@@ -185,9 +193,30 @@ void AddCalibrateJointsCommands(CLI::App& calibrate) {
   // Hand-eye has only 6 unknowns (+ spheres): every point helps, and it stays
   // fast (~1 s).
   ha->max_points = 5000;
-  AddShared(he, *ha);
+  AddShared(he, *ha, /*required=*/false);
   he->add_option("--set", ha->set, "Sweep set in the list (default eye_in_hand)");
-  he->callback([ha] { RunHandEyeLaser(*ha); });
+  auto sa = std::make_shared<HandEyeSectionArgs>();
+  AddHandEyeSectionOptions(he, *sa);
+  he->callback([ha, sa] {
+    if (HandEyeSectionsRequested(*sa)) {
+      sa->cell = ha->cell;
+      sa->output = ha->output;
+      sa->json = ha->json;
+      sa->report = ha->report;
+      sa->robot = ha->robot;
+      sa->sensor_frame = ha->sensor_frame;
+      sa->radius_mm = ha->radius_mm;
+      RunHandEyeSections(*sa);
+      return;
+    }
+    if (ha->cell.empty() || ha->camera.empty() || ha->sweeps.empty()) {
+      throw OptionError(
+          "calibrate handeye-laser: give --cell, --camera and --sweeps (sphere sweeps), or "
+          "--profiles, --poses, --pose-format, --sphere-side and --sphere-radius (one "
+          "calibrated profile per robot pose)");
+    }
+    RunHandEyeLaser(*ha);
+  });
 }
 
 }  // namespace lasercell::tools

@@ -28,11 +28,11 @@ namespace {
 namespace fs = std::filesystem;
 
 // Skips the calling test (with the reason) when the shared kuka2 set is absent.
-#define REQUIRE_KUKA2()                                                     \
-  do {                                                                      \
-    const calib::realdata::Kuka2* kuka2_ = calib::realdata::LoadKuka2();    \
-    if (kuka2_ == nullptr) GTEST_SKIP() << calib::realdata::Kuka2Missing(); \
-    ASSERT_TRUE(kuka2_->error.empty()) << kuka2_->error;                    \
+#define REQUIRE_KUKA2()                                                                   \
+  do {                                                                                    \
+    const calib::realdata::Kuka2* kuka2_ = calib::realdata::LoadKuka2();                  \
+    if (kuka2_ == nullptr) LASERCELL_SHARED_DATA_ABSENT(calib::realdata::Kuka2Missing()); \
+    ASSERT_TRUE(kuka2_->error.empty()) << kuka2_->error;                                  \
   } while (false)
 
 using ::lasercell::test::CommandResult;

@@ -503,7 +503,7 @@ namespace {
 // level of a good eye-in-hand set (sub-pixel, a few tenths of a degree).
 TEST(HandEyeReal, Kuka2FromSharedImages) {
   const realdata::Kuka2* kuka2 = realdata::LoadKuka2();
-  if (kuka2 == nullptr) GTEST_SKIP() << realdata::Kuka2Missing();
+  if (kuka2 == nullptr) LASERCELL_SHARED_DATA_ABSENT(realdata::Kuka2Missing());
   ASSERT_TRUE(kuka2->error.empty()) << kuka2->error;
   const ChessboardDetections& det = kuka2->detections;
   const CameraModel& camera = *kuka2->camera;

@@ -102,7 +102,8 @@ void ExpectConsistentPlane(const LaserPlaneResult& r) {
 TEST(LaserPlaneReal, ImagesGiveAConsistentPlane) {
   const std::string images_dir = lasercell::shared_data::SharedDataSet("laser_stripe_chessboard");
   if (images_dir.empty()) {
-    GTEST_SKIP() << lasercell::shared_data::SharedDataMissing("laser_stripe_chessboard");
+    LASERCELL_SHARED_DATA_ABSENT(
+        lasercell::shared_data::SharedDataMissing("laser_stripe_chessboard"));
   }
   std::vector<StripeImage> images;
   for (int i = 0; i < 6; ++i) {

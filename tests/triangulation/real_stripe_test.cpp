@@ -28,9 +28,9 @@ namespace {
 const char kSet[] = "laser_stripe_chessboard";
 
 // Skips the calling test (with the reason) when the shared set is absent.
-#define REQUIRE_STRIPE_IMAGES()                                      \
-  if (lasercell::shared_data::SharedDataSet(kSet).empty()) {         \
-    GTEST_SKIP() << lasercell::shared_data::SharedDataMissing(kSet); \
+#define REQUIRE_STRIPE_IMAGES()                                                    \
+  if (lasercell::shared_data::SharedDataSet(kSet).empty()) {                       \
+    LASERCELL_SHARED_DATA_ABSENT(lasercell::shared_data::SharedDataMissing(kSet)); \
   }
 
 // Green minus red (640 x 480, 8-bit).
