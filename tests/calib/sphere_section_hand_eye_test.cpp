@@ -235,11 +235,22 @@ TEST(SphereSectionHandEyeReal, BeatsTheSourceCalibrationOnItsOwnScore) {
   EXPECT_LE(ours.spread_rms_mm, 0.3);
   EXPECT_LT(ours.spread_rms_mm, their_spread);
   EXPECT_LT(ours.loo_max_mm, 1.0);
-  // The two calibrations describe one mounting: within a few reported sigma of each other.
-  const double dt =
-      (ours.flange_from_sensor.translation() - set.their_flange_from_sensor.translation()).norm();
-  const double sigma_t = std::sqrt(ours.covariance.bottomRightCorner<3, 3>().trace());
-  EXPECT_LT(dt, 5 * sigma_t) << "translation differs by " << dt << " mm";
+  // The two calibrations describe one mounting: within 4 sigma of ours (the sigma of the
+  // translation vector itself: the covariance's translation block is over the left perturbation,
+  // t = Exp(w) t0 + u, so d t = -[t0]x w + u).
+  const Eigen::Vector3d t0 = ours.flange_from_sensor.translation();
+  Eigen::Matrix<double, 3, 6> j_t;
+  j_t << 0, t0.z(), -t0.y(), 1, 0, 0, -t0.z(), 0, t0.x(), 0, 1, 0, t0.y(), -t0.x(), 0, 0, 0, 1;
+  const double sigma_t = std::sqrt((j_t * ours.covariance * j_t.transpose()).trace());
+  const double dt = (t0 - set.their_flange_from_sensor.translation()).norm();
+  // Their rotation differs from ours by 1.2 deg, 4 of our sigma (0.29 deg): printed, not
+  // asserted, since theirs is not a ground truth and which one is closer cannot be told here.
+  std::printf(
+      "translation sigma %.3f mm, theirs differs by %.3f mm; rotation sigma %.3f deg, "
+      "theirs differs by %.3f deg\n",
+      sigma_t, dt, std::sqrt(ours.covariance.topLeftCorner<3, 3>().trace()) / kDeg,
+      RotationDistance(ours.flange_from_sensor, set.their_flange_from_sensor) / kDeg);
+  EXPECT_LT(dt, 4 * sigma_t);
 }
 
 }  // namespace
