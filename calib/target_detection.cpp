@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <opencv2/aruco/charuco.hpp>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "core/error.hpp"
 
@@ -103,80 +106,122 @@ void ToFullResolution(std::vector<cv::Point2f>& corners, const DetectionOptions&
 
 // The inner-corner grid of any chessboard of at least 3x3 inner corners in the image (SB with
 // CALIB_CB_LARGER grows the grid to the whole board and reports its size through `meta`), or
-// 0x0 when there is none.
+// 0x0 when there is none. Only words the failure message: a partial grid (a board cut off, or
+// one that SB grows only partly, e.g. across a laser stripe) says nothing about whether another
+// detector finds the board, so it never decides which detectors run.
 cv::Size VisibleChessboard(const cv::Mat& search) {
   std::vector<cv::Point2f> any;
   cv::Mat meta;
-  if (cv::findChessboardCornersSB(search, cv::Size(3, 3), any,
-                                  cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER, meta) &&
-      !meta.empty()) {
-    return cv::Size(meta.cols, meta.rows);
+  try {
+    if (cv::findChessboardCornersSB(search, cv::Size(3, 3), any,
+                                    cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_LARGER, meta) &&
+        !meta.empty()) {
+      return cv::Size(meta.cols, meta.rows);
+    }
+  } catch (const cv::Exception&) {
   }
   return cv::Size(0, 0);
 }
 
-void DetectChessboard(const cv::Mat& gray, const BoardSpec& board, const DetectionOptions& options,
-                      TargetDetection& out) {
-  const cv::Size pattern(board.cols, board.rows);
-  const cv::Mat search = SearchImage(gray, options);
-  std::vector<cv::Point2f> corners;
-  bool found = cv::findChessboardCornersSB(search, pattern, corners, cv::CALIB_CB_NORMALIZE_IMAGE);
-  // On failure, what chessboard is visible (when asked): a grid too small to hold the pattern in
-  // either orientation means no detector can find it, so the fallbacks are skipped (the classic
-  // detector alone takes seconds on a 1 Mpx image of a wrong-size board).
-  const cv::Size visible =
-      !found && options.diagnose_board_size ? VisibleChessboard(search) : cv::Size(0, 0);
-  const bool can_hold = visible.area() == 0 ||
-                        (visible.width >= board.cols && visible.height >= board.rows) ||
-                        (visible.width >= board.rows && visible.height >= board.cols);
-  if (!found && can_hold) {
-    found = cv::findChessboardCorners(search, pattern, corners,
-                                      cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
-  }
-  if (!found && can_hold) {
-    found = cv::findChessboardCornersSB(search, pattern, corners,
-                                        cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE);
-  }
-  if (found && static_cast<int>(corners.size()) == board.NumCorners()) {
-    ToFullResolution(corners, options);
-    // The detectors may return a mirrored order (rows or columns reversed), i.e. the board seen
-    // from behind. Reverse the rows of a left-handed grid so every view has the board's z
-    // pointing away from the camera (board x along increasing ids, y down the rows).
-    const cv::Point2f dx = corners[1] - corners[0];
-    const cv::Point2f dy = corners[board.cols] - corners[0];
-    if (dx.x * dy.y - dx.y * dy.x < 0) {
-      for (int r = 0; r < board.rows; ++r) {
-        std::reverse(corners.begin() + r * board.cols, corners.begin() + (r + 1) * board.cols);
-      }
+// One chessboard search of the cascade.
+struct ChessboardSearch {
+  const char* name;  // TargetDetection::detector
+  bool sb;           // findChessboardCornersSB, else the classic findChessboardCorners
+  int flags;
+};
+
+// The cascade (documented in target_detection.hpp), tried in order on the search image until one
+// search returns the whole board. Cheap and most often successful first: SB + NORMALIZE finds
+// most boards in one pass; ACCURACY (SB on a 2x upsampled image) recovers small or blurred
+// squares; EXHAUSTIVE + ACCURACY tries harder on cluttered views; the classic quad detector with
+// adaptive threshold survives some views SB splits. Every SB search normalises: without
+// NORMALIZE, SB (plain, ACCURACY or EXHAUSTIVE) finds a 9x7 board in OpenCV's 9x6 samples
+// left01-04 (the board's outer edge taken for one more row of corners), measured on OpenCV 4.6.
+// Every search runs whatever earlier probes say: a failed image pays the whole cascade.
+constexpr ChessboardSearch kChessboardCascade[] = {
+    {"sb_normalize", true, cv::CALIB_CB_NORMALIZE_IMAGE},
+    {"sb_normalize_accuracy", true, cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_ACCURACY},
+    {"sb_normalize_exhaustive_accuracy", true,
+     cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_EXHAUSTIVE | cv::CALIB_CB_ACCURACY},
+    {"classic_adaptive_normalize", false,
+     cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE},
+};
+
+// Runs the cascade; the name of the search that found all pattern.area() corners, or nullptr.
+// An OpenCV exception in one search counts as a miss of that search only.
+const char* SearchChessboard(const cv::Mat& search, cv::Size pattern,
+                             std::vector<cv::Point2f>& corners) {
+  for (const ChessboardSearch& s : kChessboardCascade) {
+    corners.clear();
+    bool found = false;
+    try {
+      found = s.sb ? cv::findChessboardCornersSB(search, pattern, corners, s.flags)
+                   : cv::findChessboardCorners(search, pattern, corners, s.flags);
+    } catch (const cv::Exception&) {
+      found = false;
     }
-    std::vector<int> ids(corners.size());
-    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int>(i);
-    Refine(gray, corners, ids, board.cols, options, out);
-    Store(corners, ids, out);
-    out.status = DetectionStatus::kFound;
-    out.message = "found " + std::to_string(corners.size()) + " corners (square " +
-                  std::to_string(static_cast<int>(std::lround(out.square_px))) +
-                  " px, refinement half window " + std::to_string(out.refine_half_window_px) +
-                  " px)";
-    return;
+    if (found && static_cast<int>(corners.size()) == pattern.area()) return s.name;
   }
+  corners.clear();
+  return nullptr;
+}
+
+// The detectors may return a mirrored order (rows or columns reversed), i.e. the board seen from
+// behind. Reverses the rows of a left-handed grid so every view has the board's z pointing away
+// from the camera (board x along increasing ids, y down the rows).
+void MakeRightHanded(std::vector<cv::Point2f>& corners, const BoardSpec& board) {
+  const cv::Point2f dx = corners[1] - corners[0];
+  const cv::Point2f dy = corners[board.cols] - corners[0];
+  if (dx.x * dy.y - dx.y * dy.x >= 0) return;
+  for (int r = 0; r < board.rows; ++r) {
+    std::reverse(corners.begin() + r * board.cols, corners.begin() + (r + 1) * board.cols);
+  }
+}
+
+// The failure: kNotFound, or kWrongBoardSize when (options.diagnose_board_size) the probe sees a
+// grid of another size. Runs only after every search of the cascade failed.
+void DiagnoseMissingChessboard(const cv::Mat& search, const BoardSpec& board,
+                               const DetectionOptions& options, TargetDetection& out) {
+  const std::string size = std::to_string(board.cols) + "x" + std::to_string(board.rows);
   out.status = DetectionStatus::kNotFound;
-  out.message = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-                " chessboard (inner corners) found";
+  out.message = "no " + size + " chessboard (inner corners) found by any of " +
+                std::to_string(std::size(kChessboardCascade)) + " detectors";
+  const cv::Size visible = options.diagnose_board_size ? VisibleChessboard(search) : cv::Size();
   if (visible.area() == 0) return;
   const int c = visible.width;
   const int r = visible.height;
   if ((c == board.cols && r == board.rows) || (c == board.rows && r == board.cols)) {
-    out.message +=
-        " although a board of that size is visible (blurred, cut off or low "
-        "contrast?)";
+    out.message += " although a board of that size is visible (blurred, cut off or low contrast?)";
     return;
   }
   out.status = DetectionStatus::kWrongBoardSize;
-  out.message = "no " + std::to_string(board.cols) + "x" + std::to_string(board.rows) +
-                " chessboard found, but a " + std::to_string(c) + "x" + std::to_string(r) +
-                " one (inner corners) is visible: wrong board size in the board spec? (a "
-                "board partly outside the image also looks smaller)";
+  out.message = "no " + size + " chessboard found, but a " + std::to_string(c) + "x" +
+                std::to_string(r) +
+                " one (inner corners) is visible: wrong board size in the board spec? (a board "
+                "partly outside the image or crossed by a laser line also looks smaller)";
+}
+
+void DetectChessboard(const cv::Mat& gray, const BoardSpec& board, const DetectionOptions& options,
+                      TargetDetection& out) {
+  const cv::Mat search = SearchImage(gray, options);
+  std::vector<cv::Point2f> corners;
+  const char* detector = SearchChessboard(search, cv::Size(board.cols, board.rows), corners);
+  if (detector == nullptr) {
+    DiagnoseMissingChessboard(search, board, options, out);
+    return;
+  }
+  ToFullResolution(corners, options);
+  MakeRightHanded(corners, board);
+  std::vector<int> ids(corners.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<int>(i);
+  Refine(gray, corners, ids, board.cols, options, out);
+  Store(corners, ids, out);
+  out.status = DetectionStatus::kFound;
+  out.detector = detector;
+  out.message = "found " + std::to_string(corners.size()) + " corners (square " +
+                std::to_string(static_cast<int>(std::lround(out.square_px))) +
+                " px, refinement half window " + std::to_string(out.refine_half_window_px) +
+                " px, detector " + detector + ")";
 }
 
 void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionOptions& options,
@@ -215,6 +260,7 @@ void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionO
   Refine(gray, corners, ids, board.CornersX(), options, out);
   Store(corners, ids, out);
   out.status = DetectionStatus::kFound;
+  out.detector = "charuco";
   out.message = "found " + std::to_string(ids.size()) + " of " +
                 std::to_string(board.NumCorners()) + " ChArUco corners (" +
                 std::to_string(marker_ids.size()) + " markers)";

@@ -2,11 +2,26 @@
 // Detection of calibration boards (calib/board.hpp) in 8-bit gray images (core/image8.hpp), with
 // a diagnosis when a board is not found.
 //
-// Chessboards: OpenCV's findChessboardCornersSB (falling back to findChessboardCorners), then
-// cornerSubPix refinement with a window derived from the board's square size in pixels (SB's own
-// subpixel corners are biased by up to ~0.1 px on strongly tilted views; cornerSubPix with a
-// window inside one square stays < 0.05 px). ChArUco: ArUco markers (OpenCV 4.6 aruco),
-// interpolateCornersCharuco, then the same cornerSubPix refinement.
+// Chessboards: a fixed cascade of OpenCV detectors, tried in this order on the search image
+// (DetectionOptions::search_downscale) until one returns the whole board:
+//   1. "sb_normalize":                     findChessboardCornersSB, NORMALIZE_IMAGE
+//   2. "sb_normalize_accuracy":            findChessboardCornersSB, NORMALIZE_IMAGE | ACCURACY
+//   3. "sb_normalize_exhaustive_accuracy": findChessboardCornersSB, NORMALIZE_IMAGE | EXHAUSTIVE
+//                                          | ACCURACY
+//   4. "classic_adaptive_normalize":       findChessboardCorners, ADAPTIVE_THRESH |
+//                                          NORMALIZE_IMAGE
+// (CALIB_CB_ flags; TargetDetection::detector names the one that succeeded; SB without NORMALIZE
+// is left out: it takes a board's outer edge for one more row of corners, i.e. finds boards of
+// the wrong size), then cornerSubPix refinement at full resolution with a window derived from the
+// board's square size in pixels (SB's own subpixel corners are biased by up to ~0.1 px on strongly
+// tilted views; cornerSubPix with a window inside one square stays < 0.05 px). ChArUco: ArUco
+// markers (OpenCV 4.6 aruco), interpolateCornersCharuco, then the same cornerSubPix refinement. A
+// board any of those detectors finds is found: the board-size diagnosis (a probe for a chessboard
+// of any size) runs only after all of them failed, and only words the failure. Corner order of a
+// chessboard: row-major, `cols` corners per row, the grid right-handed in the image (corner 1 -
+// corner 0 crossed with corner cols - corner 0 is > 0 with y down), i.e. the board's z points away
+// from the camera; which of the two such orders (a half turn apart) is returned is the detector's
+// choice.
 //
 // Pixels: the centre of the top-left pixel is (0, 0) (OpenCV and mrcal convention).
 // No OpenCV type appears in this header.
@@ -46,9 +61,9 @@ struct DetectionOptions {
   /// Bounds of the refinement half window, px.
   int min_refine_half_window_px = 2;
   int max_refine_half_window_px = 15;
-  /// When the first search fails, look for a chessboard of any size to diagnose a wrong --board
-  /// spec (one more detection pass on failed images only). A visible grid too small to hold the
-  /// board also skips the slower fallback searches, which could not find it.
+  /// When every detector of the cascade failed, look for a chessboard of any size to diagnose a
+  /// wrong --board spec (one more detection pass on failed images only). Only words the failure
+  /// (kWrongBoardSize): it never skips a detector.
   bool diagnose_board_size = true;
   /// ChArUco views with fewer interpolated corners are rejected.
   int min_charuco_corners = 6;
@@ -73,6 +88,9 @@ struct TargetDetection {
   double square_px = 0;                     ///< Smallest square edge seen in the image, px.
   int refine_half_window_px = 0;            ///< cornerSubPix half window used (0: no refinement).
   double max_refine_shift_px = 0;           ///< Largest move of a corner by the refinement.
+  /// The detector that found the board: a chessboard cascade name ("sb_normalize", ...,
+  /// "classic_adaptive_normalize"; see the preamble), "charuco", or "" when not found.
+  std::string detector;
 
   bool found() const { return status == DetectionStatus::kFound; }
 };
