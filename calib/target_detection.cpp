@@ -71,9 +71,27 @@ void Refine(const cv::Mat& gray, std::vector<cv::Point2f>& corners, const std::v
       std::clamp(static_cast<int>(std::floor(options.refine_window_fraction * out.square_px)),
                  options.min_refine_half_window_px, options.max_refine_half_window_px);
   const std::vector<cv::Point2f> before = corners;
-  cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1),
-                   cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
+  const cv::TermCriteria stop(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4);
+  cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1), stop);
   out.refine_half_window_px = half;
+  // A corner that ran off (see DetectionOptions::refine_shift_limit_px): smaller windows, else
+  // the detector's own estimate.
+  const double limit = options.refine_shift_limit_px * options.search_downscale;
+  for (std::size_t i = 0; i < corners.size(); ++i) {
+    if (cv::norm(corners[i] - before[i]) <= limit) continue;
+    ++out.rerefined_corners;
+    out.rerefined.push_back(static_cast<int>(i));
+    corners[i] = before[i];
+    for (int h = half / 2; h >= options.min_refine_half_window_px; h /= 2) {
+      std::vector<cv::Point2f> one = {before[i]};
+      cv::cornerSubPix(gray, one, cv::Size(h, h), cv::Size(-1, -1), stop);
+      if (cv::norm(one[0] - before[i]) <= limit) {
+        corners[i] = one[0];
+        break;
+      }
+    }
+    if (corners[i] == before[i]) ++out.unrefined_corners;
+  }
   for (std::size_t i = 0; i < corners.size(); ++i) {
     out.max_refine_shift_px =
         std::max(out.max_refine_shift_px, static_cast<double>(cv::norm(corners[i] - before[i])));
@@ -222,6 +240,12 @@ void DetectChessboard(const cv::Mat& gray, const BoardSpec& board, const Detecti
                 std::to_string(static_cast<int>(std::lround(out.square_px))) +
                 " px, refinement half window " + std::to_string(out.refine_half_window_px) +
                 " px, detector " + detector + ")";
+  if (out.rerefined_corners > 0) {
+    out.message += "; " + std::to_string(out.rerefined_corners) +
+                   " corners ran off in the refinement window and were refined again with a "
+                   "smaller one (" +
+                   std::to_string(out.unrefined_corners) + " left unrefined)";
+  }
 }
 
 void DetectCharuco(const cv::Mat& gray, const BoardSpec& board, const DetectionOptions& options,
@@ -287,6 +311,9 @@ const char* DetectionStatusName(DetectionStatus status) {
 void DetectionOptions::Check() const {
   if (!(refine_window_fraction > 0 && refine_window_fraction < 0.5)) {
     throw OptionError("DetectionOptions.refine_window_fraction must be in (0, 0.5)");
+  }
+  if (!(refine_shift_limit_px > 0)) {
+    throw OptionError("DetectionOptions.refine_shift_limit_px must be > 0");
   }
   if (min_refine_half_window_px < 1 || max_refine_half_window_px < min_refine_half_window_px) {
     throw OptionError(

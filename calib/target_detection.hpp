@@ -61,6 +61,13 @@ struct DetectionOptions {
   /// Bounds of the refinement half window, px.
   int min_refine_half_window_px = 2;
   int max_refine_half_window_px = 15;
+  /// A corner the refinement moves farther than this from the detector's estimate (px, times
+  /// search_downscale) has run onto another edge -- near a board's outer corners a window of
+  /// 0.4 squares can reach the board's rim or the background, and real views showed 3-9 px
+  /// jumps there -- so it is refined again with half the window, down to
+  /// min_refine_half_window_px, and kept unrefined when none stays within (> 0). The
+  /// detectors' own corners are within ~1 px.
+  double refine_shift_limit_px = 1.5;
   /// When every detector of the cascade failed, look for a chessboard of any size to diagnose a
   /// wrong --board spec (one more detection pass on failed images only). Only words the failure
   /// (kWrongBoardSize): it never skips a detector.
@@ -88,6 +95,10 @@ struct TargetDetection {
   double square_px = 0;                     ///< Smallest square edge seen in the image, px.
   int refine_half_window_px = 0;            ///< cornerSubPix half window used (0: no refinement).
   double max_refine_shift_px = 0;           ///< Largest move of a corner by the refinement.
+  /// Corners refined again with a smaller window / left unrefined (refine_shift_limit_px).
+  int rerefined_corners = 0, unrefined_corners = 0;
+  /// Positions (into corners_px) of the corners refined again.
+  std::vector<int> rerefined;
   /// The detector that found the board: a chessboard cascade name ("sb_normalize", ...,
   /// "classic_adaptive_normalize"; see the preamble), "charuco", or "" when not found.
   std::string detector;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <opencv2/calib3d.hpp>
 #include <random>
 
 #include "calib/camera_calibration.hpp"
@@ -470,7 +471,11 @@ std::vector<BoardView> OpenCvSampleViews(const BoardSpec& board) {
 }
 
 // OpenCV's calibration sample (datasets/real/opencv_chessboard/left_intrinsics.yml): 5-term
-// model, fixed aspect ratio: RMS 0.3926 px, fx = fy = 535.92 px.
+// model, fixed aspect ratio: RMS 0.3926 px, fx = fy = 535.92 px. Its corners come from another
+// detector (findChessboardCorners + cornerSubPix 11x11), ours from the cascade with windows sized
+// to the squares and run-off corners refined again: the two fx differ by ~0.5 % (ours 533.1,
+// 1 sigma 0.4 px), so the published value is matched to 1 %; the solver itself is checked on
+// identical input: cv::calibrateCamera on OUR corners (no outlier rejection on either side).
 TEST(CalibrateIntrinsicsRealData, MatchesOpenCvOnItsSampleImages) {
   const BoardSpec board = ParseBoardSpec("chessboard:9x6:25");
   const std::vector<BoardView> views = OpenCvSampleViews(board);
@@ -480,28 +485,49 @@ TEST(CalibrateIntrinsicsRealData, MatchesOpenCvOnItsSampleImages) {
   const IntrinsicsResult r5 = CalibrateIntrinsics(views, board, 640, 480, options);
   std::printf("%s\n", r5.Summary().c_str());
   EXPECT_LE(r5.rms_px, 0.3926 * 1.01);
-  EXPECT_NEAR(r5.camera->intrinsics()[0] / 535.92, 1.0, 0.005);
+  EXPECT_NEAR(r5.camera->intrinsics()[0] / 535.92, 1.0, 0.01);
   EXPECT_NEAR(r5.camera->intrinsics()[2], 342.28, 3 * r5.intrinsics_sigma[2] + 1.0);
   EXPECT_TRUE(r5.focal_observable);
 
-  options.model = LensModelKind::kOpenCV8;
-  options.fix_aspect_ratio = false;
-  const IntrinsicsResult r8 = CalibrateIntrinsics(views, board, 640, 480, options);
+  IntrinsicsOptions all = options;
+  all.outlier_threshold_sigma = 1e9;
+  const IntrinsicsResult ours = CalibrateIntrinsics(views, board, 640, 480, all);
+  std::vector<std::vector<cv::Point3f>> object;
+  std::vector<std::vector<cv::Point2f>> image;
+  for (const BoardView& v : views) {
+    object.emplace_back();
+    image.emplace_back();
+    for (std::size_t i = 0; i < v.corners_px.size(); ++i) {
+      const Eigen::Vector3d p = board.Corner(v.corner_ids[i]);
+      object.back().emplace_back(p.x(), p.y(), p.z());
+      image.back().emplace_back(v.corners_px[i].x(), v.corners_px[i].y());
+    }
+  }
+  cv::Mat k = cv::Mat::eye(3, 3, CV_64F), dist, rvecs, tvecs;
+  const double cv_rms = cv::calibrateCamera(object, image, cv::Size(640, 480), k, dist, rvecs,
+                                            tvecs, cv::CALIB_FIX_ASPECT_RATIO);
+  std::printf("same corners: ours fx %.3f rms %.4f, cv::calibrateCamera fx %.3f rms %.4f\n",
+              ours.camera->intrinsics()[0], ours.rms_px, k.at<double>(0, 0), cv_rms);
+  EXPECT_NEAR(ours.camera->intrinsics()[0], k.at<double>(0, 0), 0.1 * ours.intrinsics_sigma[0]);
+  EXPECT_NEAR(ours.rms_px, cv_rms, 1e-3);
+
+  // OPENCV8 with a free aspect ratio contains the fixed-aspect OPENCV5: on the same corners (no
+  // outlier rejection, which would give the two fits different corners) it fits at least as well.
+  all.model = LensModelKind::kOpenCV8;
+  all.fix_aspect_ratio = false;
+  const IntrinsicsResult r8 = CalibrateIntrinsics(views, board, 640, 480, all);
   std::printf("%s\n", r8.Summary().c_str());
-  EXPECT_LT(r8.rms_px, r5.rms_px);
+  EXPECT_LT(r8.rms_px, ours.rms_px);
   EXPECT_TRUE(r8.uncertainty_px.allFinite());
 }
 
-// On seven of those views OPENCV8 folds over inside the observed corners: refused with the
-// inversion check's words, and the fallback refits OPENCV5, saying why.
+// From the first four views alone, OPENCV8's eight distortion terms fold the lens over inside
+// the observed corners: refused with the inversion check's words, and the fallback refits
+// OPENCV5, saying why.
 TEST(CalibrateIntrinsicsRealData, AFoldingOpencv8IsRefittedAsOpencv5) {
   const BoardSpec board = ParseBoardSpec("chessboard:9x6:25");
-  std::vector<BoardView> views;
-  for (const BoardView& v : OpenCvSampleViews(board)) {
-    for (const char* keep : {"left01", "left03", "left04", "left05", "left06", "left07", "left08"})
-      if (v.name.rfind(keep, 0) == 0) views.push_back(v);
-  }
-  ASSERT_EQ(views.size(), 7u);
+  std::vector<BoardView> views = OpenCvSampleViews(board);
+  views.resize(4);
   const IntrinsicsResult r8 = CalibrateIntrinsics(views, board, 640, 480);
   EXPECT_FALSE(r8.invertible) << r8.Summary();
   EXPECT_NE(r8.inversion_problem.find("inside the box of the observed corners"), std::string::npos)

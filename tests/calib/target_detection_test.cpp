@@ -73,6 +73,41 @@ TEST(TargetDetection, FindsTheOpenCvSampleBoardAgreeingWithOpenCvsPipeline) {
   EXPECT_LT(std::min(direct, reversed), 0.1);
 }
 
+// On real views the refinement window (0.4 squares) can reach past an outer corner to the
+// board's rim: cornerSubPix then pulls the corner 3-9 px away (measured on left03 at half
+// window 15). Every bundled OpenCV view, against an independent sub-pixel estimate (OpenCV's SB
+// detector with CALIB_CB_ACCURACY, which does not use cornerSubPix): the two sub-pixel methods
+// differ by up to ~1.4 px on these JPEG views with any window that stays on the corner, so 2 px
+// catches a run-off corner.
+TEST(TargetDetection, NoCornerRunsOffInTheRefinementOnRealViews) {
+  const BoardSpec board = ParseBoardSpec("chessboard:9x6:25");
+  int rerefined = 0;
+  for (const char* name : {"left01.jpg", "left02.jpg", "left03.jpg", "left04.jpg", "left05.jpg",
+                           "left06.jpg", "left07.jpg", "left08.jpg", "left09.jpg", "left11.jpg",
+                           "left12.jpg", "left13.jpg", "left14.jpg"}) {
+    const std::string bytes = OpenCvImage(name);
+    const TargetDetection d = DetectTargetInEncodedImage(bytes, board);
+    ASSERT_TRUE(d.found()) << name << ": " << d.message;
+    rerefined += d.rerefined_corners;
+    const std::optional<Image8> image = DecodeGrayImage(bytes);
+    ASSERT_TRUE(image);
+    const cv::Mat mat(image->height, image->width, CV_8UC1,
+                      const_cast<std::uint8_t*>(image->pixels.data()));
+    std::vector<cv::Point2f> ref;
+    ASSERT_TRUE(cv::findChessboardCornersSB(mat, cv::Size(9, 6), ref,
+                                            cv::CALIB_CB_NORMALIZE_IMAGE | cv::CALIB_CB_ACCURACY))
+        << name;
+    double direct = 0, reversed = 0;
+    for (std::size_t i = 0; i < ref.size(); ++i) {
+      direct = std::max(direct, (d.corners_px[i] - Eigen::Vector2d(ref[i].x, ref[i].y)).norm());
+      const cv::Point2f& r = ref[ref.size() - 1 - i];
+      reversed = std::max(reversed, (d.corners_px[i] - Eigen::Vector2d(r.x, r.y)).norm());
+    }
+    EXPECT_LT(std::min(direct, reversed), 2.0) << name << ": " << d.message;
+  }
+  EXPECT_GT(rerefined, 0) << "left03's outer corners run off at the default window";
+}
+
 TEST(TargetDetection, UnreadableBytesAreReportedNotThrown) {
   const BoardSpec board = ParseBoardSpec("chessboard:9x6:25");
   const TargetDetection d = DetectTargetInEncodedImage("this is not a JPEG", board);
