@@ -75,6 +75,79 @@ Image8 Quantize(const std::vector<float>& img, int w, int h, double noise_sigma,
   return out;
 }
 
+// Integral of the two-half-Gaussian profile of peak 1 (StripeShape) from -inf to t, t relative
+// to the mode: s_lo sqrt(2 pi) Phi(t / s_lo) below the mode, plus s_hi sqrt(2 pi) (Phi(t / s_hi)
+// - 1/2) above it.
+double HalfGaussiansIntegral(double t, double s_lo, double s_hi) {
+  constexpr double kSqrtHalfPi = 1.2533141373155003;  // sqrt(pi / 2)
+  if (t < 0) return kSqrtHalfPi * s_lo * std::erfc(-t / (std::numbers::sqrt2 * s_lo));
+  return kSqrtHalfPi * (s_lo + s_hi * std::erf(t / (std::numbers::sqrt2 * s_hi)));
+}
+
+// Multiplicative log-normal speckle over n consecutive rows of one column (StripeShape): a
+// unit-variance Gaussian process g (white normals filtered by a Gaussian kernel of sigma grain /
+// sqrt(2), weights normalized to unit sum of squares, so Var g = 1 exactly and its
+// autocorrelation is exp(-d^2 / (2 grain^2))), mapped to exp(sigma_l g - sigma_l^2 / 2) with
+// sigma_l^2 = ln(1 + C^2): mean 1 and std C (log-normal moments; Goodman, "Speckle Phenomena in
+// Optics", 2007, for the contrast of integrated speckle).
+std::vector<double> SpeckleField(int n, const StripeShape& shape, std::uint64_t seed) {
+  const double kernel_sigma = shape.speckle_grain_px / std::numbers::sqrt2;
+  const int r = std::max(1, static_cast<int>(std::ceil(4 * kernel_sigma)));
+  std::vector<double> kernel(2 * r + 1);
+  double sum2 = 0;
+  for (int i = -r; i <= r; ++i) {
+    kernel[i + r] = std::exp(-0.5 * i * i / (kernel_sigma * kernel_sigma));
+    sum2 += kernel[i + r] * kernel[i + r];
+  }
+  for (double& k : kernel) k /= std::sqrt(sum2);
+  Rng rng(seed);
+  std::vector<double> white(static_cast<std::size_t>(n + 2 * r));
+  for (double& v : white) v = rng.Normal();
+  const double sigma_l2 = std::log1p(shape.speckle_contrast * shape.speckle_contrast);
+  const double sigma_l = std::sqrt(sigma_l2);
+  std::vector<double> field(static_cast<std::size_t>(n));
+  for (int y = 0; y < n; ++y) {
+    double g = 0;
+    for (int i = 0; i <= 2 * r; ++i) g += kernel[i] * white[y + i];
+    field[y] = std::exp(sigma_l * g - 0.5 * sigma_l2);
+  }
+  return field;
+}
+
+// Adds one column's stripe (gray levels above the ambient) of the exposure's row, FWHM and
+// intensity, shaped by `shape`; speckle drawn from `speckle_seed`. With StripeShape{} every
+// operation reduces to the point-sampled Gaussian exactly (factors of 1.0, offsets of 0.0).
+void AddStripe(std::vector<float>& img, int w, int h, int x, double row, double width_px,
+               double intensity, const StripeShape& shape, std::uint64_t speckle_seed) {
+  const double sigma = width_px / 2.3548200450309493;  // FWHM -> sigma
+  const double peak = 255.0 * intensity * shape.peak_gain;
+  const double s_lo = (1 - shape.asymmetry) * sigma;  // rows above the mode
+  const double s_hi = (1 + shape.asymmetry) * sigma;  // rows below it
+  const double reach = 5 * std::max(s_lo, s_hi) + (shape.integrate_pixel_area ? 0.5 : 0.0);
+  const int y0 = std::max(0, static_cast<int>(std::floor(row - reach)));
+  const int y1 = std::min(h - 1, static_cast<int>(std::ceil(row + reach)));
+  if (y1 < y0) return;
+  std::vector<double> speckle;
+  if (shape.speckle_contrast > 0) speckle = SpeckleField(y1 - y0 + 1, shape, speckle_seed);
+  for (int y = y0; y <= y1; ++y) {
+    double value;
+    if (shape.integrate_pixel_area) {
+      // Mean over the pixel's extent [y - 1/2, y + 1/2] (fill factor 1).
+      value = peak * (HalfGaussiansIntegral(y + 0.5 - row, s_lo, s_hi) -
+                      HalfGaussiansIntegral(y - 0.5 - row, s_lo, s_hi));
+    } else {
+      const double d = (y - row) / (y < row ? s_lo : s_hi);
+      value = peak * std::exp(-0.5 * d * d);
+    }
+    if (!speckle.empty()) value *= speckle[y - y0];
+    img[static_cast<std::size_t>(y) * w + x] += static_cast<float>(value);
+  }
+}
+
+// Speckle streams of StreamSeed(seed, .): one per column and peak (stripe, ghost), well away
+// from the small stream ids other renderers use.
+constexpr std::uint64_t kSpeckleStream = 1ull << 40;
+
 // The target frame from BoardSpec's chessboard frame in units of one square: BoardSpec's origin,
 // the first inner corner, is one square in from the pattern's outer corner along x and y.
 Eigen::Isometry3d TargetFromBoardInSquares() {
@@ -138,6 +211,49 @@ void ImageRenderOptions::Check(const std::string& what) const {
   if (edge_samples < 1 || edge_samples > 64) {
     throw OptionError(what + ".edge_samples must be in [1, 64]");
   }
+}
+
+void StripeShape::Check(const std::string& what) const {
+  if (!(asymmetry >= -0.9 && asymmetry <= 0.9)) {
+    throw OptionError(what + ".asymmetry must be in [-0.9, 0.9] (got " + std::to_string(asymmetry) +
+                      ")");
+  }
+  if (!(speckle_contrast >= 0 && speckle_contrast <= 1)) {
+    throw OptionError(what + ".speckle_contrast must be in [0, 1] (got " +
+                      std::to_string(speckle_contrast) + ")");
+  }
+  if (!(speckle_grain_px >= 0.5 && speckle_grain_px <= 50)) {
+    throw OptionError(what + ".speckle_grain_px must be in [0.5, 50] (got " +
+                      std::to_string(speckle_grain_px) + ")");
+  }
+  if (!(peak_gain > 0 && peak_gain <= 100)) {
+    throw OptionError(what + ".peak_gain must be in (0, 100] (got " + std::to_string(peak_gain) +
+                      ")");
+  }
+}
+
+std::vector<std::string> StripeShapePresetNames() {
+  return {"sampled-gaussian", "pixel-area", "asymmetric", "speckle", "saturated"};
+}
+
+StripeShape StripeShapePreset(const std::string& name) {
+  StripeShape shape;
+  if (name == "sampled-gaussian") return shape;
+  shape.integrate_pixel_area = true;
+  if (name == "pixel-area") return shape;
+  if (name == "asymmetric") {
+    shape.asymmetry = 0.3;  // half-Gaussians of 0.7 s and 1.3 s
+  } else if (name == "speckle") {
+    shape.speckle_contrast = 0.25;
+    shape.speckle_grain_px = 1.5;
+  } else if (name == "saturated") {
+    shape.peak_gain = 4.0;
+  } else {
+    std::string known;
+    for (const std::string& n : StripeShapePresetNames()) known += (known.empty() ? "" : ", ") + n;
+    throw OptionError("stripe shape '" + name + "' is not one of " + known);
+  }
+  return shape;
 }
 
 ImageRenderer::ImageRenderer(const calib::CameraModel& camera) : camera_(camera) {
@@ -244,28 +360,28 @@ Image8 ImageRenderer::RenderChessboard(const ChessboardTarget& target,
 
 Image8 ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
                                       const ImageRenderOptions& options, std::uint64_t seed) const {
+  return RenderLaserLine(exposure, options, StripeShape{}, seed);
+}
+
+Image8 ImageRenderer::RenderLaserLine(const ExposureTruth& exposure,
+                                      const ImageRenderOptions& options, const StripeShape& shape,
+                                      std::uint64_t seed) const {
   options.Check();
+  shape.Check();
   const int w = camera_.width_px();
   const int h = camera_.height_px();
   LASERCELL_CHECK(static_cast<int>(exposure.row_px.size()) == w, "exposure width matches camera");
   std::vector<float> img(static_cast<std::size_t>(w) * h, static_cast<float>(options.ambient));
-  const auto stripe = [&](int x, double row, double width_px, double intensity) {
-    const double sigma = width_px / 2.3548200450309493;  // FWHM -> sigma
-    const double peak = 255.0 * intensity;
-    const int y0 = std::max(0, static_cast<int>(std::floor(row - 5 * sigma)));
-    const int y1 = std::min(h - 1, static_cast<int>(std::ceil(row + 5 * sigma)));
-    for (int y = y0; y <= y1; ++y) {
-      const double d = (y - row) / sigma;
-      img[static_cast<std::size_t>(y) * w + x] += static_cast<float>(peak * std::exp(-0.5 * d * d));
-    }
-  };
   for (int x = 0; x < w; ++x) {
+    const std::uint64_t stream = kSpeckleStream + 2 * static_cast<std::uint64_t>(x);
     if (!std::isnan(exposure.row_px[x])) {
-      stripe(x, exposure.row_px[x], exposure.width_px[x], exposure.intensity[x]);
+      AddStripe(img, w, h, x, exposure.row_px[x], exposure.width_px[x], exposure.intensity[x],
+                shape, StreamSeed(seed, stream));
     }
     // Specular ghosts (laser_renderer.hpp), when the exposure has them: a second, weaker peak.
     if (!exposure.reflection_row_px.empty() && !std::isnan(exposure.reflection_row_px[x])) {
-      stripe(x, exposure.reflection_row_px[x], 2.0, exposure.reflection_intensity[x]);
+      AddStripe(img, w, h, x, exposure.reflection_row_px[x], 2.0, exposure.reflection_intensity[x],
+                shape, StreamSeed(seed, stream + 1));
     }
   }
   return Quantize(img, w, h, options.noise_sigma, seed);

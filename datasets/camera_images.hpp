@@ -70,6 +70,62 @@ struct ImageRenderOptions {
   void Check(const std::string& what = "images") const;
 };
 
+/// Cross-section of the laser stripe along an image column, for RenderLaserLine: what a real
+/// sensor sees instead of the point-sampled Gaussian (on which the Gaussian three-point estimator
+/// is exact by construction). The defaults reproduce that point-sampled Gaussian bit for bit.
+///
+/// Per column, with r = ExposureTruth::row_px (the ground truth), s = width_px / 2.3548 (FWHM ->
+/// sigma) and A = 255 * intensity * peak_gain gray levels:
+///   profile  f(t) = A exp(-t^2 / (2 s_t^2)), t = row - r, s_t = (1 - asymmetry) s for t < 0 and
+///            (1 + asymmetry) s for t >= 0 (two half-Gaussians of the same peak; the FWHM stays
+///            1.1774 ((1 - a) + (1 + a)) s = width_px);
+///   pixel    f at the pixel centre (integrate_pixel_area false), or the mean of f over the pixel's
+///            extent [row - 1/2, row + 1/2] (true: a pixel integrates light over its area, fill
+///            factor 1; closed form with erf);
+///   speckle  times a multiplicative field of mean 1 and contrast speckle_contrast (std / mean),
+///            one value per pixel, correlated along the column, fresh per column;
+///   then     + ambient, read noise, rounding and clipping to 0..255 (ImageRenderOptions).
+/// Ground truth in every case is r, the beam centre = the profile's mode. An asymmetric profile
+/// stands for the skewed image of the spot on a tilted surface: an estimator's shift towards the
+/// wider side (the centroid moves by sqrt(2 / pi) * 2 a s) is real error a sensor would make
+/// there (peak detectors on such non-ideal stripes: Forest, Salvi, Cabruja & Pous, "Laser stripe
+/// peak detector for 3D scanners. A FIR filter approach", ICPR 2004).
+struct StripeShape {
+  /// a in [-0.9, 0.9]: half-Gaussian widths (1 - a) s above (smaller rows) and (1 + a) s below
+  /// the mode; a > 0 puts the wider side towards larger rows. 0: symmetric.
+  double asymmetry = 0.0;
+  /// Average the profile over each pixel's extent (box filter of 1 px) instead of sampling it at
+  /// the pixel centre.
+  bool integrate_pixel_area = false;
+  /// Speckle contrast C = std / mean of the multiplicative field, [0, 1]; 0: no speckle. The
+  /// field is log-normal, exp(sigma_l g - sigma_l^2 / 2) with sigma_l^2 = ln(1 + C^2), g a
+  /// unit-variance Gaussian process: mean 1, contrast exactly C, always positive (partially
+  /// developed speckle averaged by the pixel; Goodman, "Speckle Phenomena in Optics", 2007;
+  /// its effect on triangulation: Dorsch, Haeusler & Herrmann, Appl. Opt. 33(7), 1994).
+  double speckle_contrast = 0.0;
+  /// Speckle grain along the column, px, [0.5, 50]: g has the Gaussian autocorrelation
+  /// exp(-d^2 / (2 grain^2)) at a lag of d rows (white noise filtered by a Gaussian of
+  /// sigma grain / sqrt(2), sampled at whole rows: exact to < 1e-4 for grains >= 1 px).
+  double speckle_grain_px = 1.5;
+  /// Factor on the exposure's intensity, (0, 100]: > 1 models an over-long exposure whose top
+  /// clips at 255 in the 8-bit quantization.
+  double peak_gain = 1.0;
+
+  /// Throws OptionError naming `what` and the field.
+  void Check(const std::string& what = "stripe") const;
+};
+
+/// Named stripe shapes (StripeShapePresetNames() order):
+///  - "sampled-gaussian": the defaults, a Gaussian sampled at the pixel centres;
+///  - "pixel-area": the Gaussian integrated over each pixel;
+///  - "asymmetric": half-Gaussians of 0.7 s and 1.3 s (asymmetry 0.3), pixel-integrated;
+///  - "speckle": pixel-integrated Gaussian times speckle of contrast 0.25, grain 1.5 px;
+///  - "saturated": pixel-integrated Gaussian at peak_gain 4, its top clipped at 255.
+/// Throws OptionError for another name (listing the known ones).
+StripeShape StripeShapePreset(const std::string& name);
+/// The preset names, in the order above.
+std::vector<std::string> StripeShapePresetNames();
+
 /// Renders images through one camera. Construction unprojects every pixel corner once.
 class ImageRenderer {
  public:
@@ -85,6 +141,11 @@ class ImageRenderer {
   /// read noise; for peak-detector tests.
   Image8 RenderLaserLine(const ExposureTruth& exposure, const ImageRenderOptions& options,
                          std::uint64_t seed) const;
+  /// The same with the stripe's cross-section given by `shape` (ghost peaks get the same shape);
+  /// deterministic for a seed (read noise from `seed`, speckle from streams of it, one per
+  /// column). StripeShape{} gives exactly the image of the overload above.
+  Image8 RenderLaserLine(const ExposureTruth& exposure, const ImageRenderOptions& options,
+                         const StripeShape& shape, std::uint64_t seed) const;
 
   const calib::CameraModel& camera() const { return camera_; }
 

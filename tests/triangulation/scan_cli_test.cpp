@@ -209,7 +209,7 @@ TEST_F(ScanCli, BadInputExitsTwoWithOneLine) {
 }
 
 TEST_F(ScanCli, BenchPeaksPrintsOneRowPerEstimatorAndSnr) {
-  const CommandResult run = RunCli("bench peaks --snr 20,50 --images 1");
+  const CommandResult run = RunCli("bench peaks --snr 20,50 --images 1 --shape sampled-gaussian");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   std::istringstream in(run.out);
   std::string line;
