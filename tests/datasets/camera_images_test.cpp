@@ -14,6 +14,7 @@
 #include "datasets/cell.hpp"
 #include "datasets/laser_renderer.hpp"
 #include "datasets/sensor.hpp"
+#include "tests/sanitizer_scale.hpp"
 
 namespace lasercell::datasets {
 namespace {
@@ -324,7 +325,9 @@ TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
   const ImageRenderer renderer(camera);
   const ChessboardTarget target;
   const ImageRenderOptions options;  // blur, noise, vignetting on
-  const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(target, camera, 16, 23);
+  // Sanitizer build (slow): 5 views exercise the same code; the accuracy needs all 16.
+  const std::vector<Eigen::Isometry3d> poses =
+      DrawChessboardPoses(target, camera, test::kSanitizerBuild ? 5 : 16, 23);
   std::vector<std::vector<cv::Point3f>> object_points;
   std::vector<std::vector<cv::Point2f>> image_points;
   for (std::size_t k = 0; k < poses.size(); ++k) {
@@ -343,11 +346,12 @@ TEST(CameraImages, CalibrateCameraRecoversTheFocalLength) {
     object_points.push_back(obj);
     image_points.push_back(found);
   }
-  ASSERT_GE(image_points.size(), 14u);
+  ASSERT_GE(image_points.size(), poses.size() - 2);
   cv::Mat k, dist;
   std::vector<cv::Mat> rvecs, tvecs;
   const double rms = cv::calibrateCamera(object_points, image_points, cv::Size(1024, 1024), k, dist,
                                          rvecs, tvecs, cv::CALIB_RATIONAL_MODEL);
+  if (!test::StatisticsAsserted()) return;
   EXPECT_LT(rms, 0.3);
   EXPECT_NEAR(k.at<double>(0, 0) / intrinsics.fx_px, 1.0, 0.002);
   EXPECT_NEAR(k.at<double>(1, 1) / intrinsics.fy_px, 1.0, 0.002);
