@@ -62,6 +62,12 @@ bool ParseNumber(const std::string& token, double* value) {
   return r.ec == std::errc() && r.ptr == last && first != last;
 }
 
+// A line of the text layout that holds a pose: not blank, not a '#' comment.
+bool IsPoseLine(const std::string& line) {
+  const auto first = line.find_first_not_of(" \t\r");
+  return first != std::string::npos && line[first] != '#';
+}
+
 // The first character that is not blank or a UTF-8 byte order mark, '\0' for none.
 char FirstNonBlank(const std::string& text) {
   std::size_t i = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
@@ -117,8 +123,7 @@ RobotPoses ParseEulerText(const std::string& text, const std::string& name,
   int line_no = 0;
   for (std::string line; std::getline(in, line);) {
     ++line_no;
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
+    if (!IsPoseLine(line)) continue;
     const std::string where = "line " + std::to_string(line_no);
     const std::vector<std::string> tokens = Tokens(line);
     std::array<double, 6> v{};
@@ -189,8 +194,7 @@ std::string EulerLayout(const std::string& text) {
   }
   std::istringstream in(text);
   for (std::string line; std::getline(in, line);) {
-    const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
+    if (!IsPoseLine(line)) continue;
     const std::vector<std::string> tokens = Tokens(line);
     double x = 0;
     const bool six = tokens.size() == 6 &&

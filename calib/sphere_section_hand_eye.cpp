@@ -267,13 +267,17 @@ std::vector<SphereSection> FitSections(const std::vector<SphereSectionProfile>& 
   return out;
 }
 
+// The section's circle as eq. (1) takes it: (x_c, z_c, r).
+Eigen::Vector3d CircleOf(const SphereSection& s) {
+  return {s.circle.centre.x(), s.circle.centre.y(), s.circle.radius_mm};
+}
+
 std::vector<Section> UsedSections(const std::vector<SphereSectionProfile>& profiles,
                                   const std::vector<SphereSection>& sections, int skip = -1) {
   std::vector<Section> out;
   for (std::size_t i = 0; i < sections.size(); ++i) {
     if (!sections[i].used || static_cast<int>(i) == skip) continue;
-    const CircleFitResult& c = sections[i].circle;
-    out.push_back({profiles[i].base_from_flange, {c.centre.x(), c.centre.y(), c.radius_mm}});
+    out.push_back({profiles[i].base_from_flange, CircleOf(sections[i])});
   }
   return out;
 }
@@ -294,7 +298,7 @@ void LeaveOneOut(const std::vector<SphereSectionProfile>& profiles, const Soluti
     const std::vector<Section> rest = UsedSections(profiles, r->sections, static_cast<int>(k));
     if (rest.size() < 5) return;
     const Solution sol = Refine(rest, full, o.sphere_side, o.estimate_radius, o.max_iterations);
-    const Eigen::Vector3d circle(s.circle.centre.x(), s.circle.centre.y(), s.circle.radius_mm);
+    const Eigen::Vector3d circle = CircleOf(s);
     const Eigen::Vector3d predicted =
         CentreInBase(profiles[k].base_from_flange, sol.flange_from_sensor,
                      SensorCentre(circle, sol.radius, o.sphere_side));
@@ -358,7 +362,7 @@ SphereSectionHandEyeResult CalibrateHandEyeFromSphereSections(
   for (std::size_t i = 0; i < r.sections.size(); ++i) {
     SphereSection& s = r.sections[i];
     if (!s.used) continue;
-    const Eigen::Vector3d circle(s.circle.centre.x(), s.circle.centre.y(), s.circle.radius_mm);
+    const Eigen::Vector3d circle = CircleOf(s);
     s.centre_in_sensor = SensorCentre(circle, sol.radius, o.sphere_side);
     s.centre_in_base =
         CentreInBase(profiles[i].base_from_flange, sol.flange_from_sensor, s.centre_in_sensor);
