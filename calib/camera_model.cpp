@@ -12,6 +12,7 @@ extern "C" {
 #include <utility>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 
@@ -179,6 +180,11 @@ bool CameraModel::InImage(const Eigen::Vector2d& pixel) const {
 
 std::string LensInversionCheck::Describe() const {
   if (ok()) return "";
+  if (without_ray == 0 && reversed_cells == 0) {
+    return "the radial distortion turns back " + FormatFixed(radial_fold_px, 1) +
+           " px from the principal point (its high-order terms cancel where the boards were and "
+           "diverge there): the lens model folds over on that ring";
+  }
   if (without_ray > 0) {
     return std::to_string(without_ray) + " of " + std::to_string(pixels) +
            " grid pixels have no ray that projects back (worst " + FormatDouble(worst_px) +
@@ -188,6 +194,39 @@ std::string LensInversionCheck::Describe() const {
   return std::to_string(reversed_cells) + " of " + std::to_string(cells) +
          " grid cells map to rays in reversed order: the lens model folds over there";
 }
+
+namespace {
+
+// Distorted normalized radius at which an OPENCV model's radial map g(r) = r * N(r^2) / D(r^2)
+// (N = 1 + k1 r^2 + k2 r^4 + k3 r^6, D = 1 + k4 r^2 + k5 r^4 + k6 r^6; Brown-Conrady with
+// OpenCV's rational extension) stops increasing or D reaches zero, marching r outwards until g
+// passes `needed`; +inf when it passes without turning back or the model is not OPENCV. The
+// tangential terms (p1, p2, ~1e-4 here) are left out: they shift, not fold.
+double RadialFoldRadius(const CameraModel& model, double needed) {
+  const std::string& name = model.lensmodel();
+  if (name.rfind("LENSMODEL_OPENCV", 0) != 0) return std::numeric_limits<double>::infinity();
+  const std::vector<double>& in = model.intrinsics();
+  const auto k = [&](std::size_t i) { return i < in.size() ? in[i] : 0.0; };
+  const double k1 = k(4), k2 = k(5), k3 = k(8), k4 = k(9), k5 = k(10), k6 = k(11);
+  const auto g = [&](double r, bool* bad) {
+    const double s = r * r;
+    const double den = 1 + s * (k4 + s * (k5 + s * k6));
+    *bad = !(den > 0);
+    return r * (1 + s * (k1 + s * (k2 + s * k3))) / den;
+  };
+  constexpr double kStep = 1e-4;  // normalized radius: ~0.1 px at fx ~ 1000
+  double previous = 0;
+  for (double r = kStep; r < 20.0; r += kStep) {
+    bool bad = false;
+    const double value = g(r, &bad);
+    if (bad || !(value > previous)) return previous;
+    if (value >= needed) return std::numeric_limits<double>::infinity();
+    previous = value;
+  }
+  return std::numeric_limits<double>::infinity();
+}
+
+}  // namespace
 
 LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::AlignedBox2d& region,
                                       int grid, double tolerance_px) {
@@ -214,6 +253,17 @@ LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::Ali
     }
   }
   check.pixels = static_cast<int>(pixels.size());
+  if (region.isEmpty()) {  // the whole imager: where the triangulator needs every ray
+    const std::vector<double>& in = model.intrinsics();
+    double needed = 0;  // largest normalized distorted radius in the region
+    for (const Eigen::Vector2d& c :
+         {box.min(), box.max(), Eigen::Vector2d(box.min().x(), box.max().y()),
+          Eigen::Vector2d(box.max().x(), box.min().y())}) {
+      needed = std::max(needed, std::hypot((c.x() - in[2]) / in[0], (c.y() - in[3]) / in[1]));
+    }
+    const double fold = RadialFoldRadius(model, needed);
+    if (std::isfinite(fold)) check.radial_fold_px = std::max(fold * in[0], 1e-9);
+  }
   std::vector<Eigen::Vector3d> rays;
   try {
     rays = model.UnprojectMany(pixels);

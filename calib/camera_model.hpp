@@ -87,7 +87,13 @@ struct LensInversionCheck {
   int reversed_cells = 0;  ///< Cells whose rays are in reversed order.
   double worst_px = 0;     ///< Largest round-trip error (inf: no finite ray).
   Eigen::Vector2d first_bad_px = Eigen::Vector2d::Zero();  ///< First pixel without a ray.
-  bool ok() const { return without_ray == 0 && reversed_cells == 0; }
+  /// OPENCV models: distance from the principal point (px along x) at which the radial
+  /// distortion r * (1 + k1 r^2 + ...) / (1 + k4 r^2 + ...) stops increasing or its denominator
+  /// reaches zero inside the imager (0: it does not; checked for the whole imager only). A
+  /// rational model can fold on a ring a pixel wide that a grid steps over (a pole of the
+  /// denominator nearly cancelled by a zero of the numerator); this finds it analytically.
+  double radial_fold_px = 0;
+  bool ok() const { return without_ray == 0 && reversed_cells == 0 && radial_fold_px == 0; }
   /// Fraction of the checked pixels without a ray.
   double FractionWithoutRay() const { return pixels > 0 ? double(without_ray) / pixels : 0.0; }
   /// "" when ok(), else what failed, in words.

@@ -60,6 +60,10 @@ void AssessLensInversion(IntrinsicsResult* result) {
                                 ", inside the box of the observed corners, where the board "
                                 "pinned it down; use a lower-order model (OPENCV5)";
     result->warnings.push_back(result->inversion_problem);
+  } else if (imager.without_ray == 0 && imager.reversed_cells == 0 && !imager.ok()) {
+    result->warnings.push_back(imager.Describe() +
+                               "; rays near that ring are wrong wherever it lies: use a "
+                               "lower-order model (OPENCV5)");
   } else if (!imager.ok()) {
     result->warnings.push_back(
         imager.Describe() +

@@ -73,7 +73,7 @@ std::vector<Touch> SimulateTouches(const SimConfig& config, const CellTruth& tru
   for (std::size_t i = 0; i < centers.size(); ++i) {
     Touch t;
     t.sphere = static_cast<int>(i);
-    const Eigen::Vector3d top_cell = centers[i] + Eigen::Vector3d(0, 0, config.spheres.radius_mm);
+    const Eigen::Vector3d top_cell = centers[i] + Eigen::Vector3d(0, 0, truth.spheres.RadiusOf(i));
     t.true_top_in_handling_base = hb_from_cell * top_cell;
     Eigen::Vector3d noise;
     for (int k = 0; k < 3; ++k) noise[k] = rng.Normal(0.0, config.touches.sigma_mm);
@@ -124,7 +124,7 @@ SweepTiming PoseSweepTiming(const SimConfig& config, const PoseSweepOptions& opt
 std::vector<PoseSweep> PlanPoseSweeps(const SimConfig& config, const CellTruth& truth,
                                       const PoseSweepOptions& options, std::uint64_t seed,
                                       const std::string& what) {
-  const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+  const Scene scene = MakeSphereScene(truth.layout, truth.spheres);
   LaserRenderOptions exact = config.render;
   exact.row_sigma_px = exact.intensity_sigma = exact.dropout_probability = 0;
   const LaserRenderer renderer(scene, truth.sensor, exact);
@@ -263,6 +263,7 @@ std::string TouchesTruthYaml(const SimConfig& config, const CellTruth& truth,
     o << "  - sphere: " << t.sphere
       << "\n    sphere_center_in_handling_base: " << Vec(hb_from_cell * centers[t.sphere])
       << "\n    sphere_center_in_cell: " << Vec(centers[t.sphere])
+      << "\n    true_sphere_radius_mm: " << Num(truth.spheres.RadiusOf(t.sphere))
       << "\n    true_top_in_handling_base: " << Vec(t.true_top_in_handling_base)
       << "\n    touch_error_mm: " << Vec(t.measured_in_handling_base - t.true_top_in_handling_base)
       << "\n    tool_tilt_deg: " << Num(t.tool_tilt_deg) << "\n";
@@ -291,6 +292,7 @@ std::string PoseSweepTruthYaml(const SimConfig& config, const CellTruth& truth,
   o << "      tilt_deg: " << Num(p.tilt_deg) << "\n      azimuth_deg: " << Num(p.azimuth_deg)
     << "\n      roll_deg: " << Num(p.roll_deg) << "\n    sphere: " << p.sphere
     << "\n    sphere_radius_mm: " << Num(config.spheres.radius_mm)
+    << "\n    true_sphere_radius_mm: " << Num(truth.spheres.RadiusOf(p.sphere))
     << "\n    sphere_center_in_cell: " << Vec(center) << "\n    sphere_center_in_vision_base: "
     << Vec(truth.layout.cell_from_vision_base.inverse() * center)
     << "\n    sphere_columns_at_middle: " << p.sphere_columns_at_middle << "\n";

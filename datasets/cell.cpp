@@ -53,6 +53,18 @@ void SphereTargets::Check(const std::string& what) const {
                       std::to_string(stand_heights_mm.size()) + " and " +
                       std::to_string(positions_xy_mm.size()) + ")");
   }
+  if (!radius_errors_mm.empty() && radius_errors_mm.size() != stand_heights_mm.size()) {
+    throw OptionError(what + ".radius_errors_mm must be empty or list one error per sphere (got " +
+                      std::to_string(radius_errors_mm.size()) + " for " +
+                      std::to_string(stand_heights_mm.size()) + " spheres)");
+  }
+  for (std::size_t i = 0; i < radius_errors_mm.size(); ++i) {
+    if (!(std::abs(radius_errors_mm[i]) <= 0.1 * radius_mm)) {
+      throw OptionError(what + ".radius_errors_mm[" + std::to_string(i) +
+                        "] must be within 10 % of radius_mm (got " +
+                        std::to_string(radius_errors_mm[i]) + ")");
+    }
+  }
   for (std::size_t i = 0; i < stand_heights_mm.size(); ++i) {
     if (!(stand_heights_mm[i] > 0) || !std::isfinite(stand_heights_mm[i])) {
       throw OptionError(what + ".stand_heights_mm[" + std::to_string(i) +
@@ -158,7 +170,7 @@ Scene MakeSphereScene(const CellLayout& layout, const SphereTargets& spheres) {
     ball.albedo = layout.albedo.spheres;
     scene.Add({"sphere_" + std::to_string(i),
                MakeHemisphere(Eigen::Isometry3d(Eigen::Translation3d(centers[i])),
-                              spheres.radius_mm, spheres.segments, spheres.segments / 4),
+                              spheres.RadiusOf(i), spheres.segments, spheres.segments / 4),
                ball});
   }
   scene.Commit();

@@ -46,7 +46,15 @@ struct SphereTargets {
   std::vector<Eigen::Vector2d> positions_xy_mm = {
       {-250, -140}, {230, -160}, {260, 150}, {-220, 170}};  ///< Stand axes in cell xy.
   int segments = 128;                                       ///< Tessellation around.
+  /// Manufacturing error of each sphere's radius (true radius = radius_mm + error), mm; empty:
+  /// every sphere has exactly radius_mm. The stands keep radius_mm. Records state radius_mm
+  /// (the nominal, as printed on the drawing); only the truth knows the errors.
+  std::vector<double> radius_errors_mm;
 
+  /// True radius of sphere i, mm.
+  double RadiusOf(std::size_t i) const {
+    return radius_mm + (i < radius_errors_mm.size() ? radius_errors_mm[i] : 0.0);
+  }
   /// Sphere centres in the cell frame (the stand top's centre).
   std::vector<Eigen::Vector3d> CentersInCell() const;
   /// Throws OptionError naming `what` and the field.

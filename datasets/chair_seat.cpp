@@ -152,4 +152,35 @@ ChairSeat MakeChairSeat(const ChairSeatOptions& o) {
   return seat;
 }
 
+void SeatRenderOptions::Check(const std::string& what) const {
+  if (angular_steps != 0 && angular_steps < 16) {
+    throw OptionError(what + ".angular_steps must be 0 (the CAD's) or >= 16 (got " +
+                      std::to_string(angular_steps) + ")");
+  }
+  if (radial_steps != 0 && radial_steps < 2) {
+    throw OptionError(what + ".radial_steps must be 0 (the CAD's) or >= 2 (got " +
+                      std::to_string(radial_steps) + ")");
+  }
+  if (!(std::abs(warp_mm) <= 5.0)) {
+    throw OptionError(what + ".warp_mm must be within +-5 mm (got " + std::to_string(warp_mm) +
+                      ")");
+  }
+}
+
+ChairSeat MakeRenderedChairSeat(const ChairSeatOptions& cad, const SeatRenderOptions& render) {
+  render.Check();
+  ChairSeatOptions o = cad;
+  if (render.angular_steps > 0) o.angular_steps = render.angular_steps;
+  if (render.radial_steps > 0) o.radial_steps = render.radial_steps;
+  ChairSeat seat = MakeChairSeat(o);
+  if (render.warp_mm != 0.0) {
+    const double scale = render.warp_mm / (o.half_length_x_mm * o.half_length_x_mm);
+    for (Eigen::Vector3d& v : seat.part.mesh.vertices.positions) {
+      const double dx = v.x() - o.boss_offset_x_mm;
+      v.z() += scale * (dx * dx - v.y() * v.y());
+    }
+  }
+  return seat;
+}
+
 }  // namespace lasercell::datasets

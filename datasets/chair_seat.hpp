@@ -45,4 +45,23 @@ struct ChairSeat {
 /// Builds the seat.
 ChairSeat MakeChairSeat(const ChairSeatOptions& options = {});
 
+/// The physical seat the sensor sees, against its CAD model (ChairSeatOptions, what the user's
+/// models/seat.stl holds): a moulded part is not its CAD. Defaults reproduce the CAD exactly.
+struct SeatRenderOptions {
+  int angular_steps = 0;  ///< Tessellation of the rendered seat around the boss; 0: the CAD's.
+  int radial_steps = 0;   ///< Tessellation from the boss to the rim; 0: the CAD's.
+  /// Saddle warp of the moulded shell, mm: every vertex moves along the part's z by
+  /// warp_mm * ((x - boss_offset_x)^2 - y^2) / half_length_x^2 (a "potato chip" about the boss
+  /// axis: zero value and zero slope at the hole, so the grasp frame keeps its place, and
+  /// +-warp_mm near the rim's x and y extremes). |warp_mm| <= 5.
+  double warp_mm = 0.0;
+
+  /// Throws OptionError naming `what` and the field.
+  void Check(const std::string& what = "SeatRenderOptions") const;
+};
+
+/// The seat as rendered: MakeChairSeat at the render tessellation, then warped. The hole's
+/// centre and axis are those of the CAD (the warp vanishes there to first order).
+ChairSeat MakeRenderedChairSeat(const ChairSeatOptions& cad, const SeatRenderOptions& render);
+
 }  // namespace lasercell::datasets

@@ -12,6 +12,7 @@
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/yaml_fields.hpp"
+#include "datasets/sim_profile.hpp"
 
 namespace lasercell::datasets {
 
@@ -217,6 +218,9 @@ void SimConfig::Check() const {
   }
   seat_placement.Check("SimConfig.seats");
   seat_shape.Check("SimConfig.seats.shape");
+  seat_render.Check("SimConfig.seats.rendered");
+  ParseSimProfile(profile);  // names the allowed profiles
+  CheckRange(corner_sigma_px, 0.0, 5.0, "SimConfig.images.corner_sigma_px");
   if (capture_planes && plane_heights_mm.size() < 2) {
     throw OptionError(
         "SimConfig.planes.heights_mm must list at least 2 heights for the laser "
@@ -235,6 +239,8 @@ void SimConfig::Check() const {
                       "])");
   }
   spheres.Check("SimConfig.spheres");
+  CheckRange(sphere_radius_tolerance_mm, 0.0, 0.1 * spheres.radius_mm,
+             "SimConfig.spheres.radius_tolerance_mm");
   chessboard.Check("SimConfig.chessboard");
   images.Check("SimConfig.images");
   if (capture_chessboard_images && (chessboard_images < 1 || chessboard_images > 1000)) {
@@ -311,6 +317,7 @@ void ReadSensorSections(Fields& top, SimConfig& c) {
     r.Read("occlusion_epsilon_mm", &c.render.occlusion_epsilon_mm);
     r.Read("reflection_probability", &c.render.reflection_probability);
     r.Read("reflection_intensity", &c.render.reflection_intensity);
+    r.Read("reflective_objects", &c.render.reflective_objects);
     r.Done();
   }
   {
@@ -394,6 +401,11 @@ void ReadSceneSections(Fields& top, SimConfig& c) {
     shape.Read("angular_steps", &o.angular_steps);
     shape.Read("radial_steps", &o.radial_steps);
     shape.Done();
+    Fields rendered = s.Sub("rendered");
+    rendered.Read("angular_steps", &c.seat_render.angular_steps);
+    rendered.Read("radial_steps", &c.seat_render.radial_steps);
+    rendered.Read("warp_mm", &c.seat_render.warp_mm);
+    rendered.Done();
     s.Done();
   }
   {
@@ -408,6 +420,8 @@ void ReadSceneSections(Fields& top, SimConfig& c) {
     s.Read("stand_heights_mm", &c.spheres.stand_heights_mm);
     s.Read("positions_xy_mm", &c.spheres.positions_xy_mm);
     s.Read("segments", &c.spheres.segments);
+    s.Read("radius_tolerance_mm", &c.sphere_radius_tolerance_mm);
+    s.Read("radius_errors_mm", &c.spheres.radius_errors_mm);
     s.Done();
   }
 }
@@ -415,9 +429,17 @@ void ReadSceneSections(Fields& top, SimConfig& c) {
 }  // namespace
 
 SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
-  SimConfig c;
   Fields top = Fields::Parse(text, name);
   top.ExpectFormat("lasercell.sim_config", kSimConfigVersion);
+  // The named profile is the base; every other field changes it.
+  std::string profile = "ideal";
+  top.Read("profile", &profile);
+  SimConfig c;
+  try {
+    c = SimConfigForProfile(profile);
+  } catch (const OptionError& e) {
+    throw OptionError(name + ": field 'profile': " + e.what());
+  }
   top.Read("seed", &c.seed);
   ReadSensorSections(top, c);
   ReadCellSections(top, c);
@@ -453,6 +475,7 @@ SimConfig SimConfigFromYaml(const std::string& text, const std::string& name) {
     i.Read("noise_sigma", &c.images.noise_sigma);
     i.Read("vignetting", &c.images.vignetting);
     i.Read("edge_samples", &c.images.edge_samples);
+    i.Read("corner_sigma_px", &c.corner_sigma_px);
     i.Done();
   }
   {
@@ -513,6 +536,7 @@ std::string SimConfigToYaml(const SimConfig& c) {
   const auto& r = c.render;
   const auto& s = c.seat_shape;
   o << "format: lasercell.sim_config\nversion: " << kSimConfigVersion << "\n";
+  o << "profile: " << c.profile << "\n";
   o << "seed: " << c.seed << "\n";
   o << "sensor:\n  camera: {width_px: " << cam.width_px << ", height_px: " << cam.height_px
     << ", fx_px: " << Num(cam.fx_px) << ", fy_px: " << Num(cam.fy_px)
@@ -537,7 +561,11 @@ std::string SimConfigToYaml(const SimConfig& c) {
     << ", speckle_intensity_sigma: " << Num(r.speckle_intensity_sigma)
     << ", occlusion_epsilon_mm: " << Num(r.occlusion_epsilon_mm)
     << ", reflection_probability: " << Num(r.reflection_probability)
-    << ", reflection_intensity: " << Num(r.reflection_intensity) << "}\n";
+    << ", reflection_intensity: " << Num(r.reflection_intensity) << ", reflective_objects: [";
+  for (std::size_t i = 0; i < r.reflective_objects.size(); ++i) {
+    o << (i ? ", " : "") << r.reflective_objects[i];
+  }
+  o << "]}\n";
   o << "timing: {profiles: " << c.timing.profiles << ", rate_hz: " << Num(c.timing.rate_hz)
     << ", jitter_s: " << Num(c.timing.jitter_s)
     << ", timestamp_noise_s: " << Num(c.timing.timestamp_noise_s)
@@ -576,6 +604,9 @@ std::string SimConfigToYaml(const SimConfig& c) {
     << ", boss_height_mm: " << Num(s.boss_height_mm)
     << ", hole_diameter_mm: " << Num(s.hole_diameter_mm) << ", angular_steps: " << s.angular_steps
     << ", radial_steps: " << s.radial_steps << "}\n";
+  o << "  rendered: {angular_steps: " << c.seat_render.angular_steps
+    << ", radial_steps: " << c.seat_render.radial_steps
+    << ", warp_mm: " << Num(c.seat_render.warp_mm) << "}\n";
   o << "planes: {heights_mm: " << List(c.plane_heights_mm) << ", size_mm: " << List(c.plane_size_mm)
     << "}\n";
   o << "spheres:\n  radius_mm: " << Num(c.spheres.radius_mm)
@@ -583,7 +614,11 @@ std::string SimConfigToYaml(const SimConfig& c) {
   for (std::size_t i = 0; i < c.spheres.positions_xy_mm.size(); ++i) {
     o << (i ? ", " : "") << List(c.spheres.positions_xy_mm[i]);
   }
-  o << "]\n  segments: " << c.spheres.segments << "\n";
+  o << "]\n  segments: " << c.spheres.segments
+    << "\n  radius_tolerance_mm: " << Num(c.sphere_radius_tolerance_mm) << "\n";
+  if (!c.spheres.radius_errors_mm.empty()) {
+    o << "  radius_errors_mm: " << List(c.spheres.radius_errors_mm) << "\n";
+  }
   o << "trajectory: {arc_radius_mm: " << Num(c.arc_radius_mm)
     << ", arc_angle_deg: " << Num(c.arc_angle_deg) << ", waypoints: " << c.arc_waypoints << "}\n";
   const auto b = [](bool v) { return v ? "true" : "false"; };
@@ -594,7 +629,8 @@ std::string SimConfigToYaml(const SimConfig& c) {
     << ", background_albedo: " << Num(c.images.background_albedo)
     << ", blur_sigma_px: " << Num(c.images.blur_sigma_px)
     << ", noise_sigma: " << Num(c.images.noise_sigma) << ", vignetting: " << b(c.images.vignetting)
-    << ", edge_samples: " << c.images.edge_samples << "}\n";
+    << ", edge_samples: " << c.images.edge_samples
+    << ", corner_sigma_px: " << Num(c.corner_sigma_px) << "}\n";
   o << "touches: {sigma_mm: " << Num(c.touches.sigma_mm)
     << ", tool_length_mm: " << Num(c.touches.tool_length_mm) << "}\n";
   for (auto [key, p] :

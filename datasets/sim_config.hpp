@@ -8,6 +8,7 @@
 // File layout (format lasercell.sim_config, version 1), all sections optional:
 //   format: lasercell.sim_config
 //   version: 1
+//   profile: ideal | realistic   (the named base the other fields change; sim_profile.hpp)
 //   seed: 1
 //   sensor: {camera: {width_px, height_px, fx_px, fy_px, cx_px, cy_px, distortion: [8]},
 //            baseline_mm, standoff_mm, fan_angle_deg,
@@ -16,7 +17,7 @@
 //            max_view_angle_deg, sheet_thickness_mm, min_width_px, row_sigma_px,
 //            intensity_sigma, dropout_probability, speckle_sigma_px,
 //            speckle_correlation_px, speckle_intensity_sigma, occlusion_epsilon_mm,
-//            reflection_probability, reflection_intensity}
+//            reflection_probability, reflection_intensity, reflective_objects: [names]}
 //   timing: {profiles, rate_hz, jitter_s, timestamp_noise_s, joint_noise_rad, start_ns}
 //   cell: {vision_base_mm: [x, y, z], vision_base_yaw_deg, handling_base_mm: [x, y, z],
 //          handling_base_yaw_deg, floor_size_mm,
@@ -25,13 +26,15 @@
 //   vision_robot: {joint_offsets_deg: [6] (explicit), joint_offset_sigma_deg,
 //                  dh_a_errors_mm: [6], dh_d_errors_mm: [6] (explicit), dh_length_sigma_mm}
 //   sweep: {measuring_height_mm, length_mm, center_xy_mm: [x, y], direction_deg}
-//   seats: {count, max_shift_mm, max_tilt_deg, max_yaw_deg, shape: {ChairSeatOptions fields}}
+//   seats: {count, max_shift_mm, max_tilt_deg, max_yaw_deg, shape: {ChairSeatOptions fields},
+//           rendered: {angular_steps, radial_steps, warp_mm}}
 //   planes: {heights_mm: [...], size_mm: [x, y]}
-//   spheres: {radius_mm, stand_heights_mm: [...], positions_xy_mm: [[x, y], ...], segments}
+//   spheres: {radius_mm, stand_heights_mm: [...], positions_xy_mm: [[x, y], ...], segments,
+//             radius_tolerance_mm, radius_errors_mm: [...] (explicit)}
 //   trajectory: {arc_radius_mm, arc_angle_deg, waypoints}
 //   chessboard: {images, squares: [x, y], square_mm, border_mm}
 //   images: {exposure, ambient, background_albedo, blur_sigma_px, noise_sigma, vignetting,
-//            edge_samples}
+//            edge_samples, corner_sigma_px}
 //   touches: {sigma_mm, tool_length_mm}
 //   eye_in_hand: {poses, min_tilt_deg, max_tilt_deg, max_roll_deg, sweep_length_mm, profiles,
 //                 range_offsets_mm}
@@ -110,6 +113,9 @@ struct HandEyeImageOptions {
 
 /// Everything the simulator needs; defaults give the standard cell.
 struct SimConfig {
+  /// The named profile this config was built on ("ideal" or "realistic", sim_profile.hpp). It
+  /// records the base only; the fields below are what the simulator uses.
+  std::string profile = "ideal";
   std::uint64_t seed = 1;  ///< Master seed: same seed (and config) -> identical files.
 
   SensorOptions sensor;  ///< Camera, laser geometry.
@@ -150,12 +156,19 @@ struct SimConfig {
   // Part scenes.
   int seat_count = 3;                   ///< Seat placements in a cell capture set.
   SeatPlacementOptions seat_placement;  ///< Table I ranges.
-  ChairSeatOptions seat_shape;          ///< Seat geometry.
+  ChairSeatOptions seat_shape;          ///< Seat geometry: the CAD model (models/seat.*).
+  /// The physical seat the sensor sees: tessellation and warp against the CAD (defaults: the
+  /// CAD itself).
+  SeatRenderOptions seat_render;
 
   // Calibration targets.
   std::vector<double> plane_heights_mm = {150.0, 250.0, 350.0};   ///< White plane top heights.
   Eigen::Vector2d plane_size_mm = Eigen::Vector2d(800.0, 600.0);  ///< White plane size.
   SphereTargets spheres;                                          ///< Half spheres on stands.
+  /// Manufacturing tolerance of the sphere radius, mm: unless spheres.radius_errors_mm lists
+  /// them, each sphere's true radius is radius_mm + U(-tol, tol), drawn from a stream of its
+  /// own (0: every sphere is exactly radius_mm). Records state radius_mm.
+  double sphere_radius_tolerance_mm = 0.0;
 
   // Robot-trajectory sweep: the sensor follows a horizontal arc about the sweep centre.
   double arc_radius_mm = 150.0;  ///< Arc radius, mm.
@@ -167,6 +180,12 @@ struct SimConfig {
   ChessboardTarget chessboard;  ///< Printed board: squares, square_mm, border_mm.
   int chessboard_images = 20;   ///< Chessboard views in a cell capture set.
   ImageRenderOptions images;    ///< Photometry, blur, noise of the images.
+  /// Detector-level corner noise, px per coordinate, for captures that synthesize corner
+  /// detections from the true projections instead of rendering images (calibration benches
+  /// and tests that need many views fast). Ideal 0.03 px (SB on this renderer's images);
+  /// realistic 0.15 px (real views of ../shared/data: 0.18 px RMS reprojection after
+  /// intrinsics).
+  double corner_sigma_px = 0.03;
 
   // Robot-side calibration captures (hand-eye, joint offsets, half spheres).
   TouchOptions touches;  ///< Handling-robot pointing-tool touches of the sphere tops.

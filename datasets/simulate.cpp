@@ -38,6 +38,7 @@ constexpr double kDegToRad = std::numbers::pi / 180.0;
 // others.
 constexpr std::uint64_t kRobotStream = 0x0B07;
 constexpr std::uint64_t kDhLengthStream = 0x0B08;
+constexpr std::uint64_t kSphereRadiusStream = 0x0B09;
 constexpr std::uint64_t kPlaneStream = 0x1000;
 constexpr std::uint64_t kSphereStream = 0x2000;
 constexpr std::uint64_t kTrajectoryStream = 0x3000;
@@ -142,8 +143,17 @@ CaptureReport WriteSweep(const SweepJob& job, const SweepResult& result, const S
   return r;
 }
 
-TriangleMesh SphereTargetsMesh(const CellTruth& truth, const SimConfig& config) {
-  const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+// "[r_0, r_1, ...]": every sphere's true radius, mm.
+std::string TrueRadiiList(const SphereTargets& spheres) {
+  std::string s;
+  for (std::size_t i = 0; i < spheres.stand_heights_mm.size(); ++i) {
+    s += (i ? ", " : "") + Num(spheres.RadiusOf(i));
+  }
+  return "[" + s + "]";
+}
+
+TriangleMesh SphereTargetsMesh(const CellTruth& truth) {
+  const Scene scene = MakeSphereScene(truth.layout, truth.spheres);
   MeshPart all;
   for (const SceneObject& o : scene.objects()) {
     if (o.name != "floor" && o.name != "pallet") all.Append(o.geometry);
@@ -324,7 +334,7 @@ void RunPoseSweeps(const SimConfig& config, const CellTruth& truth, const PoseSw
                    SimulationReport& report, std::string& captures_yaml,
                    triangulation::SphereSweepList& records, const ProgressCallback& progress,
                    int threads) {
-  const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+  const Scene scene = MakeSphereScene(truth.layout, truth.spheres);
   const LaserRenderer renderer(scene, truth.sensor, config.render);
   const SweepTiming timing = PoseSweepTiming(config, options);
   records.sets.push_back({set, {}});
@@ -358,10 +368,10 @@ void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
   out.Write("truth/robots.yaml", RobotsTruthYaml(truth));
   out.Write("truth/sim_config.yaml", SimConfigToYaml(config));
   if (config.write_meshes) {
-    out.WriteMesh("seat", truth.seat.part.mesh);
-    out.Write("models/seat.part.yaml", localize::PartFileYaml(SeatPartDefinition(truth.seat)));
+    out.WriteMesh("seat", truth.seat_cad.part.mesh);
+    out.Write("models/seat.part.yaml", localize::PartFileYaml(SeatPartDefinition(truth.seat_cad)));
     out.WriteMesh("pallet", MakePallet().mesh);
-    out.WriteMesh("sphere_targets", SphereTargetsMesh(truth, config));
+    out.WriteMesh("sphere_targets", SphereTargetsMesh(truth));
   }
 }
 
@@ -400,7 +410,7 @@ void RunPlanes(const SimConfig& config, const CellTruth& truth, const LinearSwee
 void RunSpheres(const SimConfig& config, const CellTruth& truth, const LinearSweep& sweep,
                 const Eigen::Isometry3d& hb_from_cell, Output& out, SimulationReport& report,
                 std::string& captures_yaml, const ProgressCallback& progress, int threads) {
-  const Scene scene = MakeSphereScene(truth.layout, config.spheres);
+  const Scene scene = MakeSphereScene(truth.layout, truth.spheres);
   const LaserRenderer renderer(scene, truth.sensor, config.render);
   const SweepResult result = RenderSweep(
       renderer,
@@ -419,6 +429,7 @@ void RunSpheres(const SimConfig& config, const CellTruth& truth, const LinearSwe
   captures_yaml += CaptureHeaderYaml(r) + LinearSweepTruthYaml(sweep, hb_from_cell, config) +
                    ExposureTimesTruthYaml(result, config) +
                    "    sphere_radius_mm: " + Num(config.spheres.radius_mm) +
+                   "\n    true_sphere_radii_mm: " + TrueRadiiList(truth.spheres) +
                    "\n    sphere_centers_in_cell: [" + centers_cell +
                    "]\n    sphere_centers_in_handling_base: [" + centers_hb + "]\n";
   ReportProgress(progress, "spheres", 1.0);
@@ -528,7 +539,16 @@ CellTruth MakeCellTruth(const SimConfig& config) {
   t.true_vision_robot = ApplyRobotErrors(t.nominal_vision_robot,
                                          {t.joint_offsets_rad, t.dh_a_errors_mm, t.dh_d_errors_mm});
   t.handling_robot = ApproximateNachiSc15f();
-  t.seat = MakeChairSeat(config.seat_shape);
+  t.seat = MakeRenderedChairSeat(config.seat_shape, config.seat_render);
+  t.seat_cad = MakeChairSeat(config.seat_shape);
+  t.spheres = config.spheres;
+  if (t.spheres.radius_errors_mm.empty() && config.sphere_radius_tolerance_mm > 0) {
+    Rng radius_rng(StreamSeed(config.seed, kSphereRadiusStream));
+    for (std::size_t i = 0; i < t.spheres.stand_heights_mm.size(); ++i) {
+      t.spheres.radius_errors_mm.push_back(radius_rng.Uniform(-config.sphere_radius_tolerance_mm,
+                                                              config.sphere_radius_tolerance_mm));
+    }
+  }
   return t;
 }
 

@@ -63,7 +63,11 @@ struct CellTruth {
   std::vector<double> dh_a_errors_mm;     ///< True errors added to the nominal a_i (mm).
   std::vector<double> dh_d_errors_mm;     ///< True errors added to the nominal d_i (mm).
   DhChain handling_robot;                 ///< ApproximateNachiSc15f().
-  ChairSeat seat;                         ///< The part.
+  ChairSeat seat;      ///< The part as the sensor sees it (seats.rendered: tessellation, warp).
+  ChairSeat seat_cad;  ///< The part's CAD model (seats.shape), written to models/seat.*.
+  /// The calibration spheres as made: radius_errors_mm explicit or drawn within
+  /// sphere_radius_tolerance_mm (records state the nominal radius_mm).
+  SphereTargets spheres;
 
   /// The true frame graph: cell -> vision_base -> (vision_robot) -> vision_flange -> sensor ->
   /// camera, cell -> handling_base -> (handling_robot) -> handling_flange.

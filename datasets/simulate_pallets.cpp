@@ -240,8 +240,11 @@ SimulationReport SimulatePallets(const SimConfig& config_in, int scenes, const s
   out.Write("truth/sensor.yaml", SensorTruthYaml(truth, config));
   out.Write("truth/robots.yaml", RobotsTruthYaml(truth));
   out.Write("truth/sim_config.yaml", SimConfigToYaml(config));
-  for (const PalletPart& part : parts) out.WriteMesh(part.name, part.geometry.mesh);
-  out.WritePart(SeatPartDefinition(truth.seat));
+  // The seat's models/ mesh is its CAD (truth.seat_cad); the others' are their STEP's render.
+  for (const PalletPart& part : parts) {
+    out.WriteMesh(part.name, part.name == "seat" ? truth.seat_cad.part.mesh : part.geometry.mesh);
+  }
+  out.WritePart(SeatPartDefinition(truth.seat_cad));
   out.WriteMesh("pallet", MakePallet().mesh);
   report.files = out.files();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

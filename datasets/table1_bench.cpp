@@ -20,6 +20,7 @@
 #include "core/stats.hpp"
 #include "datasets/capture_calibration.hpp"
 #include "datasets/sim_config.hpp"
+#include "datasets/sim_profile.hpp"
 #include "datasets/simulate.hpp"
 #include "localize/job_run.hpp"
 #include "registration/localize_options_io.hpp"
@@ -84,7 +85,8 @@ Stats Summarize(std::vector<double> v) {
 }
 
 SimConfig ConfigOf(const Table1Options& options, int cell, int seats) {
-  SimConfig config = options.sim_config.empty() ? SimConfig{} : LoadSimConfig(options.sim_config);
+  SimConfig config = options.sim_config.empty() ? SimConfigForProfile(options.profile)
+                                                : LoadSimConfig(options.sim_config);
   config.seed = options.seed + static_cast<std::uint64_t>(cell);
   config.seat_count = seats;
   config.capture_seats = config.capture_planes = config.capture_spheres = true;
@@ -233,6 +235,8 @@ nlohmann::json Summary(const Table1Options& options, const std::vector<Trial>& t
           {"seed", options.seed},
           {"threads", options.threads},
           {"options_file", options.options_file},
+          {"profile", options.sim_config.empty() ? options.profile : std::string()},
+          {"sim_config", options.sim_config},
           {"calibrations", calibrations},
           {"refused_calibrations", refused},
           {"placements_localized", placements_localized},
@@ -355,6 +359,7 @@ void Table1Options::Check() const {
   }
   if (threads < 0) throw OptionError("threads " + std::to_string(threads) + " < 0");
   if (work_dir.empty()) throw OptionError("work_dir is empty: name a folder for the captures");
+  if (sim_config.empty()) ParseSimProfile(profile);
 }
 
 nlohmann::json RunTable1Bench(const Table1Options& options, const ProgressCallback& progress) {
@@ -378,6 +383,12 @@ std::string Table1Markdown(const nlohmann::json& j) {
       std::to_string(j.at("placements").get<int>()) + " --cells " +
       std::to_string(j.at("cells").get<int>()) + " --seed " +
       std::to_string(j.at("seed").get<std::uint64_t>()) +
+      (j.value("profile", std::string()).empty()
+           ? std::string()
+           : " --profile " + j.at("profile").get<std::string>()) +
+      (j.value("sim_config", std::string()).empty()
+           ? std::string()
+           : " --config " + j.at("sim_config").get<std::string>()) +
       (j.value("options_file", std::string()).empty()
            ? std::string()
            : " --options " + j.at("options_file").get<std::string>()) +

@@ -25,7 +25,10 @@ struct Table1Options {
   std::uint64_t seed = 1;
   int threads = 1;                  ///< Localization threads (0 = all cores).
   std::string work_dir = "table1";  ///< Captures, calibrations and the shared model cache.
-  std::string sim_config;           ///< Simulator settings (SIM.yaml); empty: defaults.
+  std::string sim_config;           ///< Simulator settings (SIM.yaml); empty: `profile`.
+  /// Named simulation profile (sim_profile.hpp) when sim_config is empty: "realistic" (the
+  /// default for accuracy benchmarks) or "ideal".
+  std::string profile = "realistic";
   /// A localize options file (registration/localize_options_io.hpp) for the seat's job; its
   /// `model:` section (defaults where silent) builds the seat's PPF model. Empty: the job's and
   /// the simulated part file's defaults.
@@ -35,7 +38,7 @@ struct Table1Options {
   bool reuse_captures = false;
 
   /// Throws OptionError naming the field (placements and cells positive, placements a
-  /// multiple of cells, threads >= 0).
+  /// multiple of cells, threads >= 0, a known profile).
   void Check() const;
 };
 

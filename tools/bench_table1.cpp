@@ -59,7 +59,9 @@ void AddTable1BenchCommand(CLI::App& bench) {
       ->capture_default_str();
   cmd->add_option("--work", o.work_dir, "Folder for the captures, calibration and cache")
       ->capture_default_str();
-  cmd->add_option("--config", o.sim_config, "Simulator settings (SIM.yaml)");
+  cmd->add_option("--config", o.sim_config, "Simulator settings (SIM.yaml; overrides --profile)");
+  cmd->add_option("--profile", o.profile, "Simulation profile: realistic or ideal")
+      ->capture_default_str();
   cmd->add_option("--options", o.options_file,
                   "Localize options file for the job; its model: section builds the seat model");
   cmd->add_flag("--reuse-captures", o.reuse_captures,

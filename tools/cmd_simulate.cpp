@@ -1,4 +1,4 @@
-// `lasercell simulate cell --out DIR [--seed N] [--config SIM.yaml]`,
+// `lasercell simulate cell --out DIR [--seed N] [--config SIM.yaml | --profile NAME]`,
 // `lasercell simulate seat --placements N --out DIR [--seed N] [--config SIM.yaml]` and
 // `lasercell simulate pallet --scenes N --out DIR [--seed N] [--config SIM.yaml]`:
 // the workcell simulator (datasets/simulate.hpp, datasets/simulate_pallets.hpp). Same seed and
@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "datasets/sim_config.hpp"
+#include "datasets/sim_profile.hpp"
 #include "datasets/simulate.hpp"
 #include "datasets/simulate_pallets.hpp"
 #include "tools/commands.hpp"
@@ -17,7 +18,7 @@ namespace lasercell::tools {
 namespace {
 
 struct SimulateArgs {
-  std::string out, config;
+  std::string out, config, profile;
   long long seed = -1;  // -1: from the config (default 1)
   int placements = 10;
   int scenes = 1;
@@ -26,8 +27,16 @@ struct SimulateArgs {
 };
 
 datasets::SimConfig Config(const SimulateArgs& args) {
+  if (!args.config.empty() && !args.profile.empty()) {
+    throw OptionError(
+        "give --profile or --config, not both (a config file names its base with "
+        "'profile: " +
+        args.profile + "')");
+  }
   datasets::SimConfig config =
-      args.config.empty() ? datasets::SimConfig{} : datasets::LoadSimConfig(args.config);
+      args.config.empty()
+          ? datasets::SimConfigForProfile(args.profile.empty() ? "ideal" : args.profile)
+          : datasets::LoadSimConfig(args.config);
   if (args.seed >= 0) config.seed = static_cast<std::uint64_t>(args.seed);
   return config;
 }
@@ -46,6 +55,10 @@ void AddCommon(CLI::App* cmd, SimulateArgs& args) {
   cmd->add_option("--seed", args.seed, "Random seed (default: the config's, 1)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--config", args.config, "Simulator config YAML (datasets/SIMULATOR.md)");
+  cmd->add_option("--profile", args.profile,
+                  "Named simulation profile: ideal (default; exact projection + white noise) or "
+                  "realistic (speckle, reflections, timing and encoder noise, DH errors, CAD != "
+                  "part; datasets/SIMULATOR.md)");
   cmd->add_option("--threads", args.threads, "Worker threads (0 = all cores); output identical")
       ->check(CLI::NonNegativeNumber);
   cmd->add_flag("--quiet", args.quiet, "No progress, no summary");

@@ -229,7 +229,9 @@ TEST(CameraModel, LensInversionCheckFindsANarrowFold) {
        -8.243658142967805, 14.558034061666534, 0.00022565673964037192, -0.00014926363647190332,
        10.242592125125572, -8.12071436120108, 13.478289513137199, 12.610510814922677},
       1024, 1024);
-  EXPECT_TRUE(CheckLensInversion(m, {}, 33).ok());
+  // The analytic radial check finds the ring at any grid density; the 129-grid finds it too.
+  EXPECT_FALSE(CheckLensInversion(m, {}, 33).ok());
+  EXPECT_GT(CheckLensInversion(m, {}, 33).radial_fold_px, 0.0);
   const LensInversionCheck check = CheckLensInversion(m);
   EXPECT_FALSE(check.ok());
   EXPECT_GT(check.reversed_cells, 0) << check.Describe();
@@ -255,4 +257,38 @@ TEST(CameraModel, LensInversionCheckRefusesRaysThatPointBackwards) {
       m, Eigen::AlignedBox2d(Eigen::Vector2d(400, 400), Eigen::Vector2d(600, 600)), 33);
   EXPECT_TRUE(centre.ok()) << centre.Describe();
 }
+}  // namespace lasercell::calib
+
+namespace lasercell::calib {
+namespace {
+
+// An OPENCV8 fit to 20 noisy simulated views (the realistic profile, 0.036 px RMS) whose
+// rational terms cancel where the boards were: its denominator 1 + k4 r^2 + k5 r^4 + k6 r^6
+// nearly vanishes at r ~ 0.44 (~500 px from the centre) and the triangulator found a pixel
+// (136, 191.5) without a ray, while a 129 x 129 grid (8 px apart) stepped over the ring. The
+// analytic radial check finds it; the true lens (distortion of the simulator) passes.
+TEST(CameraModel, LensInversionCheckFindsARingTheGridStepsOver) {
+  const CameraModel folded(
+      "LENSMODEL_OPENCV8",
+      {1132.0970710387446, 1132.0851646200986, 515.2884585652554, 508.6076744009299,
+       -8.981737731407616, 16.858031884907195, 0.00019252115995663932, -0.00012631204672982672,
+       14.384427896860792, -8.856995089338458, 15.659248063421842, 17.240525707160465},
+      1024, 1024);
+  const LensInversionCheck check = CheckLensInversion(folded);
+  EXPECT_FALSE(check.ok());
+  EXPECT_GT(check.radial_fold_px, 300.0) << check.Describe();
+  EXPECT_LT(check.radial_fold_px, 700.0) << check.Describe();
+  EXPECT_NE(check.Describe().find("radial distortion turns back"), std::string::npos);
+  // Within 200 px of the principal point the model is fine.
+  const LensInversionCheck centre = CheckLensInversion(
+      folded, Eigen::AlignedBox2d(Eigen::Vector2d(400, 400), Eigen::Vector2d(600, 600)));
+  EXPECT_TRUE(centre.ok()) << centre.Describe();
+  const CameraModel truth(
+      "LENSMODEL_OPENCV8",
+      {1132, 1132, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011, -0.006, 0.002},
+      1024, 1024);
+  EXPECT_TRUE(CheckLensInversion(truth).ok()) << CheckLensInversion(truth).Describe();
+}
+
+}  // namespace
 }  // namespace lasercell::calib

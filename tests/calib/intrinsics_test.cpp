@@ -135,7 +135,13 @@ TEST(CalibrateIntrinsics, RecoversTheTruthWithinThreeSigma) {
   EXPECT_TRUE(r.focal_observable);
   EXPECT_TRUE(r.invertible);
   EXPECT_EQ(r.RejectionReason(), "");
-  EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+  // At 0.2 px noise the OPENCV8 fit's rational terms nearly cancel (k1 ~ 26 for a truth of
+  // -0.11, within its sigma): a pole of the denominator at r ~ 0.465 that a zero of the
+  // numerator almost cancels, a ring ~0.6 px wide where the model folds. The only warning is
+  // that one (CalibrateIntrinsicsFallingBackToOpencv5 refits such a model as OPENCV5).
+  for (const std::string& w : r.warnings) {
+    EXPECT_NE(w.find("radial distortion turns back"), std::string::npos) << w;
+  }
   ASSERT_EQ(r.intrinsics_sigma.size(), 12u);
   const std::array<double, 12> truth = s.truth.MrcalVector();
   for (int i = 0; i < 12; ++i) {

@@ -307,6 +307,25 @@ TEST_F(CliTest, SimulateBadConfigNamesTheField) {
   EXPECT_THAT(r.err, HasSubstr("standof_mm"));
 }
 
+// A named profile: an unknown name and a profile beside a config file are bad input (exit 2,
+// nothing simulated); the realistic profile's truth names it.
+TEST_F(CliTest, SimulateProfileIsNamedOnceAndRecorded) {
+  const std::string out = (dir_ / "out").string();
+  CommandResult r = RunCli("simulate seat --quiet --placements 1 --profile noisy --out " + out);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("use ideal or realistic"));
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "truth"));
+  const fs::path cfg = dir_ / "sim.yaml";
+  std::ofstream(cfg) << "profile: realistic\n";
+  r = RunCli("simulate seat --quiet --placements 1 --profile ideal --config " + cfg.string() +
+             " --out " + out);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_THAT(r.err, HasSubstr("not both"));
+  r = RunCli("simulate seat --quiet --placements 1 --profile realistic --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_THAT(Slurp(dir_ / "out" / "truth" / "sim_config.yaml"), HasSubstr("profile: realistic"));
+}
+
 TEST_F(CliTest, BenchRegistrationPrintsPoseErrorTable) {
   // OpenCV training takes about a minute: the full comparison runs by hand (BENCHMARKS.md).
   const std::string json = (dir_ / "bench.json").string();
