@@ -296,6 +296,9 @@ localize::PartDefinition SeatPartDefinition(const ChairSeat& seat) {
   part.model = "seat.stl";
   part.units = "mm";
   part.grasps.push_back(GraspFrameOf(SeatHoleGrasp(seat), "the boss"));
+  // The gripper engages the boss: its position is read from the boss and the shell within
+  // 2.5 boss radii (80 mm), where a warp of the moulded shell has not yet built up.
+  part.grasps.back().refine_radius_mm = 2.5 * seat.boss_radius_mm;
   return part;
 }
 

@@ -149,6 +149,7 @@ ChairSeat MakeChairSeat(const ChairSeatOptions& o) {
   m.CheckConsistent();
   seat.hole_center_in_part = Eigen::Vector3d(boss_c.x(), boss_c.y(), boss_top_z);
   seat.hole_axis_in_part = Eigen::Vector3d::UnitZ();
+  seat.boss_radius_mm = o.boss_radius_mm;
   return seat;
 }
 

@@ -40,6 +40,7 @@ struct ChairSeat {
   MeshPart part;                        ///< Closed mesh with patches (cylinders for boss and hole).
   Eigen::Vector3d hole_center_in_part;  ///< Centre of the hole's opening at the boss top, mm.
   Eigen::Vector3d hole_axis_in_part;    ///< Unit axis of the hole, pointing out of the boss.
+  double boss_radius_mm = 0.0;          ///< Outer radius of the boss holding the hole.
 };
 
 /// Builds the seat.

@@ -52,6 +52,8 @@ struct Trial {
   Eigen::Matrix3d icp_term = Eigen::Matrix3d::Zero(), placement_term = Eigen::Matrix3d::Zero(),
                   laser_plane_term = Eigen::Matrix3d::Zero();
   double mahalanobis_sq = NAN;
+  bool refined_locally = false;  // the hole grasp's own fit decided its pose
+  double local_shift_mm = 0;     // and moved the hole by this much from the part's pose
   double localization_ms = 0, triangulation_ms = 0, run_ms = 0;
   // The reported 1-sigma of the hole centre per axis.
   Eigen::Vector3d Sigma() const { return covariance.diagonal().cwiseMax(0.0).cwiseSqrt(); }
@@ -136,18 +138,25 @@ Trial RunTrial(localize::JobRunner& runner, const std::string& sim, const std::s
                         (inst.candidate.coarse_scene_from_model * hole_in_part - hole_true);
   t.ppf_rotation_error_deg =
       RotationDistance(inst.candidate.coarse_scene_from_model, truth) * 180.0 / std::numbers::pi;
-  t.error = inst.target_from_part * hole_in_part - hole_true;
+  // What the handling robot is sent: the hole grasp's pose (its own fit when the part file
+  // asks for one), its origin the hole centre.
+  const auto grasp = std::find_if(inst.grasps.begin(), inst.grasps.end(),
+                                  [](const localize::GraspPose& g) { return g.name == "hole"; });
+  if (grasp == inst.grasps.end()) throw InternalError("Table I: the seat has no 'hole' grasp");
+  t.error = grasp->target_from_grasp.translation() - hole_true;
   t.icp_error_mm = t.error.norm();
+  t.refined_locally = grasp->refined_locally;
+  t.local_shift_mm = grasp->local_shift_mm;
   t.graspable = inst.graspable;
   t.reason = inst.not_graspable_reason;
   if (inst.covariance_valid) {
-    const Eigen::Matrix3d cov =
-        PointCovariance(inst.target_from_part, inst.covariance, hole_in_part);
-    t.covariance = cov;
     const auto term = [&](const Matrix6d& c) {
-      return PointCovariance(inst.target_from_part, c, hole_in_part);
+      return PointCovariance(grasp->target_from_grasp, c, Eigen::Vector3d::Zero());
     };
-    t.icp_term = term(inst.covariance_terms.icp);
+    const Eigen::Matrix3d cov = term(grasp->covariance);
+    t.covariance = cov;
+    t.icp_term = term(grasp->covariance - inst.covariance_terms.placement -
+                      inst.covariance_terms.laser_plane);
     t.placement_term = term(inst.covariance_terms.placement);
     t.laser_plane_term = term(inst.covariance_terms.laser_plane);
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(cov);
@@ -196,6 +205,8 @@ nlohmann::json Summary(const Table1Options& options, const std::vector<Trial>& t
                       {"placement", json::Rows(t.placement_term)},
                       {"laser_plane", json::Rows(t.laser_plane_term)}}},
                     {"mahalanobis_sq", json::FiniteOrNull(t.mahalanobis_sq)},
+                    {"grasp_refined_locally", t.refined_locally},
+                    {"local_shift_mm", t.local_shift_mm},
                     {"localization_ms", t.localization_ms}});
     if (!t.found) continue;
     ppf.push_back(t.ppf_error_mm);

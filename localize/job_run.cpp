@@ -91,12 +91,20 @@ LocalizePartsOptions PartsOptionsOf(const Job& job, int threads) {
 }
 
 nlohmann::json GraspJson(const GraspPose& g, const std::string& target) {
-  return {{"name", g.name},
-          {target + "_from_grasp", json::Pose(g.target_from_grasp)},
-          {"matrix", json::MatrixRows(g.target_from_grasp)},
-          {"covariance", json::Covariance(g.covariance)},
-          {"position_sigma_mm", g.position_sigma_mm},
-          {"within_tolerance", g.within_tolerance}};
+  nlohmann::json j = {{"name", g.name},
+                      {target + "_from_grasp", json::Pose(g.target_from_grasp)},
+                      {"matrix", json::MatrixRows(g.target_from_grasp)},
+                      {"covariance", json::Covariance(g.covariance)},
+                      {"position_sigma_mm", g.position_sigma_mm},
+                      {"within_tolerance", g.within_tolerance},
+                      {"refined_locally", g.refined_locally}};
+  if (g.refined_locally || !g.local_note.empty()) {
+    j["local_fit"] = {{"points", g.local_points},
+                      {"rmse_mm", g.local_rmse_mm},
+                      {"shift_mm", g.local_shift_mm},
+                      {"note", g.local_note}};
+  }
+  return j;
 }
 
 nlohmann::json InstanceJson(const PartInstance& inst, const std::string& target) {

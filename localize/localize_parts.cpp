@@ -5,7 +5,10 @@
 #include <cmath>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
+#include "core/pose_covariance.hpp"
 #include "registration/filters.hpp"
+#include "registration/icp.hpp"
 #include "registration/kdtree.hpp"
 #include "registration/normals.hpp"
 
@@ -72,9 +75,81 @@ Matrix6d LaserPlaneTerm(const LaserPlaneUncertainty& plane, const PointCloud& ex
   return LaserPlanePoseCovariance(plane, explained.positions, explained.normals, explained.profile);
 }
 
-// Grasp poses and the graspability verdict of an instance.
+// A grasp's own fit: ICP over the model's refinement points and the scan points within
+// `radius` of the grasp origin, from the part's pose. Refused (note set) when either side has
+// too few points, ICP gives no valid covariance (the region does not fix the pose), or the
+// fit moves the grasp farther than the part's ICP correspondence distance (it slid).
+struct LocalFit {
+  bool used = false;
+  Eigen::Isometry3d target_from_part = Eigen::Isometry3d::Identity();
+  Matrix6d covariance = Matrix6d::Zero();
+  std::size_t points = 0;
+  double rmse_mm = 0.0, shift_mm = 0.0;
+  std::string note;
+};
+
+LocalFit FitAroundGrasp(const PartModel& model, const PointCloud& scene,
+                        const Eigen::Isometry3d& target_from_part, const GraspFrame& grasp,
+                        const registration::IcpOptions& icp) {
+  LocalFit fit;
+  const registration::PpfModel& ppf = model.ppf;
+  const double r_sq = grasp.refine_radius_mm * grasp.refine_radius_mm;
+  const Eigen::Vector3d origin_in_part = grasp.part_from_grasp.ToIsometry().translation();
+  const Eigen::Vector3d origin_centered = ppf.model_from_centered().inverse() * origin_in_part;
+  std::vector<Eigen::Vector3d> target, normals;
+  for (std::size_t i = 0; i < ppf.refinement_points().size(); ++i) {
+    if ((ppf.refinement_points()[i] - origin_centered).squaredNorm() > r_sq) continue;
+    target.push_back(ppf.refinement_points()[i]);
+    normals.push_back(ppf.refinement_normals()[i]);
+  }
+  const Eigen::Vector3d origin_in_target = target_from_part * origin_in_part;
+  std::vector<Eigen::Vector3d> source;
+  for (const Eigen::Vector3d& p : scene.positions) {
+    if ((p - origin_in_target).squaredNorm() <= r_sq) source.push_back(p);
+  }
+  constexpr std::size_t kMaxSource = 6000, kMinPoints = 50;
+  if (source.size() > kMaxSource) {  // every k-th point: deterministic, spread over the region
+    std::vector<Eigen::Vector3d> thinned;
+    const double step = static_cast<double>(source.size()) / kMaxSource;
+    for (std::size_t k = 0; k < kMaxSource; ++k) {
+      thinned.push_back(source[static_cast<std::size_t>(k * step)]);
+    }
+    source = std::move(thinned);
+  }
+  fit.points = source.size();
+  if (target.size() < kMinPoints || source.size() < kMinPoints) {
+    fit.note = "local fit refused: " + std::to_string(target.size()) + " model and " +
+               std::to_string(source.size()) + " scan points within " +
+               FormatFixed(grasp.refine_radius_mm, 1) + " mm of the grasp (need " +
+               std::to_string(kMinPoints) + " each)";
+    return fit;
+  }
+  const registration::KdTree tree(std::move(target));
+  const Eigen::Isometry3d centered_from_target =
+      (target_from_part * ppf.model_from_centered()).inverse();
+  const registration::IcpResult r =
+      registration::AlignIcp(source, tree, normals, centered_from_target, icp);
+  fit.rmse_mm = r.rmse_mm;
+  fit.target_from_part = r.target_from_source.inverse() * ppf.model_from_centered().inverse();
+  fit.shift_mm = (fit.target_from_part * origin_in_part - origin_in_target).norm();
+  if (r.termination == registration::IcpTermination::kTooFewCorrespondences ||
+      !r.covariance_valid) {
+    fit.note = "local fit refused: the region around the grasp does not fix the pose (" +
+               r.Summary() + ")";
+  } else if (fit.shift_mm > icp.max_correspondence_distance_mm) {
+    fit.note = "local fit refused: it moved the grasp " + FormatFixed(fit.shift_mm, 2) +
+               " mm, beyond the ICP correspondence distance " +
+               FormatFixed(icp.max_correspondence_distance_mm, 2) + " mm";
+  } else {
+    fit.used = true;
+    fit.covariance = InverseCovariance(r.target_from_source, r.covariance);
+  }
+  return fit;
+}
+
+// Grasp poses and the graspability verdict of an instance; local_fits[i] is grasp i's own fit.
 void JudgeInstance(const PartModel& model, const LocalizePartsOptions& options,
-                   PartInstance* inst) {
+                   const std::vector<LocalFit>& local_fits, PartInstance* inst) {
   const double rmse = inst->candidate.icp_run ? inst->candidate.icp.rmse_mm : -1.0;
   std::string reason;
   if (inst->ambiguous) reason = "ambiguous: " + inst->ambiguity_reason;
@@ -85,19 +160,32 @@ void JudgeInstance(const PartModel& model, const LocalizePartsOptions& options,
              std::to_string(options.scan_noise_mm) + " mm): the model does not fit the scan";
   }
   if (reason.empty() && !inst->covariance_valid) reason = "pose covariance unavailable";
-  for (const GraspFrame& g : model.part.grasps) {
+  for (std::size_t gi = 0; gi < model.part.grasps.size(); ++gi) {
+    const GraspFrame& g = model.part.grasps[gi];
+    const LocalFit& local = local_fits[gi];
     GraspPose grasp;
     grasp.name = g.name;
     const Eigen::Isometry3d part_from_grasp = g.part_from_grasp.ToIsometry();
-    grasp.target_from_grasp = inst->target_from_part * part_from_grasp;
+    grasp.refined_locally = local.used;
+    grasp.local_points = local.points;
+    grasp.local_rmse_mm = local.rmse_mm;
+    grasp.local_shift_mm = local.shift_mm;
+    grasp.local_note = local.note;
+    // The local fit replaces the ICP term; the calibration terms are shared by every point.
+    const Matrix6d covariance = local.used
+                                    ? Matrix6d(local.covariance + inst->covariance_terms.placement +
+                                               inst->covariance_terms.laser_plane)
+                                    : inst->covariance;
+    grasp.target_from_grasp =
+        (local.used ? local.target_from_part : inst->target_from_part) * part_from_grasp;
     // Left perturbations in the target frame carry over unchanged to a pose right-multiplied
     // by a fixed transform; the grasp origin's position covariance follows from the lever arm.
-    grasp.covariance = inst->covariance;
+    grasp.covariance = covariance;
     const Eigen::Vector3d lever = grasp.target_from_grasp.translation();
     Eigen::Matrix<double, 3, 6> j;  // d(position) / d[rotation; translation]
     j.leftCols<3>() = -Skew(lever);
     j.rightCols<3>().setIdentity();
-    const Eigen::Matrix3d position_cov = j * inst->covariance * j.transpose();
+    const Eigen::Matrix3d position_cov = j * covariance * j.transpose();
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(position_cov);
     grasp.position_sigma_mm = std::sqrt(std::max(0.0, eig.eigenvalues().maxCoeff()));
     grasp.within_tolerance =
@@ -295,6 +383,22 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
             "is not determined by the scan";
       }
       inst.covariance_valid = IcpPoseCovariance(inst.candidate, &inst.covariance_terms.icp);
+      // The grasps' own fits use the part's ICP settings as LocalizeInCloud scales them.
+      registration::IcpOptions local_icp = lo.icp;
+      if (lo.icp_max_distance_relative > 0.0) {
+        local_icp.max_correspondence_distance_mm =
+            lo.icp_max_distance_relative * model.ppf.diameter_mm();
+      }
+      if (lo.icp_covariance_block_relative > 0.0) {
+        local_icp.covariance_block_mm = lo.icp_covariance_block_relative * model.ppf.diameter_mm();
+      }
+      std::vector<LocalFit> local_fits;
+      for (const GraspFrame& g : model.part.grasps) {
+        local_fits.push_back(
+            g.refine_radius_mm > 0 && inst.candidate.icp_run
+                ? FitAroundGrasp(model, remaining, inst.target_from_part, g, local_icp)
+                : LocalFit{});
+      }
       PointCloud explained;
       RemoveExplained(model.ppf, inst.target_from_part,
                       options.explained_distance_relative * model.ppf.diameter_mm(), &remaining,
@@ -309,7 +413,7 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
         inst.covariance = inst.covariance_terms.icp + inst.covariance_terms.placement +
                           inst.covariance_terms.laser_plane;
       }
-      JudgeInstance(model, options, &inst);
+      JudgeInstance(model, options, local_fits, &inst);
       inst.search_ms = MsSince(search_start);
       result.instances.push_back(std::move(inst));
       ++search.found;

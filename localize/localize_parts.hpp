@@ -74,6 +74,14 @@ struct GraspPose {
   Matrix6d covariance = Matrix6d::Zero();  ///< Left perturbation in the target frame.
   double position_sigma_mm = 0.0;  ///< sqrt of the largest eigenvalue of the position covariance.
   bool within_tolerance = false;   ///< 3 x position_sigma_mm <= grasp tolerance.
+  /// The grasp's own fit (GraspFrame::refine_radius_mm > 0) decided the pose and its ICP term;
+  /// false: the part's pose did (no radius, or the local fit was refused: local_note says why).
+  bool refined_locally = false;
+  std::size_t local_points = 0;  ///< Scan points of the local fit.
+  double local_rmse_mm = 0.0;    ///< Its ICP RMSE.
+  /// Translation of the grasp origin by the local fit against the part's pose, mm.
+  double local_shift_mm = 0.0;
+  std::string local_note;  ///< Why a requested local fit was not used ("" otherwise).
 };
 
 /// The terms `PartInstance::covariance` adds (same convention; zero when absent).

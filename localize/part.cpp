@@ -6,6 +6,7 @@
 #include <set>
 
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/yaml_fields.hpp"
@@ -94,6 +95,7 @@ PartDefinition FromFields(yaml::Fields r, const std::string& path) {
     grasp.name = name;
     g.ReadRequiredPose("part_from_grasp", &grasp.part_from_grasp);
     g.Read("description", &grasp.description);
+    g.Read("refine_radius_mm", &grasp.refine_radius_mm);
     g.Done();
     if (!IsSnakeCase(name)) {
       grasps.Fail(name, ": grasp names are lower snake case ([a-z][a-z0-9_]*)");
@@ -197,6 +199,10 @@ void PartDefinition::Check() const {
       throw InputError(where + ": grasp '" + g.name + "' is defined twice");
     }
     CheckQuaternionPose(g.part_from_grasp, where + ": grasps." + g.name + ".part_from_grasp");
+    if (!(g.refine_radius_mm >= 0.0 && g.refine_radius_mm <= 1e4)) {
+      throw InputError(where + ": grasps." + g.name +
+                       ".refine_radius_mm must be in [0, 10000] mm (0: no local refinement)");
+    }
   }
   for (const Eigen::Vector3d& up : stable_up_in_part) {
     if (!up.allFinite() || std::abs(up.norm() - 1.0) > 1e-6) {
@@ -239,6 +245,9 @@ std::string PartFileYaml(const PartDefinition& part) {
     for (const GraspFrame& g : part.grasps) {
       out += "  " + g.name + ":\n    part_from_grasp: " + PoseYaml(g.part_from_grasp) + "\n";
       if (!g.description.empty()) out += "    description: " + Quoted(g.description) + "\n";
+      if (g.refine_radius_mm > 0) {
+        out += "    refine_radius_mm: " + FormatDouble(g.refine_radius_mm) + "\n";
+      }
     }
   }
   if (!part.stable_up_in_part.empty()) {

@@ -42,6 +42,12 @@ struct GraspFrame {
   std::string name;                ///< Lower snake case, unique within the part.
   QuaternionPose part_from_grasp;  ///< Kept as written.
   std::string description;         ///< Free text (may be empty).
+  /// Radius around the grasp origin (part frame, mm) whose fit decides the grasp pose: after
+  /// the part's ICP, ICP over only the model and scan points within it refines where the grasp
+  /// is (a warped or flexed part fits best near the feature the gripper engages; the whole
+  /// part's fit spreads its deformation over every point). 0 (default): the part's pose
+  /// decides. Part file key `refine_radius_mm`.
+  double refine_radius_mm = 0.0;
 };
 
 /// Symmetry of the part: a symmetric part's pose is undetermined about the axis.

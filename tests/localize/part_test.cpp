@@ -46,6 +46,7 @@ constexpr const char* kPart =
     "  top:\n"
     "    part_from_grasp: {translation_mm: [40, 30, 20], rotation_wxyz: [0, 1, 0, 0]}\n"
     "    description: suction cup on the top face\n"
+    "    refine_radius_mm: 25.5\n"
     "stable_poses:\n"
     "  up_in_part: [[0, 0, 1], [0, 0, -1]]\n"
     "  max_tilt_deg: 10\n"
@@ -61,6 +62,7 @@ TEST(PartFile, EveryFieldIsReadAndWrittenBackTheSame) {
   ASSERT_EQ(part.grasps.size(), 1u);
   EXPECT_EQ(part.Grasp("top").part_from_grasp.translation_mm, Eigen::Vector3d(40, 30, 20));
   EXPECT_EQ(part.grasps[0].description, "suction cup on the top face");
+  EXPECT_EQ(part.grasps[0].refine_radius_mm, 25.5);
   ASSERT_EQ(part.stable_up_in_part.size(), 2u);
   EXPECT_NEAR(part.max_tilt_rad, 10.0 * M_PI / 180.0, 1e-15);
   EXPECT_EQ(part.symmetry.kind, PartSymmetry::Kind::kDiscrete);
@@ -79,6 +81,7 @@ TEST(PartFile, EveryFieldIsReadAndWrittenBackTheSame) {
             part.grasps[0].part_from_grasp.rotation.coeffs());
   EXPECT_EQ(back.max_tilt_rad, part.max_tilt_rad);
   EXPECT_EQ(back.model_options.sampling_step_relative, 0.05);
+  EXPECT_EQ(back.grasps[0].refine_radius_mm, 25.5);
 }
 
 TEST(PartFile, BadFieldsNameTheFileAndTheField) {
@@ -111,6 +114,10 @@ TEST(PartFile, BadFieldsNameTheFileAndTheField) {
             std::string::npos);
   EXPECT_NE(error(head + "model: a.stl\nunits: mm\nmodel_options: {sampling_step: 3}\n")
                 .find("sampling_step"),
+            std::string::npos);
+  EXPECT_NE(error(head + "model: a.stl\nunits: mm\ngrasps: {g: {part_from_grasp: {translation_mm: "
+                         "[0, 0, 0], rotation_wxyz: [1, 0, 0, 0]}, refine_radius_mm: -5}}\n")
+                .find("grasps.g.refine_radius_mm must be in [0, 10000]"),
             std::string::npos);
   EXPECT_NE(error(head + "model: a.stl\nunits: mm\ncad: {sampling_step_mm: -1}\n")
                 .find("sampling_step_mm"),
