@@ -128,6 +128,24 @@ TEST(Table1Bench, MarkdownListsRefusedCalibrationsAndCountsOnlyLocalizedPlacemen
   EXPECT_EQ(none.find("3-sigma ellipsoid"), std::string::npos) << "an older result has no count";
 }
 
+TEST(Table1Bench, MarkdownComparesTheCalibrationsWithTheTruthBesideTheTargets) {
+  nlohmann::json j = Result(true);
+  EXPECT_EQ(Table1Markdown(j).find("calibration against the truth"), std::string::npos)
+      << "an older result has no errors";
+  j["calibrations"][0]["errors_against_truth"] = {{"laser_plane_normal_deg", 0.0023},
+                                                  {"laser_plane_offset_mm", -0.0089},
+                                                  {"sensor_rotation_deg", 0.017},
+                                                  {"sensor_origin_mm", 0.21},
+                                                  {"sensor_at_deck_mm", 0.0247}};
+  const std::string md = Table1Markdown(j);
+  EXPECT_NE(md.find("| laser plane offset d, absolute (mm) | 0.0089 | 0.0089 | 0.02 |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| handling_base <- sensor rotation (deg) | 0.0170 | 0.0170 | 0.01 |"),
+            std::string::npos)
+      << md;
+}
+
 TEST(Table1Bench, MarkdownGivesTheEllipsoidCountBesideItsExpectation) {
   nlohmann::json j = Result(true);
   j["beyond_3_sigma_ellipsoid"] = 3;
