@@ -40,6 +40,7 @@ PoseError Compare(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth,
 
 // The full chain on the simulated cell: render + triangulate the sphere sweep, segment, fit,
 // match the 4 touches (simulator default: sigma 0.05 mm per axis), rigid fit.
+// Simulation profile: ideal (DefaultSphereSweep; a regression check of the algorithms' own error).
 TEST(CalibrateHalfSpheres, SimulatedCellAgreesWithTheTruthWithinItsReportedSigma) {
   const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
   const SphereSegmentationResult& seg = testing::DefaultSphereSegmentation();
@@ -77,6 +78,7 @@ TEST(CalibrateHalfSpheres, SimulatedCellAgreesWithTheTruthWithinItsReportedSigma
 // there. Lower touch sigmas, 20 seeded draws of the touch noise each on the same sweep: 0.01 mm
 // reaches ~0.05 mm only just (printed, not asserted); 0.005 mm per axis (a CMM-grade probe;
 // stated, not hidden) meets the issue's numbers with margin, and that is what is asserted.
+// Simulation profile: ideal (the swept spheres of DefaultSphereSweep; the touches are drawn here).
 TEST(CalibrateHalfSpheres, FourSpheresMeetTheIssueNumbersAtTouchSigmaFiveMicrometres) {
   const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
   const SphereSegmentationResult& seg = testing::DefaultSphereSegmentation();
@@ -121,6 +123,7 @@ TEST(CalibrateHalfSpheres, FourSpheresMeetTheIssueNumbersAtTouchSigmaFiveMicrome
 // Calibrated uncertainty of the transform: 100 Monte-Carlo draws of sphere points (sensor-like
 // caps, sigma 0.05 mm, centres fitted with the radius given, then free) and touches (sigma
 // 0.05 mm); truth inside the reported 1-sigma 60-76 % of the time over the 6 coordinates.
+// No simulated points: only DefaultSphereSweep's truth is used; caps and touches are drawn here.
 TEST(CalibrateHalfSpheres, TransformCovarianceIsCalibrated) {
   const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
   const Eigen::Isometry3d& truth = sim.handling_base_from_sweep;
@@ -310,6 +313,7 @@ TEST(ParseTouchesYaml, ReadsTheSimulatorsFormat) {
   EXPECT_DOUBLE_EQ(t.handling_flange_from_tool_tip->translation().z(), 200.0);
 }
 
+// Simulation profile: ideal (the touches of DefaultSphereSweep).
 TEST(ParseTouchesYaml, ReadsWhatTheSimulatorWrites) {
   const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
   datasets::SimConfig config;

@@ -1,5 +1,6 @@
 // `lasercell calibrate spheres` end to end on the simulated sweep: JSON, report, cell.yaml edge,
 // and the CLI's bad-input paths (exit 2, one line naming the problem).
+// Simulation profile: ideal (DefaultSphereSweep, tests/calib/sphere_sweep_sim.hpp).
 #include <gtest/gtest.h>
 
 #include <algorithm>

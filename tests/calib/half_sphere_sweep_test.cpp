@@ -1,5 +1,6 @@
 // CalibrateHalfSpheresInSweep (segmentation + calibration), its result JSON and report, and the
 // edge checks `calibrate spheres` runs before it.
+// Simulation profile: ideal (DefaultSphereSweep, tests/calib/sphere_sweep_sim.hpp).
 #include <gtest/gtest.h>
 
 #include <string>

@@ -142,6 +142,7 @@ TEST_F(HandEyeCli, PosesInMetresGivenAsYamlAreRejected) {
 // The simulator's record path: records/hand_eye_images.yaml (commanded joints) through the robot
 // of the true cell.yaml, corners = the plan's true projections + N(0, 0.03 px) as a corners file;
 // the new edge is within the 0.05 mm / 0.02 deg of the true one.
+// Simulation profile: ideal (SimConfig{}'s plan and truth; the corner noise is drawn here).
 TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
@@ -181,6 +182,7 @@ TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
 // `calibrate handeye` creates the cell file when it is absent (as `calibrate laser` does): with
 // poses in the lasercell YAML form (mm, the true robot's flange poses) no robot of the cell is
 // needed, and the new file holds just the vision_flange -> sensor edge.
+// Simulation profile: ideal (SimConfig{}'s plan and truth; the corner noise is drawn here).
 TEST_F(HandEyeCli, CreatesTheCellFileWhenAbsent) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
@@ -229,6 +231,7 @@ TEST_F(HandEyeCli, CreatesTheCellFileWhenAbsent) {
 // The images path of the CLI: the simulator renders the eye-in-hand chessboard images, the
 // shared detector (calib/target_detection) finds the corners, the record's joints pose the
 // flange through the cell's (true) robot -> within the 0.05 mm / 0.02 deg.
+// Simulation profile: ideal (SimConfig{} with only the hand-eye images captured).
 TEST_F(HandEyeCli, SimulatedImagesThroughTheSharedDetector) {
   datasets::SimConfig config;
   config.capture_planes = config.capture_spheres = config.capture_seats = false;

@@ -410,6 +410,7 @@ TEST(PoseIo, MetresInYamlAndMixedUnitsAreRejected) {
 
 // records/hand_eye_images.yaml as the simulator writes it reads back through the calib reader:
 // robot, board and every image's file and joints, the joints bit for bit.
+// Simulation profile: ideal (SimConfig{}).
 TEST(PoseIo, ReadsTheSimulatorsHandEyeImagesRecord) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
@@ -555,6 +556,7 @@ namespace {
 // rendered images). Target of the issue: <= 0.05 mm / 0.02 deg from the true
 // vision_flange_from_sensor; the reported 1 sigma here is 0.007-0.015 mm and 0.001-0.0023 deg
 // per axis (expected error norm ~0.02 mm / 0.003 deg).
+// Simulation profile: ideal (SimConfig{}'s plan and truth; the corner noise is drawn here).
 TEST(HandEyeSim, SimulatorPlanWithinTarget) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);

@@ -27,6 +27,8 @@ namespace {
 using ::testing::HasSubstr;
 using testing::kDeg;
 
+// Simulation profile: ideal (SimConfig{}: the true robot has joint offsets only, exact DH
+// lengths); the sweep points are synthetic (tests/calib/joint_test_util.hpp).
 datasets::SimConfig JointConfig(std::uint64_t seed = 21) {
   datasets::SimConfig config;
   config.seed = seed;
@@ -210,6 +212,7 @@ TEST(JointIdentification, ReportedSigmaCoversTheTruth) {
 // leave a positioning error; with --dh-deltas the parameters the poses cannot separate (e.g. the
 // d of the parallel joints 2-4, only their sum acts) are named and fixed, and the held-out
 // positioning error drops back under 0.1 mm.
+// Simulation profile: ideal, plus DH length errors N(0, 0.3 mm).
 TEST(JointIdentification, DhDeltasNameTheUnidentifiableAndFixThePositioning) {
   datasets::SimConfig config = JointConfig();
   config.dh_length_sigma_mm = 0.3;

@@ -4,6 +4,8 @@
 // TRUE UR5 posing the sensor), with points computed analytically as laser plane ∩ sphere (upper
 // half only, the side facing the camera) plus Gaussian noise along the camera ray, and a few
 // floor points as clutter. Much faster than rendering, for Monte-Carlo tests.
+// The simulation profile is the caller's SimConfig: it draws the truth (joint offsets, DH
+// errors) and plans the poses; the points themselves are synthetic.
 
 #include <Eigen/Geometry>
 #include <cmath>

@@ -28,6 +28,7 @@ using testing::kDeg;
 
 // 12 poses, all at the laser's stand-off (the simulator's default set has 24 poses at three
 // ranges; the tests below vary the range themselves where they need it).
+// Simulation profile: ideal (SimConfig{}'s truth and plan; synthetic sweeps add their own noise).
 datasets::SimConfig EyeInHandConfig() {
   datasets::SimConfig config;
   config.seed = 11;
@@ -114,6 +115,7 @@ TEST(LaserHandEye, TwelvePoseSetIsWeakAndSaysSo) {
 // +100 mm from the stand-off, 40 profiles, default noise 0.05 px per row) -> the sweep loader
 // (triangulator, exact path) -> hand-eye with the TRUE robot model: within the 0.05 mm /
 // 0.02 deg, the error within 4 reported sigma per component, the residual at the noise level.
+// Simulation profile: ideal (SimConfig{} with only the eye-in-hand sweeps captured).
 TEST(LaserHandEye, RecoversTheMountFromRenderedSimulatorSweeps) {
   datasets::SimConfig config;
   config.seed = 11;

@@ -24,6 +24,7 @@ namespace fs = std::filesystem;
 using test::CommandResult;
 using test::RunCli;
 
+// Simulation profile: ideal (the `simulate cell` config below names no profile).
 class CalibrateLaserCli : public ::testing::Test {
  protected:
   void SetUp() override { dir_ = test::MakeTestDir("laser_cli"); }

@@ -113,6 +113,7 @@ TEST(LaserPlaneCost, StripeOnBoardMatchesNumericDifferences) {
 
 // ---- Method (a) on the simulator's white-plane sweeps ------------------------------------
 
+// Simulation profile: ideal (SimConfig{} with only the white-plane sweeps captured).
 datasets::SimConfig PlanesOnlyConfig() {
   datasets::SimConfig config;
   config.capture_spheres = config.capture_seats = config.capture_trajectory = false;
@@ -472,6 +473,7 @@ StripeScene MakeStripeScene(int count, std::uint64_t seed) {
 }
 
 /// One scene of 4 rendered views (seed 31), rendered once for all the stripe tests.
+/// Simulation profile: ideal (ImageRenderOptions{} boards; the laser stripe is drawn here).
 const StripeScene& SharedScene() {
   static const StripeScene scene = MakeStripeScene(4, 31);
   return scene;

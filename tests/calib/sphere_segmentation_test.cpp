@@ -20,6 +20,7 @@ namespace {
 // The default cell: 4 half spheres (r = 25 mm) on stands 40-160 mm over the pallet, swept by the
 // simulated sensor (row noise 0.05 px, intensity noise, 350 profiles). Every sphere is found,
 // nothing else is; the centres match the truth within 5 reported sigmas (and 0.03 mm).
+// Simulation profile: ideal (DefaultSphereSweep; a regression check of the algorithm's own error).
 TEST(SegmentSpheres, FindsTheFourSimulatedSpheresAndNothingElse) {
   const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
   ASSERT_GT(sim.cloud.size(), 100000u);
@@ -54,6 +55,7 @@ TEST(SegmentSpheres, FindsTheFourSimulatedSpheresAndNothingElse) {
   for (int k = 0; k < 4; ++k) EXPECT_EQ(matched[static_cast<std::size_t>(k)], 1) << "sphere " << k;
 }
 
+// Simulation profile: ideal (DefaultSphereSweep).
 TEST(SegmentSpheres, FreeRadiusRecoversTheRadius) {
   const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
   SphereSegmentationOptions options;
@@ -66,6 +68,7 @@ TEST(SegmentSpheres, FreeRadiusRecoversTheRadius) {
 }
 
 // Only the stands (cylinders of the spheres' radius), floor and pallet: nothing is a sphere.
+// Simulation profile: ideal (DefaultSphereSweep).
 TEST(SegmentSpheres, CylindersAndPlanesAreNotSpheres) {
   const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
   PointCloud without;
@@ -126,6 +129,7 @@ namespace {
 // speckle is correlated over ~10 columns, so the covariance must be inflated by the measured
 // line correlation (without it the errors were 6-7 sigma); the errors themselves are larger
 // than with white noise (measured up to 0.06 mm: the 0.02 mm is for white 0.05 mm noise).
+// Simulation profile: ideal, plus speckle (0.08 px) and specular ghosts (reflection_probability 1).
 TEST(SegmentSpheres, SpeckleAndReflectionGhostsDoNotBreakIt) {
   datasets::SimConfig config;
   config.seed = 8;

@@ -32,7 +32,8 @@ struct SimulatedSphereSweep {
   double radius_mm = 0;
 };
 
-/// Renders and triangulates the spheres sweep of `config` (random stream `seed`).
+/// Renders and triangulates the spheres sweep of `config` (random stream `seed`). The simulation
+/// profile is the caller's: whatever `config` holds.
 inline SimulatedSphereSweep SimulateSphereSweep(const datasets::SimConfig& config,
                                                 std::uint64_t seed) {
   using namespace lasercell::datasets;
@@ -80,6 +81,7 @@ inline SimulatedSphereSweep SimulateSphereSweep(const datasets::SimConfig& confi
 }
 
 /// The default simulated cell's spheres sweep, rendered once per test binary (seed 7).
+/// Simulation profile: ideal (SimConfig{}; a regression check of the algorithms' own error).
 inline const SimulatedSphereSweep& DefaultSphereSweep() {
   static const SimulatedSphereSweep sweep = [] {
     datasets::SimConfig config;

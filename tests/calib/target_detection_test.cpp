@@ -180,6 +180,7 @@ double RmsToTruth(const TargetDetection& d, const CameraModel& camera,
 // Rendered (exact-area, blur 0.6 px, read noise 1.5) boards of the simulator: refined corners
 // against the true projections. The noise-free detector bias is < 0.05 px (cornerSubPix, see
 // tests/datasets/camera_images_test.cpp); read noise adds ~0.02 px.
+// Simulation profile: ideal (ImageRenderOptions{}).
 TEST(TargetDetection, RenderedChessboardCornersMatchTheTruth) {
   const CameraModel camera = datasets::MakeCameraModel();
   const datasets::ImageRenderer renderer(camera);
@@ -204,6 +205,7 @@ TEST(TargetDetection, RenderedChessboardCornersMatchTheTruth) {
 // search_downscale 2: the board is found on the half-size image and refined at full resolution,
 // so the corners meet the same bound against the truth as the full-resolution search (the
 // search's own corners, ~0.5 px off, would not).
+// Simulation profile: ideal (ImageRenderOptions{}).
 TEST(TargetDetection, SearchOnAShrunkImageRefinesAtFullResolution) {
   const CameraModel camera = datasets::MakeCameraModel();
   const datasets::ImageRenderer renderer(camera);

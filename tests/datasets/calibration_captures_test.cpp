@@ -1,3 +1,4 @@
+// Simulation profile: ideal (SimConfig{}); a test that changes a noise field says so.
 #include "datasets/calibration_captures.hpp"
 
 #include <gtest/gtest.h>
@@ -183,6 +184,7 @@ SweepCheck CheckSweep(const triangulation::ProfileSet& set, const CellTruth& tru
   return r;
 }
 
+// Simulation profile: ideal, with the row and intensity noise off and 1 ms exposure jitter.
 TEST(PoseSweeps, JointPoseSetIsLargeVariedAndEverySweepSeesItsSphereOnTheTruth) {
   SimConfig config;
   config.seed = 3;

@@ -1,3 +1,5 @@
+// Simulation profile: ideal photometry (ImageRenderOptions{}: blur 0.6 px, read noise 1.5,
+// vignetting); a test that turns an effect off says so.
 #include "datasets/camera_images.hpp"
 
 #include <gtest/gtest.h>
@@ -77,6 +79,7 @@ double MaxCornerError(const std::vector<cv::Point2f>& found, const std::vector<c
 }
 
 // An exact image: a distortion-free camera, no noise, blur or vignetting.
+// Simulation profile: ideal, with lens distortion, read noise, blur and vignetting off.
 struct ExactRendering {
   CameraIntrinsics intrinsics = [] {
     CameraIntrinsics k;
@@ -172,6 +175,7 @@ double TiltDeg(const Eigen::Isometry3d& camera_from_board) {
 // contrast, which a real lens's falloff also breaks. Even a fronto-parallel board gets 0.025-0.036
 // px from SB, not 0.01. So: SB within the 0.05 px on every view tilted <= 26 deg,
 // cornerSubPix within 0.05 px on every view, SB bounded on all.
+// Simulation profile: ideal, with the read noise off.
 TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
   constexpr double kSbExactTiltDeg = 26.0;
   const calib::CameraModel camera = MakeCameraModel();
@@ -396,6 +400,7 @@ TEST(CameraImages, PngsAreDeterministicAndDecodable) {
   EXPECT_EQ(decoded.type(), CV_8UC1);
 }
 
+// Simulation profile: ideal, with the read noise off.
 TEST(CameraImages, LaserLineImagePeaksAtTheExactRows) {
   const SensorModel sensor = MakeSensor({});
   const Scene scene = MakePlaneScene(CellLayout{}, 150.0, {1500, 1500});

@@ -30,6 +30,8 @@ Eigen::Isometry3d LookDownPose(const SensorModel& sensor, const Eigen::Vector3d&
   return pose;
 }
 
+// Simulation profile: ideal (LaserRenderOptions{}, as in SimConfig{}); a test that turns an
+// effect on or off says so.
 struct Fixture {
   SensorOptions sensor_options;
   SensorModel sensor = MakeSensor(sensor_options);
@@ -183,6 +185,7 @@ TEST(LaserRenderer, DarkSurfacesDropOut) {
   EXPECT_GT(LaserRenderer(bright, f.sensor, f.render).RenderExact(pose).ValidCount(), 900u);
 }
 
+// Simulation profile: ideal, with the row noise at 0.25 px and the intensity noise off.
 TEST(LaserRenderer, RowNoiseHasTheConfiguredSigma) {
   Fixture f;
   f.render.row_sigma_px = 0.25;
@@ -219,6 +222,7 @@ TEST(LaserRenderer, RowNoiseHasTheConfiguredSigma) {
 
 // Speckle: the row shift of each exposure is N(0, speckle_sigma_px) per column and correlated
 // over the grain: lag-1 autocorrelation exp(-1 / (4 c^2)) = 0.984 for c = 4 columns, 0 for c = 0.
+// Simulation profile: ideal, plus speckle, with the white row and intensity noise off.
 TEST(LaserRenderer, SpeckleHasTheConfiguredSigmaAndGrain) {
   Fixture f;
   f.render.row_sigma_px = 0.0;
@@ -321,6 +325,7 @@ TEST(LaserRenderer, SpeckleHasTheConfiguredSigmaAndGrain) {
   EXPECT_NEAR(std::sqrt(ss / n), 0.2, 5 * 0.2 / std::sqrt(2.0 * n / 7.5));
 }
 
+// Simulation profile: ideal, plus encoder noise (2e-5 rad) on the recorded joints.
 TEST(LaserRenderer, EncoderNoiseChangesOnlyTheRecordedJoints) {
   Fixture f;
   const ChairSeat seat = MakeChairSeat();
@@ -400,6 +405,7 @@ TEST(LaserRenderer, SweepsAreIdenticalForAnyThreadCount) {
 namespace lasercell::datasets {
 namespace {
 
+// Simulation profile: ideal, plus specular ghosts (reflection_probability 1).
 TEST(LaserRenderer, SpecularReflectionsGiveWeakerGhostPeaksOnlyWhenEnabled) {
   Fixture f;
   SphereTargets spheres;

@@ -21,6 +21,7 @@
 namespace lasercell::datasets {
 namespace {
 
+// Simulation profile: ideal (SimConfig{} noise; fewer profiles and fan rays than the default).
 SimConfig PalletConfig() {
   SimConfig c;
   c.seed = 11;

@@ -1,3 +1,5 @@
+// Simulation profile: ideal (SimConfig{}, or SmallConfig()'s smaller capture set); a test that
+// changes a noise field says so.
 #include "datasets/simulate.hpp"
 
 #include <gtest/gtest.h>
@@ -263,6 +265,7 @@ TEST(CellTruth, RobotTrajectoryIsReachableAndTheTrueRobotMissesIt) {
   EXPECT_EQ(traj.At(1e9), traj.joints_rad.back());
 }
 
+// Simulation profile: ideal, plus DH length errors (drawn, then explicit).
 TEST(CellTruth, DhLengthErrorsAreAppliedAndLeaveTheJointOffsetDrawsUnchanged) {
   SimConfig config;
   const CellTruth plain = MakeCellTruth(config);
@@ -295,6 +298,7 @@ TEST(CellTruth, DhLengthErrorsAreAppliedAndLeaveTheJointOffsetDrawsUnchanged) {
             std::string::npos);
 }
 
+// Simulation profile: ideal, plus specular ghosts and speckle (their draws are compared too).
 TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   SimConfig config = SmallConfig();
   config.render.reflection_probability = 0.5;  // ghosts draw random numbers too
@@ -457,6 +461,7 @@ TEST(Simulate, SeatScenesMatchTheCellSetForTheSameSeed) {
   EXPECT_THROW(SimulateSeats(config, 0, seats), OptionError);
 }
 
+// Simulation profile: ideal, with the row and intensity noise off and 1 ms exposure jitter.
 TEST(Simulate, NoiseFreeProfilesTriangulateOntoTheTruth) {
   // The whole chain: profile file rows -> true camera ray -> true laser plane -> true sweep pose
   // must land on the white plane or the floor, to the float precision of the stored rows.

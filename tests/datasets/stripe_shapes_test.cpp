@@ -1,5 +1,7 @@
 // Stripe shapes of ImageRenderer::RenderLaserLine (datasets/camera_images.hpp, StripeShape):
 // each preset checked against an independent closed form of what it claims to render.
+// Simulation profile: ideal photometry (ImageRenderOptions{}), mostly with the read noise off;
+// the stripe shapes are not part of either profile.
 #include <gtest/gtest.h>
 
 #include <algorithm>

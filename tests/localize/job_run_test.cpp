@@ -34,6 +34,8 @@ std::string ErrorOf(const std::function<void()>& f) {
 
 // Two simulated seats, a cell with handling_base <- sensor (at the sweep's t0) and the laser
 // plane, and a job per seat. Built once for the suite (the simulation takes seconds).
+// Simulation profile: ideal (SimConfig{}, seed 21); the realistic chain is tested in
+// tests/datasets/table1_bench_test.cpp.
 class SeatJob : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -159,6 +161,7 @@ TEST_F(SeatJob, TheHoleGraspOfEachSeatIsWithinAMillimetreAndAHalfAndGraspable) {
 // placements, 0.37 mm on this one; its own fit: 0.005 mm). The hole grasp's own
 // fit (the part file's refine_radius_mm, 80 mm) reads the position from the boss and the shell
 // around it, where the warp has not built up.
+// Simulation profile: ideal, plus the rendered seat warped 0.5 mm (the realistic profile's warp).
 TEST_F(SeatJob, TheHoleGraspsOwnFitUndoesAWarpedShell) {
   datasets::SimConfig config;
   config.seed = 21;

@@ -3,6 +3,7 @@
 // samples at its own 1 mm step, while the sweep was rendered from a 0.02 mm tessellation of the
 // same files. The cell knows the sensor's true placement (this checks the job pipeline, not the
 // calibration chain).
+// Simulation profile: ideal (SimConfig{}, seed 31).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -24,6 +24,7 @@ namespace fs = std::filesystem;
 using ::testing::HasSubstr;
 
 /// Simulated pose sweeps, written once for the whole binary.
+/// Simulation profile: ideal (sim.yaml names no profile).
 class CalibrateJointsCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {

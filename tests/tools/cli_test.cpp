@@ -273,6 +273,7 @@ TEST_F(CliTest, LocalizeSavesAndReusesAPrebuiltModel) {
             b["candidates"][0]["scene_from_model_matrix"]);
 }
 
+// Simulation profile: ideal (`simulate seat` without --profile).
 TEST_F(CliTest, SimulateSeatIsDeterministicAndReadable) {
   const fs::path a = dir_ / "a", b = dir_ / "b";
   CommandResult r = RunCli("simulate seat --quiet --placements 1 --seed 7 --out " + a.string());

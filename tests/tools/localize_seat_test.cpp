@@ -35,6 +35,8 @@ Eigen::Isometry3d Pose(const YAML::Node& node) {
 // the mesh's facets, not noise: the model's points are the CAD mesh's vertices (192 x 40 around
 // the shell), the sweep samples the true curved surface, and ICP fits one to the other. 1.5 mm
 // keeps the test well under SINTEF's 1.8 mm mean and a seventh of the gripper's 10 mm.
+// Simulation profile: ideal (`simulate seat` without --profile); the realistic chain is tested
+// in tests/datasets/table1_bench_test.cpp.
 TEST(LocalizeSeat, TheSimulatedSeatsHoleIsFoundWithinAMillimetreAndAHalf) {
   const TestDir dir("localize_seat");
   const std::string sim = (dir.path() / "sim").string();

@@ -1,5 +1,6 @@
 // Items 4 + 5 together: a raw laser-line image of the simulator's white plane -> peaks ->
 // triangulated points on the true plane, within the scatter the peak noise predicts.
+// Simulation profile: ideal (SimConfig{}, and ImageRenderOptions{} for the raw image).
 #include <gtest/gtest.h>
 
 #include <cmath>

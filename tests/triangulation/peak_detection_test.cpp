@@ -76,6 +76,7 @@ TEST(PeakDetection, EstimatorsOnNoiseFreeStripes) {
 // at least the Cramer-Rao bound of a Gaussian peak in white noise, sigma_mu = (sigma_n / A) *
 // sqrt(2 s / sqrt(pi)) (s the Gaussian sigma; noise incl. quantization 1/12), and within a
 // small factor of it; the error averages to zero over the subpixel phases.
+// Simulation profile: ideal image noise (1.5 gray levels); the stripe rows are synthetic.
 TEST(PeakDetection, SimulatedStripeImagesScatterNearTheCramerRaoBound) {
   const datasets::ImageRenderer renderer{datasets::MakeCameraModel()};
   datasets::ExposureTruth ex;

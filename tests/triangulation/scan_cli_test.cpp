@@ -1,5 +1,6 @@
 // `lasercell scan triangulate` end to end: a simulated plane sweep written as files, the CLI run
 // as a process, its PLY read back.
+// Simulation profile: ideal (SimConfig{}); the robot sweep also turns the exposure jitter off.
 #include <gtest/gtest.h>
 
 #include <cmath>

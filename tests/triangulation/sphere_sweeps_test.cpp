@@ -89,6 +89,7 @@ calib::CameraModel SimCamera(const datasets::SensorModel& sensor) { return senso
 
 // The sweep loader and `scan triangulate --exact` (AssembleSweep, exact path, sensor frame)
 // turn the same profile file into the same points, bit for bit.
+// Simulation profile: ideal (SimConfig{}, three eye-in-hand sweeps only).
 TEST(SphereSweeps, SamePointsAsScanTriangulate) {
   datasets::SimConfig config;
   config.capture_planes = config.capture_spheres = config.capture_seats = false;

@@ -18,6 +18,7 @@ namespace {
 
 calib::CameraModel SimCamera(const datasets::SensorModel& sensor) { return sensor.camera; }
 
+// Simulation profile: ideal (SimConfig{}); the robot sweep test turns the exposure jitter off.
 struct SimCell {
   datasets::SimConfig config;
   datasets::CellTruth truth = datasets::MakeCellTruth(config);

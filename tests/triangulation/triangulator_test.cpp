@@ -216,6 +216,7 @@ TEST(Triangulator, ProfilesWiderThanTheCameraAreRejected) {
 // Simulator sweep of the white plane at 150 mm: each point's distance to the true plane is the
 // row noise (N(0, 0.05 px)) times the sensitivity of that distance to the row, which we compute
 // per point by differentiating the exact path. Normalized residuals must be N(0, 1).
+// Simulation profile: ideal (SimConfig{}).
 TEST(Triangulator, SimulatedPlaneSweepLiesOnTheTruePlaneWithinTheRowNoise) {
   datasets::SimConfig config;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
