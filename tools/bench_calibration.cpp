@@ -36,6 +36,7 @@
 #include "core/io/file_util.hpp"
 #include "datasets/calibration_captures.hpp"
 #include "datasets/sim_config.hpp"
+#include "datasets/sim_profile.hpp"
 #include "datasets/simulate.hpp"
 #include "tools/bench.hpp"
 
@@ -56,7 +57,8 @@ std::string DefaultKuka2Dir() {
 
 struct CalibrationBenchArgs {
   std::string kuka2_dir = DefaultKuka2Dir();
-  double sim_noise_px = 0.1;
+  std::string profile = "realistic";  // simulation profile (datasets/sim_profile.hpp)
+  double sim_noise_px = -1;  // corner noise sigma, px; < 0: the profile's corner_sigma_px
   bool sim_render = true;
   int sim_draws = 50;
   unsigned seed = 1;
@@ -388,9 +390,9 @@ nlohmann::json RunRendered(const CalibrationBenchArgs& args, const datasets::Sim
     v.corners_px = std::move(best);
     detected.push_back(v);
   }
-  char title[256];
+  char title[400];
   std::snprintf(title, sizeof title,
-                "Simulated cell, rendered images (default image noise/blur), corners by "
+                "Simulated cell, rendered images (the profile's image noise/blur), corners by "
                 "calib::DetectTarget (findChessboardCornersSB + cornerSubPix): %zu of %zu boards "
                 "found, detection "
                 "error vs true projections %.3f px RMS, %d corner orderings relabelled from truth",
@@ -402,9 +404,10 @@ nlohmann::json RunRendered(const CalibrationBenchArgs& args, const datasets::Sim
   return PrintSimTable(title, rows, detected, ours, camera, x_true);
 }
 
-nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
-  datasets::SimConfig config;
+nlohmann::json RunSimulated(CalibrationBenchArgs args) {
+  datasets::SimConfig config = datasets::SimConfigForProfile(args.profile);
   config.seed = args.seed;
+  if (args.sim_noise_px < 0) args.sim_noise_px = config.corner_sigma_px;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
   datasets::ChessboardTarget target = config.chessboard;
   target.dark_albedo = config.albedo.chessboard_dark;
@@ -430,11 +433,11 @@ nlohmann::json RunSimulated(const CalibrationBenchArgs& args) {
   }
   CheckTruthChain(views, x_true, set);
   nlohmann::json out;
-  char title[256];
+  char title[400];
   std::snprintf(title, sizeof title,
-                "Simulated cell (seed %u): %zu views of a %dx%d-inner-corner board (%.0f mm), "
-                "true robot poses, true projections + N(0, %.2f px)",
-                args.seed, views.size(), board.cols, board.rows, board.square_mm,
+                "Simulated cell (%s profile, seed %u): %zu views of a %dx%d-inner-corner board "
+                "(%.0f mm), true robot poses, true projections + N(0, %.2f px)",
+                config.profile.c_str(), args.seed, views.size(), board.cols, board.rows, board.square_mm,
                 args.sim_noise_px);
   calib::HandEyeResult ours;
   std::vector<Row> rows = RunMethods(views, camera, &ours);
@@ -523,6 +526,7 @@ nlohmann::json RunKuka2(const CalibrationBenchArgs& args) {
 }
 
 void RunCalibrationBench(const CalibrationBenchArgs& args) {
+  datasets::ParseSimProfile(args.profile);  // bad input before any output
   std::printf(
       "lasercell bench calibration (eye-in-hand). Same detections and the same per-view "
       "PnP board poses for every method. OpenCV is Debian's 4.6, which predates the fixes "
@@ -546,9 +550,14 @@ void AddCalibrationBenchCommand(CLI::App& bench) {
   cmd->add_option("--kuka2", args->kuka2_dir,
                   "kuka2 images + RobotPosesVec.txt (not bundled: no licence; skipped if absent)")
       ->capture_default_str();
-  cmd->add_option("--sim-noise", args->sim_noise_px, "Simulated corner noise sigma, px")
-      ->check(CLI::NonNegativeNumber)
+  cmd->add_option("--profile", args->profile,
+                  "Simulation profile: realistic (corner noise 0.15 px, noisier images, DH "
+                  "errors) or ideal")
       ->capture_default_str();
+  cmd->add_option("--sim-noise", args->sim_noise_px,
+                  "Simulated corner noise sigma, px (default: the profile's corner_sigma_px, "
+                  "realistic 0.15, ideal 0.03)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--seed", args->seed, "Simulator seed")->capture_default_str();
   cmd->add_option("--draws", args->sim_draws, "Monte-Carlo noise draws (0: none)")
       ->check(CLI::Range(0, 100000))
