@@ -58,7 +58,7 @@ std::string DefaultKuka2Dir() {
 struct CalibrationBenchArgs {
   std::string kuka2_dir = DefaultKuka2Dir();
   std::string profile = "realistic";  // simulation profile (datasets/sim_profile.hpp)
-  double sim_noise_px = -1;  // corner noise sigma, px; < 0: the profile's corner_sigma_px
+  double sim_noise_px = -1;           // corner noise sigma, px; < 0: the profile's corner_sigma_px
   bool sim_render = true;
   int sim_draws = 50;
   unsigned seed = 1;
@@ -437,8 +437,8 @@ nlohmann::json RunSimulated(CalibrationBenchArgs args) {
   std::snprintf(title, sizeof title,
                 "Simulated cell (%s profile, seed %u): %zu views of a %dx%d-inner-corner board "
                 "(%.0f mm), true robot poses, true projections + N(0, %.2f px)",
-                config.profile.c_str(), args.seed, views.size(), board.cols, board.rows, board.square_mm,
-                args.sim_noise_px);
+                config.profile.c_str(), args.seed, views.size(), board.cols, board.rows,
+                board.square_mm, args.sim_noise_px);
   calib::HandEyeResult ours;
   std::vector<Row> rows = RunMethods(views, camera, &ours);
   out["synthetic_noise"] = PrintSimTable(title, rows, views, ours, camera, x_true);
