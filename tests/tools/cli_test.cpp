@@ -327,6 +327,20 @@ TEST_F(CliTest, SimulateProfileIsNamedOnceAndRecorded) {
   EXPECT_THAT(Slurp(dir_ / "out" / "truth" / "sim_config.yaml"), HasSubstr("profile: realistic"));
 }
 
+// The accuracy benches take the realistic profile by default; a wrong name is bad input, said
+// before any output.
+TEST_F(CliTest, BenchesRefuseAnUnknownProfileBeforeRunning) {
+  for (const std::string& cmd : std::vector<std::string>{
+           "bench calibration --profile noisy",
+           "bench table1 --placements 1 --profile noisy --work " + (dir_ / "t1").string()}) {
+    const CommandResult r = RunCli(cmd);
+    EXPECT_EQ(r.exit_code, 2) << cmd;
+    EXPECT_THAT(r.err, HasSubstr("use ideal or realistic")) << cmd;
+    EXPECT_EQ(r.out, "") << cmd;
+  }
+  EXPECT_FALSE(fs::exists(dir_ / "t1"));
+}
+
 TEST_F(CliTest, BenchRegistrationPrintsPoseErrorTable) {
   // OpenCV training takes about a minute: the full comparison runs by hand (BENCHMARKS.md).
   const std::string json = (dir_ / "bench.json").string();
