@@ -60,7 +60,6 @@ struct Trial {
   Eigen::Vector3d Sigma() const { return covariance.diagonal().cwiseMax(0.0).cwiseSqrt(); }
 };
 
-// What one cell's calibration gave: the calibration, or why it was refused.
 // A cell's calibration against the simulator's truth (the benchmark reads truth/; the job never
 // does): the laser plane's normal (deg) and offset d of n . p + d = 0 (mm), handling_base <-
 // sensor's rotation (deg) and translation (mm) at the sensor origin, and how far it moves the
@@ -100,6 +99,7 @@ CalibrationErrors AgainstTruth(const SimConfig& config, const std::string& sim,
   return e;
 }
 
+// What one cell's calibration gave: the calibration, or why it was refused.
 struct CellCalibration {
   int cell = 0;
   std::uint64_t seed = 0;

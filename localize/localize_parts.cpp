@@ -384,14 +384,8 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
       }
       inst.covariance_valid = IcpPoseCovariance(inst.candidate, &inst.covariance_terms.icp);
       // The grasps' own fits use the part's ICP settings as LocalizeInCloud scales them.
-      registration::IcpOptions local_icp = lo.icp;
-      if (lo.icp_max_distance_relative > 0.0) {
-        local_icp.max_correspondence_distance_mm =
-            lo.icp_max_distance_relative * model.ppf.diameter_mm();
-      }
-      if (lo.icp_covariance_block_relative > 0.0) {
-        local_icp.covariance_block_mm = lo.icp_covariance_block_relative * model.ppf.diameter_mm();
-      }
+      const registration::IcpOptions local_icp =
+          registration::DerivedLocalizeOptions(lo, model.ppf).icp;
       std::vector<LocalFit> local_fits;
       for (const GraspFrame& g : model.part.grasps) {
         local_fits.push_back(

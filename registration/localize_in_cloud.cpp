@@ -162,32 +162,6 @@ void Refine(const RefineContext& ctx, std::vector<std::uint32_t> overlap,
   ctx.timings->verification_ms += MillisecondsSince(t);
 }
 
-// Stage options derived from the model: relative values are fractions of its diameter.
-LocalizeOptions DerivedOptions(const LocalizeOptions& options_in, const PpfModel& model) {
-  LocalizeOptions options = options_in;
-  const double diameter = model.diameter_mm();
-  if (options.cluster_radius_relative > 0.0) {
-    options.clustering.translation_radius_mm = options.cluster_radius_relative * diameter;
-    options.clustering.duplicate_radius_mm = options.cluster_radius_relative * diameter;
-  }
-  if (options.cluster_refinement_inlier_steps > 0.0) {
-    options.clustering.refinement_inlier_mm =
-        options.cluster_refinement_inlier_steps * model.sampling_step_mm();
-  }
-  if (options.support_distance_relative > 0.0)
-    options.verification.support_distance_mm = options.support_distance_relative * diameter;
-  if (options.icp_max_distance_relative > 0.0) {
-    options.icp.max_correspondence_distance_mm = options.icp_max_distance_relative * diameter;
-    options.verification.overlap_band_mm = options.icp.max_correspondence_distance_mm;
-  }
-  if (options.icp_covariance_block_relative > 0.0) {
-    options.icp.covariance_block_mm = options.icp_covariance_block_relative * diameter;
-  }
-  options.matching.threads = options.normals.threads = options.icp.threads = options.threads;
-  options.normals.viewpoint = options.viewpoint;
-  return options;
-}
-
 // Steps 1-2: clean, region of interest, small clusters (Skotheim IV-A), normals toward the
 // sensor (IV-B).
 PointCloud PreprocessScene(const PointCloud& scene_in, const LocalizeOptions& options,
@@ -551,6 +525,31 @@ std::string LocalizationResult::Summary() const {
   return s.str();
 }
 
+LocalizeOptions DerivedLocalizeOptions(const LocalizeOptions& options_in, const PpfModel& model) {
+  LocalizeOptions options = options_in;
+  const double diameter = model.diameter_mm();
+  if (options.cluster_radius_relative > 0.0) {
+    options.clustering.translation_radius_mm = options.cluster_radius_relative * diameter;
+    options.clustering.duplicate_radius_mm = options.cluster_radius_relative * diameter;
+  }
+  if (options.cluster_refinement_inlier_steps > 0.0) {
+    options.clustering.refinement_inlier_mm =
+        options.cluster_refinement_inlier_steps * model.sampling_step_mm();
+  }
+  if (options.support_distance_relative > 0.0)
+    options.verification.support_distance_mm = options.support_distance_relative * diameter;
+  if (options.icp_max_distance_relative > 0.0) {
+    options.icp.max_correspondence_distance_mm = options.icp_max_distance_relative * diameter;
+    options.verification.overlap_band_mm = options.icp.max_correspondence_distance_mm;
+  }
+  if (options.icp_covariance_block_relative > 0.0) {
+    options.icp.covariance_block_mm = options.icp_covariance_block_relative * diameter;
+  }
+  options.matching.threads = options.normals.threads = options.icp.threads = options.threads;
+  options.normals.viewpoint = options.viewpoint;
+  return options;
+}
+
 LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& model,
                                    const LocalizeOptions& options_in) {
   options_in.Check();
@@ -561,7 +560,7 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
     throw InputError("LocalizeInCloud: the scene cloud is empty; nothing to search");
   if (model.points().empty())
     throw InputError("LocalizeInCloud: the PPF model is empty; build it from a model cloud");
-  const LocalizeOptions options = DerivedOptions(options_in, model);
+  const LocalizeOptions options = DerivedLocalizeOptions(options_in, model);
 
   // Steps 1-2: preprocessing and normals.
   const PointCloud scene = PreprocessScene(scene_in, options, &result);

@@ -180,6 +180,11 @@ struct LocalizationResult {
   std::string Summary() const;
 };
 
+/// The options with every `*_relative` field turned into its absolute stage option (fractions of
+/// the model's diameter or sampling step) and the thread count passed to the stages: what
+/// LocalizeInCloud runs with, for callers that run a stage themselves (a grasp's local ICP).
+LocalizeOptions DerivedLocalizeOptions(const LocalizeOptions& options, const PpfModel& model);
+
 /// Localizes `model` in `scene` (see the file comment). Throws InputError for an empty scene or
 /// attribute sizes that disagree, OptionError for bad options.
 LocalizationResult LocalizeInCloud(const PointCloud& scene, const PpfModel& model,
