@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "core/error.hpp"
+#include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/se3.hpp"
 #include "registration/kdtree.hpp"
@@ -51,6 +52,20 @@ Eigen::Isometry3d ReadPoseFile(const std::string& path) {
   Eigen::Isometry3d pose;
   pose.matrix() = m;
   return pose;
+}
+
+void WritePoseFile(const std::string& path, const Eigen::Isometry3d& pose,
+                   const std::string& comment) {
+  std::ostringstream s;
+  std::istringstream lines(comment);
+  std::string line;
+  while (std::getline(lines, line)) s << "# " << line << "\n";
+  s.precision(10);
+  for (int r = 0; r < 4; ++r) {
+    for (int c = 0; c < 4; ++c) s << (c > 0 ? " " : "") << pose.matrix()(r, c);
+    s << "\n";
+  }
+  io::WriteFileAtomically(path, s.str());
 }
 
 PointCloud SampleMeshSurface(const TriangleMesh& mesh, double area_per_point_mm2,

@@ -63,6 +63,11 @@ struct Rs1SyntheticData {
 /// FileError when unreadable, InputError when it does not hold 16 numbers.
 Eigen::Isometry3d ReadPoseFile(const std::string& path);
 
+/// Writes `pose` as ReadPoseFile reads it, atomically: each line of `comment` as a '#' line,
+/// then the 4x4 row-major matrix at 10 significant digits. Throws FileError when unwritable.
+void WritePoseFile(const std::string& path, const Eigen::Isometry3d& pose,
+                   const std::string& comment);
+
 /// Uniform random points on a mesh surface, one per `area_per_point_mm2` on average (stochastic
 /// rounding per face), normals interpolated from the (normalized) vertex normals, which the mesh
 /// must have. Seeded by `seed`.

@@ -4,12 +4,13 @@
 #include <CLI/CLI.hpp>
 
 namespace lasercell::tools {
-void AddCloudCommands(CLI::App& app);     ///< cloud info, cloud convert
-void AddFramesCommands(CLI::App& app);    ///< frames show, frames get
-void AddLocalizeCommand(CLI::App& app);   ///< localize
-void AddJobCommands(CLI::App& app);       ///< job run
-void AddModelCommands(CLI::App& app);     ///< model info, model build
-void AddSimulateCommands(CLI::App& app);  ///< simulate cell, simulate seat
+void AddCloudCommands(CLI::App& app);         ///< cloud info, cloud convert
+void AddFramesCommands(CLI::App& app);        ///< frames show, frames get
+void AddLocalizeCommand(CLI::App& app);       ///< localize
+void AddReferencePoseCommand(CLI::App& app);  ///< reference-pose
+void AddJobCommands(CLI::App& app);           ///< job run
+void AddModelCommands(CLI::App& app);         ///< model info, model build
+void AddSimulateCommands(CLI::App& app);      ///< simulate cell, simulate seat
 /// calibrate spheres (under the `calibrate` parent created in main.cpp)
 void AddCalibrateSpheresCommand(CLI::App& calibrate);
 void AddScanCommands(CLI::App& app);  ///< scan triangulate

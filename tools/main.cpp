@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   lasercell::tools::AddCloudCommands(app);
   lasercell::tools::AddFramesCommands(app);
   lasercell::tools::AddLocalizeCommand(app);
+  lasercell::tools::AddReferencePoseCommand(app);
   lasercell::tools::AddJobCommands(app);
   lasercell::tools::AddModelCommands(app);
   lasercell::tools::AddSimulateCommands(app);
