@@ -63,6 +63,30 @@ double SquareSizePx(const std::vector<cv::Point2f>& corners, const std::vector<i
   return d[d.size() / 20];
 }
 
+// Where corner i should be, from a homography (grid -> image) through the trusted corners within
+// two grid steps of it: a square's neighbourhood is close to planar-projective even under lens
+// distortion. False when fewer than 6 trusted neighbours surround it.
+bool PredictFromNeighbours(const std::vector<cv::Point2f>& corners, const std::vector<int>& ids,
+                           int nx, const std::vector<char>& trusted, std::size_t i,
+                           cv::Point2f* predicted) {
+  const int ci = ids[i] % nx, ri = ids[i] / nx;
+  std::vector<cv::Point2f> grid, image;
+  for (std::size_t j = 0; j < ids.size(); ++j) {
+    const int cj = ids[j] % nx, rj = ids[j] / nx;
+    if (j == i || !trusted[j] || std::abs(cj - ci) > 2 || std::abs(rj - ri) > 2) continue;
+    grid.emplace_back(static_cast<float>(cj), static_cast<float>(rj));
+    image.push_back(corners[j]);
+  }
+  if (grid.size() < 6) return false;
+  const cv::Mat h = cv::findHomography(grid, image, 0);
+  if (h.empty()) return false;
+  std::vector<cv::Point2f> out;
+  cv::perspectiveTransform(
+      std::vector<cv::Point2f>{{static_cast<float>(ci), static_cast<float>(ri)}}, out, h);
+  *predicted = out[0];
+  return std::isfinite(out[0].x) && std::isfinite(out[0].y);
+}
+
 void Refine(const cv::Mat& gray, std::vector<cv::Point2f>& corners, const std::vector<int>& ids,
             int nx, const DetectionOptions& options, TargetDetection& out) {
   out.square_px = SquareSizePx(corners, ids, nx);
@@ -74,20 +98,43 @@ void Refine(const cv::Mat& gray, std::vector<cv::Point2f>& corners, const std::v
   const cv::TermCriteria stop(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4);
   cv::cornerSubPix(gray, corners, cv::Size(half, half), cv::Size(-1, -1), stop);
   out.refine_half_window_px = half;
-  // A corner that ran off (see DetectionOptions::refine_shift_limit_px): smaller windows, else
-  // the detector's own estimate.
+  // A corner that moved farther than the limit either ran onto another edge (the full window
+  // reached the board's rim) or started from a detector estimate that was itself off (SB's
+  // corners on strongly foreshortened squares, seen 3 px off). Candidates: the full window,
+  // halved windows, the detector's estimate; the one nearest the neighbours' homography wins.
+  // Without enough neighbours: the first smaller window that stays within the limit, else the
+  // detector's estimate.
   const double limit = options.refine_shift_limit_px * options.search_downscale;
+  std::vector<char> trusted(corners.size());
+  for (std::size_t i = 0; i < corners.size(); ++i)
+    trusted[i] = cv::norm(corners[i] - before[i]) <= limit ? 1 : 0;
+  const std::vector<cv::Point2f> refined = corners;
   for (std::size_t i = 0; i < corners.size(); ++i) {
-    if (cv::norm(corners[i] - before[i]) <= limit) continue;
+    if (trusted[i]) continue;
     ++out.rerefined_corners;
     out.rerefined.push_back(static_cast<int>(i));
-    corners[i] = before[i];
+    std::vector<cv::Point2f> candidates = {refined[i]};
     for (int h = half / 2; h >= options.min_refine_half_window_px; h /= 2) {
       std::vector<cv::Point2f> one = {before[i]};
       cv::cornerSubPix(gray, one, cv::Size(h, h), cv::Size(-1, -1), stop);
-      if (cv::norm(one[0] - before[i]) <= limit) {
-        corners[i] = one[0];
-        break;
+      candidates.push_back(one[0]);
+    }
+    cv::Point2f predicted;
+    corners[i] = before[i];
+    if (PredictFromNeighbours(refined, ids, nx, trusted, i, &predicted)) {
+      double best = cv::norm(before[i] - predicted);
+      for (const cv::Point2f& c : candidates) {
+        if (cv::norm(c - predicted) < best) {
+          best = cv::norm(c - predicted);
+          corners[i] = c;
+        }
+      }
+    } else {
+      for (std::size_t k = 1; k < candidates.size(); ++k) {
+        if (cv::norm(candidates[k] - before[i]) <= limit) {
+          corners[i] = candidates[k];
+          break;
+        }
       }
     }
     if (corners[i] == before[i]) ++out.unrefined_corners;

@@ -62,11 +62,13 @@ struct DetectionOptions {
   int min_refine_half_window_px = 2;
   int max_refine_half_window_px = 15;
   /// A corner the refinement moves farther than this from the detector's estimate (px, times
-  /// search_downscale) has run onto another edge -- near a board's outer corners a window of
-  /// 0.4 squares can reach the board's rim or the background, and real views showed 3-9 px
-  /// jumps there -- so it is refined again with half the window, down to
-  /// min_refine_half_window_px, and kept unrefined when none stays within (> 0). The
-  /// detectors' own corners are within ~1 px.
+  /// search_downscale) is suspect: it may have run onto another edge -- near a board's outer
+  /// corners a window of 0.4 squares can reach the board's rim or the background, and real
+  /// views showed 3-9 px jumps there -- or the detector's estimate may have been off (SB's
+  /// corners on strongly foreshortened squares, seen 3 px off). It is refined again with
+  /// halved windows down to min_refine_half_window_px, and of those results and the detector's
+  /// estimate the one nearest the homography of its trusted grid neighbours is kept; without 6
+  /// such neighbours, the first halved window within the limit, else the estimate (> 0).
   double refine_shift_limit_px = 1.5;
   /// When every detector of the cascade failed, look for a chessboard of any size to diagnose a
   /// wrong --board spec (one more detection pass on failed images only). Only words the failure
