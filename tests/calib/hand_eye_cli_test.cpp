@@ -21,6 +21,7 @@
 #include "datasets/simulate.hpp"
 #include "tests/calib/kuka2_data.hpp"
 #include "tests/cli_util.hpp"
+#include "tests/sanitizer_scale.hpp"
 
 namespace lasercell {
 namespace {
@@ -239,6 +240,9 @@ TEST_F(HandEyeCli, SimulatedImagesThroughTheSharedDetector) {
   config.capture_laser_line_images = config.write_meshes = false;
   config.capture_joint_poses = config.capture_touches = config.capture_eye_in_hand = false;
   config.capture_hand_eye_images = true;
+  // Sanitizer time: 4 of the 15 images (render + detect + solve run the same); the 0.05 mm /
+  // 0.02 deg accuracy holds only over the full set and is asserted in the normal build.
+  if (test::kSanitizerBuild) config.hand_eye_images.images = 4;
   const fs::path sim = dir_ / "sim_images";
   datasets::SimulateCell(config, sim.string(), {}, 2);
   const std::string cell = (dir_ / "images_cell.yaml").string();
@@ -255,8 +259,12 @@ TEST_F(HandEyeCli, SimulatedImagesThroughTheSharedDetector) {
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
   const Eigen::Isometry3d got = LoadFrameGraph(cell).Transform("vision_flange", "sensor");
-  EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.out;
-  EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.out;
+  if (test::StatisticsAsserted()) {
+    EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 0.05) << r.out;
+    EXPECT_LT(RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI, 0.02) << r.out;
+  } else {
+    EXPECT_LT(TranslationDistance(got, truth.vision_flange_from_sensor), 2.0) << r.out;
+  }
   // An unreadable image is a one-line error naming it.
   io::WriteFileAtomically((sim / "images/hand_eye_000.png").string(), "not a png");
   const CommandResult bad =

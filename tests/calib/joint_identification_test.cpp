@@ -35,6 +35,12 @@ datasets::SimConfig JointConfig(std::uint64_t seed = 21) {
   return config;
 }
 
+// Sanitizer time: the accuracy tests sweep each pose with 4 profiles instead of 10 and position
+// 5 held-out poses instead of 30 (the same solve and observability analysis run); their
+// accuracy bounds hold at full size and are asserted in the normal build.
+constexpr int kAccuracyProfiles = lasercell::test::kSanitizerBuild ? 4 : 10;
+constexpr int kHeldOutPoses = lasercell::test::kSanitizerBuild ? 5 : 30;
+
 /// The 50-pose set of the default simulator, planned once for the whole test binary.
 const testing::PlannedPoses& FiftyPoses() {
   static const testing::PlannedPoses poses = [] {
@@ -134,7 +140,8 @@ TEST(RobotObservability, ZeroAndDuplicateColumnsAreNamed) {
 // positioned within 0.1 mm, where the nominal model misses by >= 2 mm.
 TEST(JointIdentification, RecoversOffsetsAndPositionsHeldOutPoses) {
   const testing::PlannedPoses& poses = FiftyPoses();
-  const std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, 10, 0.05, 31);
+  const std::vector<SphereSweep> sweeps =
+      testing::SyntheticSweeps(poses, kAccuracyProfiles, 0.05, 31);
   JointIdentificationOptions options;
   options.point_sigma_mm = 0.05;
   options.known_centres_in_base = poses.centres_in_base;
@@ -153,7 +160,7 @@ TEST(JointIdentification, RecoversOffsetsAndPositionsHeldOutPoses) {
   }
   // Held-out poses: another plan of 30 poses.
   datasets::PoseSweepOptions held = poses.config.joint_poses;
-  held.poses = 30;
+  held.poses = kHeldOutPoses;
   const std::vector<datasets::PoseSweep> other =
       datasets::PlanPoseSweeps(poses.config, poses.truth, held, 999, "held-out");
   double worst_calibrated = 0, worst_nominal = 0;
@@ -173,7 +180,8 @@ TEST(JointIdentification, RecoversOffsetsAndPositionsHeldOutPoses) {
   std::printf("  held-out positioning: worst %.4f mm calibrated, %.3f mm nominal\n",
               worst_calibrated, worst_nominal);
   EXPECT_LT(worst_calibrated, 0.1);
-  EXPECT_GT(worst_nominal, 2.0);
+  // The worst of 5 held-out poses (sanitizer) need not reach the 30 poses' 2 mm.
+  EXPECT_GT(worst_nominal, lasercell::test::kSanitizerBuild ? 1.0 : 2.0);
 }
 
 // Monte Carlo: 100 noise draws of a small problem (15 poses, 6 profiles, 12 points each, known
@@ -217,14 +225,15 @@ TEST(JointIdentification, DhDeltasNameTheUnidentifiableAndFixThePositioning) {
   datasets::SimConfig config = JointConfig();
   config.dh_length_sigma_mm = 0.3;
   const testing::PlannedPoses poses = testing::PlanPoses(config, config.joint_poses, 4242);
-  const std::vector<SphereSweep> sweeps = testing::SyntheticSweeps(poses, 10, 0.05, 31);
+  const std::vector<SphereSweep> sweeps =
+      testing::SyntheticSweeps(poses, kAccuracyProfiles, 0.05, 31);
   JointIdentificationOptions options;
   options.point_sigma_mm = 0.05;
   options.known_centres_in_base = poses.centres_in_base;
   options.known_centre_sigma_mm = 0.02;
   const auto held_out_worst = [&](const JointIdentificationResult& r) {
     datasets::PoseSweepOptions held = config.joint_poses;
-    held.poses = 30;
+    held.poses = kHeldOutPoses;
     double worst = 0;
     for (const datasets::PoseSweep& p :
          datasets::PlanPoseSweeps(config, poses.truth, held, 999, "held-out")) {

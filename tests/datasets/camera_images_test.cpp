@@ -184,9 +184,15 @@ TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
   ImageRenderOptions options;
   options.noise_sigma = 0;
   const std::vector<Eigen::Isometry3d> poses = DrawChessboardPoses(target, camera, 8, 17);
+  // Sanitizer time: render and detect 2 of the 8 views, a mild (11.7 deg) and the steepest
+  // (35.5 deg) one, with the same per-view bounds; the counts over all 8 are asserted in the
+  // normal build.
+  const std::vector<std::size_t> views = test::kSanitizerBuild
+                                             ? std::vector<std::size_t>{2, 3}
+                                             : std::vector<std::size_t>{0, 1, 2, 3, 4, 5, 6, 7};
   std::vector<double> view_rms;
   int mild_views = 0;
-  for (std::size_t k = 0; k < poses.size(); ++k) {
+  for (const std::size_t k : views) {
     const Image8 image = renderer.RenderChessboard(target, poses[k], options, 1);
     const cv::Mat mat = ToMat(image);
     std::vector<cv::Point2f> found;
@@ -215,9 +221,11 @@ TEST(CameraImages, NoiseFreeChessboardCornersMatchTheTrueProjections) {
     std::printf("view %zu tilt %.1f deg: SB rms %.4f max %.4f, cornerSubPix rms %.4f px\n", k, tilt,
                 rms, worst, refined_rms);
   }
-  EXPECT_GE(mild_views, 3);
-  std::sort(view_rms.begin(), view_rms.end());
-  EXPECT_LT(view_rms[view_rms.size() / 2], 0.05);  // median view
+  EXPECT_GE(mild_views, test::kSanitizerBuild ? 1 : 3);
+  if (test::StatisticsAsserted()) {
+    std::sort(view_rms.begin(), view_rms.end());
+    EXPECT_LT(view_rms[view_rms.size() / 2], 0.05);  // median view
+  }
 }
 
 // A second renderer, written independently of ImageRenderer for this test: a plain pinhole ray

@@ -20,6 +20,7 @@
 #include "datasets/sim_config.hpp"
 #include "datasets/simulate_records.hpp"
 #include "tests/cli_util.hpp"
+#include "tests/sanitizer_scale.hpp"
 #include "triangulation/linear_sweep.hpp"
 #include "triangulation/profile_io.hpp"
 
@@ -60,6 +61,21 @@ SimConfig SmallConfig() {
   c.joint_poses.poses = 4;
   c.joint_poses.profiles = 8;
   return c;
+}
+
+// Sanitizer time: under ASan the capture-set tests use a 512 x 512 camera of the same field of
+// view, a quarter of the pixels to render (the camera images are most of a set's time); every
+// capture runs the same code.
+constexpr std::uint32_t kSetColumns = test::kSanitizerBuild ? 512 : 1024;
+
+void ShrinkCameraUnderSanitizer(SimConfig& c) {
+  if (!test::kSanitizerBuild) return;
+  CameraIntrinsics& k = c.sensor.camera;
+  k.width_px = k.height_px = static_cast<int>(kSetColumns);
+  k.fx_px /= 2;
+  k.fy_px /= 2;
+  k.cx_px /= 2;
+  k.cy_px /= 2;
 }
 
 TEST(SimConfig, DefaultsAreValidAndYamlRoundTrips) {
@@ -304,6 +320,7 @@ TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
   config.render.reflection_probability = 0.5;  // ghosts draw random numbers too
   config.render.speckle_sigma_px = 0.08;       // and speckle
   config.render.speckle_intensity_sigma = 0.2;
+  ShrinkCameraUnderSanitizer(config);
   const test::TestDir scratch("sim_seeds");
   const std::string a = scratch.File("a"), b = scratch.File("b"), c = scratch.File("c");
   const SimulationReport ra = SimulateCell(config, a, {}, 1);
@@ -319,6 +336,13 @@ TEST(Simulate, SameSeedGivesIdenticalBytesForAnyThreadCount) {
     EXPECT_EQ(io::ReadFileBytes(a + "/" + f), io::ReadFileBytes(b + "/" + f)) << f;
   }
   config.seed = 6;
+  if (test::kSanitizerBuild) {
+    // Sanitizer time: only the seats, the one file compared, for the other seed.
+    config.capture_planes = config.capture_spheres = config.capture_trajectory = false;
+    config.capture_chessboard_images = config.capture_laser_line_images = false;
+    config.write_meshes = config.capture_touches = config.capture_eye_in_hand = false;
+    config.capture_joint_poses = false;
+  }
   const SimulationReport rc = SimulateCell(config, c, {}, 2);
   EXPECT_NE(io::ReadFileBytes(a + "/profiles/seat_000.lcp"),
             io::ReadFileBytes(c + "/profiles/seat_000.lcp"));
@@ -361,7 +385,11 @@ TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
 }
 
 TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
-  const SimConfig config = SmallConfig();
+  const SimConfig config = [] {
+    SimConfig c = SmallConfig();
+    ShrinkCameraUnderSanitizer(c);
+    return c;
+  }();
   const test::TestDir scratch("sim_set");
   const std::string dir = scratch.path().string();
   std::vector<std::string> stages;
@@ -375,7 +403,7 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
     const bool pose_sweep = c.kind == "eye_in_hand_sphere" || c.kind == "joint_poses_sphere";
     const std::size_t profiles = pose_sweep ? 8u : 12u;
     EXPECT_EQ(set.profiles.size(), profiles) << c.name;
-    EXPECT_EQ(set.header.columns, 1024u);
+    EXPECT_EQ(set.header.columns, kSetColumns);
     EXPECT_GT(c.valid_peaks, profiles * 100u) << c.name;
     EXPECT_NE(set.header.metadata.find("capture: " + c.name), std::string::npos);
     if (c.kind == "seat_trajectory" || pose_sweep) {
@@ -471,6 +499,10 @@ TEST(Simulate, NoiseFreeProfilesTriangulateOntoTheTruth) {
   config.capture_spheres = config.capture_seats = config.capture_trajectory = false;
   config.capture_eye_in_hand = config.capture_joint_poses = false;
   config.timing.jitter_s = 1e-3;  // irregular exposures: poses must follow the timestamps
+  // Sanitizer time: no camera images (not read here; the capture-set tests render them).
+  if (test::kSanitizerBuild) {
+    config.capture_chessboard_images = config.capture_laser_line_images = false;
+  }
   const test::TestDir scratch("sim_chain");
   const std::string dir = scratch.path().string();
   SimulateCell(config, dir, {}, 2);

@@ -16,6 +16,7 @@
 #include "datasets/simulate_records.hpp"
 #include "localize/job_run.hpp"
 #include "tests/cli_util.hpp"
+#include "tests/sanitizer_scale.hpp"
 
 namespace lasercell::localize {
 namespace {
@@ -75,7 +76,8 @@ class ThreeParts : public ::testing::Test {
                                 "localize: {max_icp_source_points: 6000}\n");
     return path;
   }
-  static constexpr int kScenes = 2;
+  // Sanitizer time: one pallet scene (the same three parts and job) instead of two.
+  static constexpr int kScenes = test::kSanitizerBuild ? 1 : 2;
   static test::TestDir* dir_;
   static FrameGraph* truth_;
 };
