@@ -15,7 +15,9 @@
 
 #include "calib/cost_functions/kinematic_sphere_cost.hpp"
 #include "calib/internal/kinematic_sphere_seed.hpp"
+#include "calib/sweep_bias.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/stats.hpp"
 
 namespace lasercell::calib {
@@ -772,6 +774,15 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
   const FinalJacobian f = Uncertainty(st, sweeps, flat, o, all_cols, robot_free, seed_obs, result);
   FillParameters(robot, st, o, all_cols, robot_free, f.active, spheres, result);
   FillResiduals(sweeps, f, o, result);
+  result.sweep_bias_ratio = SweepBiasRatio(result.sweeps);
+  if (result.sweep_bias_ratio > kSweepBiasWarningRatio) {
+    result.warnings.push_back(
+        "the sweeps' mean residuals are " + FormatFixed(std::sqrt(result.sweep_bias_ratio), 1) +
+        "x what their own scatter explains (F = " + FormatFixed(result.sweep_bias_ratio, 1) +
+        "): the model misses something -- " +
+        (o.estimate_dh_deltas ? std::string("the sphere radius or centres, or the hand-eye")
+                              : std::string("link lengths off the nominal? estimate DH deltas")));
+  }
   if (!result.converged) result.warnings.push_back("Ceres did not converge: " + result.termination);
   return result;
 }

@@ -111,6 +111,9 @@ struct JointIdentificationResult {
   double radius_sigma_mm = 0;  ///< 0 when held.
   double rms_mm = 0;           ///< RMS point-to-sphere distance over the points used.
   double variance_factor = 0;  ///< s^2 = sum r^2 / (m - n), r in units of point_sigma.
+  /// Per-sweep mean residuals against the within-sweep scatter (calib/sweep_bias.hpp); above
+  /// kSweepBiasWarningRatio a warning says the model misses something.
+  double sweep_bias_ratio = 0;
   std::size_t points_used = 0;
   std::size_t points_rejected = 0;  ///< Seed inliers beyond the final gate.
   std::vector<SweepResidual> sweeps;

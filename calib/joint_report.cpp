@@ -175,6 +175,7 @@ nlohmann::json JointCalibrationJson(const JointIdentificationResult& r, const Sp
       {"points_used", r.points_used},
       {"points_rejected", r.points_rejected},
       {"variance_factor", r.variance_factor},
+      {"sweep_bias_ratio", r.sweep_bias_ratio},
       {"joint_offsets", OffsetsJson(r)},
       {"radius_mm", r.radius_mm},
       {"radius_sigma_mm", r.radius_sigma_mm},

@@ -109,6 +109,7 @@ void RunJoints(const JointsArgs& a) {
   if (!a.report.empty())
     report::WriteHtmlReport(a.report, calib::JointCalibrationReport(r, in.run));
   std::printf("%s -> %s\n", r.Summary().c_str(), out.c_str());
+  for (const auto& w : r.warnings) std::printf("warning: %s\n", w.c_str());
 }
 
 void RunHandEyeLaser(const JointsArgs& a) {

@@ -15,6 +15,7 @@
 #include "calib/camera_model.hpp"
 #include "calib/cost_functions/kinematic_sphere_cost.hpp"
 #include "calib/robot_observability.hpp"
+#include "calib/sweep_bias.hpp"
 #include "core/error.hpp"
 #include "datasets/robots.hpp"
 #include "tests/calib/joint_test_util.hpp"
@@ -260,6 +261,13 @@ TEST(JointIdentification, DhDeltasNameTheUnidentifiableAndFixThePositioning) {
   EXPECT_LT(full.observability.condition_number, 1e6);
   EXPECT_GT(worst_offsets, 0.1);
   EXPECT_LT(worst_full, 0.1);
+  // The offsets alone cannot absorb 0.3 mm link-length errors: whole sweeps stay biased and the
+  // result says so; with the lengths free the per-sweep means are noise (F ~ 1).
+  EXPECT_GT(offsets_only.sweep_bias_ratio, kSweepBiasWarningRatio);
+  EXPECT_THAT(::testing::PrintToString(offsets_only.warnings), HasSubstr("estimate DH deltas"));
+  EXPECT_LT(full.sweep_bias_ratio, 2.0);
+  EXPECT_THAT(::testing::PrintToString(full.warnings),
+              ::testing::Not(HasSubstr("model misses something")));
 }
 
 TEST(JointIdentification, RejectsFewerPosesThanParameters) {

@@ -78,6 +78,10 @@ TEST_F(CalibrateJointsCli, JointsUpdatesOnlyTheRobotAndWritesAVersionedJson) {
   EXPECT_EQ(j["version"], 1);
   EXPECT_TRUE(j["converged"].get<bool>());
   ASSERT_EQ(j["joint_offsets"].size(), 6u);
+  // The cell's link lengths are the true ones here: the sweeps are unbiased, no model warning
+  // (the biased case: JointIdentification.DhDeltasNameTheUnidentifiableAndFixThePositioning).
+  EXPECT_LT(j["sweep_bias_ratio"].get<double>(), 4.0);
+  EXPECT_EQ(run.out.find("model misses something"), std::string::npos) << run.out;
   // Sphere centres free: joint 1 is not identifiable and stays at its input value.
   EXPECT_FALSE(j["joint_offsets"][0]["estimated"].get<bool>());
   EXPECT_EQ(j["observability"]["unidentifiable"][0]["parameters"][0], "joint_offset_1");
