@@ -25,6 +25,7 @@
 #include "datasets/synthetic_scan.hpp"
 #include "registration/kdtree.hpp"
 #include "registration/normals.hpp"
+#include "registration/reference_pose.hpp"
 #include "registration/viewpoint.hpp"
 
 namespace lasercell::registration::test {
@@ -65,12 +66,11 @@ inline Eigen::Isometry3d Rs1ReferencePose() {
                                 "/tests/registration/data/rs1_parasaurolophus_reference.txt");
 }
 
-/// RMS displacement of `points` between two poses, mm (the pose error tests use).
+/// RMS displacement of `points` between two poses, mm (the pose error tests use; the library's
+/// PoseRmsDistanceMm).
 inline double PoseRmsMm(const std::vector<Eigen::Vector3d>& points, const Eigen::Isometry3d& a,
                         const Eigen::Isometry3d& b) {
-  double sum = 0.0;
-  for (const auto& p : points) sum += (a * p - b * p).squaredNorm();
-  return std::sqrt(sum / static_cast<double>(points.size()));
+  return PoseRmsDistanceMm(points, a, b);
 }
 
 /// Rotation angle (rad) and translation distance (mm) between two poses within tolerances.
