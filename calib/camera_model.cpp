@@ -15,6 +15,7 @@ extern "C" {
 #include "core/format.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "core/number_list.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -85,6 +86,61 @@ CameraModel FromMrcal(const mrcal_cameramodel_t& m, const std::string& name) {
   }
 }
 
+constexpr char kCovarianceKey[] = "lasercell_intrinsics_covariance";
+
+/// The text without its comments (a '#' outside quotes up to the end of the line).
+std::string WithoutComments(const std::string& text) {
+  std::string out;
+  char quote = 0;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quote == 0 && c == '#') {
+      while (i + 1 < text.size() && text[i + 1] != '\n') ++i;
+      continue;
+    }
+    if (c == '\'' || c == '"') quote = quote == 0 ? c : (quote == c ? 0 : quote);
+    out += c;
+  }
+  return out;
+}
+
+/// The covariance stored under kCovarianceKey (empty when the key is absent). FileError when
+/// its value is not a list of n * n numbers.
+Eigen::MatrixXd ParseCovarianceKey(const std::string& text, const std::string& name, int n) {
+  const std::string code = WithoutComments(text);
+  std::size_t at = std::string::npos;
+  const std::string key = kCovarianceKey;
+  for (const std::string& quoted : {"'" + key + "'", "\"" + key + "\""}) {
+    const std::size_t k = code.find(quoted);
+    if (k != std::string::npos) at = k + quoted.size();
+  }
+  if (at == std::string::npos) return {};
+  const std::size_t open = code.find('[', at);
+  const std::size_t close = open == std::string::npos ? open : code.find(']', open);
+  const std::string between = code.substr(at, open == std::string::npos ? 0 : open - at);
+  if (close == std::string::npos || between.find_first_not_of(" \t\r\n:") != std::string::npos) {
+    throw FileError(name, std::string("'") + kCovarianceKey +
+                              "' must be followed by a list [ ... ] of numbers");
+  }
+  std::string list;
+  for (const char c : code.substr(open + 1, close - open - 1)) {
+    if (!std::isspace(static_cast<unsigned char>(c))) list += c;
+  }
+  if (!list.empty() && list.back() == ',') list.pop_back();
+  std::vector<double> values;
+  try {
+    values = ParseNumberList(list, kCovarianceKey, static_cast<std::size_t>(n) * n);
+  } catch (const OptionError&) {
+    throw FileError(name, std::string("'") + kCovarianceKey + "' must hold " +
+                              std::to_string(n * n) + " finite numbers (the " + std::to_string(n) +
+                              " x " + std::to_string(n) +
+                              " covariance of the intrinsics, row-major); remove the key if the "
+                              "covariance is unknown");
+  }
+  return Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      values.data(), n, n);
+}
+
 }  // namespace
 
 CameraModel::CameraModel(std::string lensmodel, std::vector<double> intrinsics, int width_px,
@@ -109,6 +165,31 @@ CameraModel::CameraModel(std::string lensmodel, std::vector<double> intrinsics, 
     throw InputError("camera imager size " + std::to_string(width_px_) + " x " +
                      std::to_string(height_px_) + " px must be positive");
   }
+}
+
+void CameraModel::SetIntrinsicsCovariance(const Eigen::MatrixXd& covariance) {
+  if (covariance.size() == 0) {
+    intrinsics_covariance_.resize(0, 0);
+    return;
+  }
+  const int n = NumIntrinsics();
+  if (covariance.rows() != n || covariance.cols() != n) {
+    throw InputError("the intrinsics covariance of the " + lensmodel_ + " camera must be " +
+                     std::to_string(n) + " x " + std::to_string(n) + ", got " +
+                     std::to_string(covariance.rows()) + " x " + std::to_string(covariance.cols()));
+  }
+  if (!covariance.allFinite()) {
+    throw InputError("the intrinsics covariance of the " + lensmodel_ + " camera is not finite");
+  }
+  const double scale = covariance.cwiseAbs().maxCoeff();
+  if ((covariance - covariance.transpose()).cwiseAbs().maxCoeff() > 1e-6 * scale) {
+    throw InputError("the intrinsics covariance of the " + lensmodel_ + " camera is not symmetric");
+  }
+  if ((covariance.diagonal().array() < 0).any()) {
+    throw InputError("the intrinsics covariance of the " + lensmodel_ +
+                     " camera has a negative variance on its diagonal");
+  }
+  intrinsics_covariance_ = 0.5 * (covariance + covariance.transpose());
 }
 
 bool CameraModel::HasGradients() const { return mrcal_lensmodel_metadata(&lens_).has_gradients; }
@@ -311,7 +392,23 @@ std::string CameraModelText(const CameraModel& model, const std::string& comment
   out += "{\n  'lensmodel':  '" + model.lensmodel() + "',\n  'intrinsics': [ ";
   for (double v : model.intrinsics()) out += FormatDouble(v) + ", ";
   out += "],\n  'imagersize': [ " + std::to_string(model.width_px()) + ", " +
-         std::to_string(model.height_px()) + " ],\n  'extrinsics': [ 0, 0, 0, 0, 0, 0 ]\n}\n";
+         std::to_string(model.height_px()) + " ],\n  'extrinsics': [ 0, 0, 0, 0, 0, 0 ]";
+  const Eigen::MatrixXd& cov = model.intrinsics_covariance();
+  if (cov.size() > 0) {
+    out += ",\n  '";
+    out += kCovarianceKey;
+    out += "': [";
+    for (int r = 0; r < cov.rows(); ++r) {
+      out += "\n   ";
+      for (int c = 0; c < cov.cols(); ++c) {
+        out += ' ';
+        out += FormatDouble(cov(r, c));
+        if (r + 1 < cov.rows() || c + 1 < cov.cols()) out += ',';
+      }
+    }
+    out += " ]";
+  }
+  out += "\n}\n";
   return out;
 }
 
@@ -327,7 +424,13 @@ CameraModel ParseCameraModel(const std::string& text, const std::string& name) {
                     "model text with lensmodel, intrinsics, imagersize, extrinsics)");
   }
   const ModelPtr model = Guard(raw);
-  return FromMrcal(*model, name);
+  CameraModel camera = FromMrcal(*model, name);
+  try {
+    camera.SetIntrinsicsCovariance(ParseCovarianceKey(text, name, camera.NumIntrinsics()));
+  } catch (const InputError& e) {
+    throw FileError(name, e.what());
+  }
+  return camera;
 }
 
 CameraModel LoadCameraModel(const std::string& path) {
@@ -341,7 +444,10 @@ void SaveCameraModel(const std::string& path, const CameraModel& model,
   // Never write a file that mrcal itself would not read back identically.
   const CameraModel check = ParseCameraModel(text, path);
   LASERCELL_CHECK(
-      check.intrinsics() == model.intrinsics() && check.lensmodel() == model.lensmodel(),
+      check.intrinsics() == model.intrinsics() && check.lensmodel() == model.lensmodel() &&
+          check.intrinsics_covariance().rows() == model.intrinsics_covariance().rows() &&
+          (model.intrinsics_covariance().size() == 0 ||
+           check.intrinsics_covariance() == model.intrinsics_covariance()),
       "camera model text does not round-trip through mrcal's reader");
   io::WriteFileAtomically(path, text);
 }

@@ -11,7 +11,10 @@
 //
 // Files: mrcal's .cameramodel text (a Python-dict literal that mrcal's tools and
 // mrcal_read_cameramodel_file read), written atomically with every number printed to round-trip
-// exactly, preceded by a `# lasercell-cameramodel v1` comment line.
+// exactly, preceded by a `# lasercell-cameramodel v1` comment line. A model that carries its
+// intrinsics covariance stores it under the key 'lasercell_intrinsics_covariance' (row-major
+// list of NumIntrinsics()^2 numbers); mrcal's readers (C and Python) ignore keys they do not
+// know, and a file without the key reads as a model without a covariance.
 
 extern "C" {
 #include <mrcal/mrcal.h>  // C library without extern "C" guards
@@ -42,6 +45,16 @@ class CameraModel {
   int NumIntrinsics() const { return static_cast<int>(intrinsics_.size()); }
   /// True when mrcal provides gradients for the model (everything but CAHVORE).
   bool HasGradients() const;
+  /// Covariance of intrinsics() (NumIntrinsics() square; px^2 for fx fy cx cy, the distortion
+  /// terms' own units) from the calibration that made the model, marginal over the board poses;
+  /// empty when unknown (a model mrcal wrote, or a calibration whose covariance was not
+  /// computable). Calibrations downstream of the camera propagate it
+  /// (calib/camera_uncertainty.hpp).
+  const Eigen::MatrixXd& intrinsics_covariance() const { return intrinsics_covariance_; }
+  /// Sets it (an empty matrix clears it). Throws InputError unless it is NumIntrinsics() square,
+  /// finite, symmetric (to 1e-6 of its largest entry; stored symmetrized) with a non-negative
+  /// diagonal.
+  void SetIntrinsicsCovariance(const Eigen::MatrixXd& covariance);
 
   /// Pixel of a point in the camera frame (mrcal_project). Points behind a pinhole-like camera
   /// give undefined values, as in mrcal; check z > 0 before calling when that matters.
@@ -70,6 +83,7 @@ class CameraModel {
   std::string lensmodel_;
   mrcal_lensmodel_t lens_{};
   std::vector<double> intrinsics_;
+  Eigen::MatrixXd intrinsics_covariance_;
   int width_px_ = 0;
   int height_px_ = 0;
 };

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "calib/camera_uncertainty.hpp"
 #include "calib/cost_functions/hand_eye_reprojection.hpp"
 #include "calib/internal/board_pose.hpp"
 #include "core/error.hpp"
@@ -387,8 +388,64 @@ std::string HandEyeResult::Summary() const {
       axxb_rms_rotation_deg, axxb_rms_translation_mm, sr.x(), sr.y(), sr.z(), st.x(), st.y(),
       st.z(),
       warnings.empty() ? "" : (" (" + std::to_string(warnings.size()) + " warnings)").c_str());
-  return b;
+  return std::string(b) + (camera_uncertainty_included ? "; the camera's uncertainty included"
+                                                       : "; camera uncertainty not included");
 }
+
+namespace {
+
+/// The joint refinement of X and Y over every corner's reprojection error, from *x, *y.
+ceres::Solver::Summary Refine(const std::vector<HandEyeView>& views, const CameraModel& camera,
+                              const HandEyeOptions& options, Eigen::Isometry3d* x,
+                              Eigen::Isometry3d* y) {
+  double dx[6] = {0, 0, 0, 0, 0, 0}, dy[6] = {0, 0, 0, 0, 0, 0};
+  ceres::Problem problem;
+  AddResiduals(views, camera, *x, *y, dx, dy, &problem);
+  ceres::Solver::Options o;
+  o.linear_solver_type = ceres::DENSE_QR;
+  o.max_num_iterations = options.max_iterations;
+  o.function_tolerance = options.function_tolerance;
+  o.gradient_tolerance = 1e-14;
+  o.parameter_tolerance = 1e-12;
+  o.num_threads = options.threads;
+  ceres::Solver::Summary summary;
+  ceres::Solve(o, &problem, &summary);
+  *x = Perturbed(*x, dx);
+  *y = Perturbed(*y, dy);
+  return summary;
+}
+
+/// [rotation vector; translation] of `moved` as a left perturbation of `pose` (file comment).
+Vector6d LeftPerturbation(const Eigen::Isometry3d& pose, const Eigen::Isometry3d& moved) {
+  const Eigen::AngleAxisd r(moved.linear() * pose.linear().transpose());
+  Vector6d d;
+  d << r.angle() * r.axis(), moved.translation() - pose.translation();
+  return d;
+}
+
+/// Adds the camera's uncertainty to the covariances: X and Y refined again through perturbed
+/// cameras (calib/camera_uncertainty.hpp).
+void AddCameraUncertainty(const std::vector<HandEyeView>& views, const CameraModel& camera,
+                          const HandEyeOptions& options, HandEyeResult& result) {
+  if (const std::string problem = CameraPropagationProblem(camera); !problem.empty()) {
+    result.camera_uncertainty_note = "camera uncertainty not included: " + problem;
+    return;
+  }
+  const Eigen::MatrixXd cov = PropagateIntrinsicsCovariance(camera, [&](const CameraModel& c) {
+    Eigen::Isometry3d x = result.flange_from_camera, y = result.base_from_board;
+    Refine(views, c, options, &x, &y);
+    Eigen::VectorXd d(12);
+    d << LeftPerturbation(result.flange_from_camera, x),
+        LeftPerturbation(result.base_from_board, y);
+    return d;
+  });
+  result.flange_from_camera_camera_covariance = cov.topLeftCorner<6, 6>();
+  result.flange_from_camera_covariance += result.flange_from_camera_camera_covariance;
+  result.base_from_board_covariance += cov.bottomRightCorner<6, 6>();
+  result.camera_uncertainty_included = true;
+}
+
+}  // namespace
 
 HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const CameraModel& camera,
                                const HandEyeOptions& options) {
@@ -455,23 +512,10 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
   result.converged = true;
 
   if (options.refine) {
-    double dx[6] = {0, 0, 0, 0, 0, 0}, dy[6] = {0, 0, 0, 0, 0, 0};
-    ceres::Problem problem;
-    AddResiduals(vs, camera, x, y, dx, dy, &problem);
-    ceres::Solver::Options o;
-    o.linear_solver_type = ceres::DENSE_QR;
-    o.max_num_iterations = options.max_iterations;
-    o.function_tolerance = options.function_tolerance;
-    o.gradient_tolerance = 1e-14;
-    o.parameter_tolerance = 1e-12;
-    o.num_threads = options.threads;
-    ceres::Solver::Summary summary;
-    ceres::Solve(o, &problem, &summary);
+    const ceres::Solver::Summary summary = Refine(vs, camera, options, &x, &y);
     result.converged = summary.termination_type == ceres::CONVERGENCE;
     result.iterations = static_cast<int>(summary.iterations.size()) - 1;
     result.termination = summary.message;
-    x = Perturbed(x, dx);
-    y = Perturbed(y, dy);
   }
   result.flange_from_camera = x;
   result.base_from_board = y;
@@ -537,6 +581,11 @@ HandEyeResult CalibrateHandEye(const std::vector<HandEyeView>& views, const Came
     } else {
       result.warnings.emplace_back("covariance: J^T J is rank deficient");
     }
+  }
+  if (result.covariance_valid && options.include_camera_uncertainty && options.refine) {
+    AddCameraUncertainty(vs, camera, options, result);
+  } else if (result.camera_uncertainty_note.empty()) {
+    result.camera_uncertainty_note = "camera uncertainty not included (not asked for)";
   }
   return result;
 }

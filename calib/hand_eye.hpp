@@ -13,8 +13,11 @@
 // Covariances are 6x6 over [rotation vector rad; translation mm] of a perturbation
 // (R = Exp(dr) * R_est, t = t_est + dt), i.e. the rotation part is a LEFT perturbation expressed
 // in the parent frame (flange for X, base for Y), as FrameGraph's StaticEdge::covariance. They
-// are (J^T J)^-1 scaled by the residual variance sigma^2 = sum r^2 / (2 N - 12) and do not include
-// the uncertainty of the intrinsics or of the robot poses.
+// are (J^T J)^-1 scaled by the residual variance sigma^2 = sum r^2 / (2 N - 12), plus (when the
+// camera model carries its intrinsics covariance) what the camera's own uncertainty does to X and
+// Y, propagated by refining again through perturbed cameras (calib/camera_uncertainty.hpp): a
+// focal length error scales every board distance, which no number of views averages away. They
+// do not include the uncertainty of the robot poses.
 //
 // Units: mm, rad (deg only where a name says _deg), px for pixels.
 
@@ -96,7 +99,10 @@ struct HandEyeOptions {
   int max_iterations = 100;  ///< Ceres iterations (>= 1).
   double function_tolerance = 1e-12;  ///< Ceres relative cost change to stop (> 0).
   bool estimate_covariance = true;    ///< Compute the 6x6 covariances.
-  int threads = 1;                    ///< Ceres threads (>= 1).
+  /// Add the camera's uncertainty to them (file comment; 2 refinements per intrinsic). Default
+  /// true; needs the refinement and a camera model that carries its covariance.
+  bool include_camera_uncertainty = true;
+  int threads = 1;  ///< Ceres threads (>= 1).
   /// For boards symmetric under a 180-degree turn (odd x odd inner corners), renumber the corners
   /// of views whose numbering runs from the other end than view 1's (see CalibrateHandEye).
   bool fix_symmetric_board_order = true;
@@ -112,6 +118,10 @@ struct HandEyeResult {
   Matrix6d flange_from_camera_covariance = Matrix6d::Zero();             ///< See the file comment.
   Matrix6d base_from_board_covariance = Matrix6d::Zero();                ///< See the file comment.
   bool covariance_valid = false;  ///< False when not asked for or Ceres could not invert.
+  /// The camera's part of flange_from_camera_covariance (zero when not included).
+  Matrix6d flange_from_camera_camera_covariance = Matrix6d::Zero();
+  bool camera_uncertainty_included = false;
+  std::string camera_uncertainty_note;  ///< Why not, when not included.
 
   Eigen::Isometry3d initial_flange_from_camera = Eigen::Isometry3d::Identity();  ///< Closed form.
   std::vector<Eigen::Isometry3d> camera_from_board;  ///< Per-view PnP poses (closed-form input).

@@ -194,36 +194,42 @@ nlohmann::json HandEyeJson(const HandEyeResult& r, const HandEyeViews& v, const 
   for (const auto& e : r.axxb) {
     motions.push_back({{"rotation_deg", e.rotation_deg}, {"translation_mm", e.translation_mm}});
   }
-  return {{"format", "lasercell.hand_eye"},
-          {"version", 1},
-          {"tool", run.tool},
-          {"date", run.date},
-          {"camera", run.camera_path},
-          {"poses", run.poses_path},
-          {"frames", {{"parent", run.flange_frame}, {"child", run.camera_frame}}},
-          {"flange_from_camera", json::Pose(r.flange_from_camera)},
-          {"flange_from_camera_sigma", json::Sigma(r.flange_from_camera_covariance)},
-          {"flange_from_camera_covariance", json::Rows(r.flange_from_camera_covariance)},
-          {"base_from_board", json::Pose(r.base_from_board)},
-          {"base_from_board_sigma", json::Sigma(r.base_from_board_covariance)},
-          {"base_from_board_covariance", json::Rows(r.base_from_board_covariance)},
-          {"covariance_note",
-           "6x6 over [rotation vector rad (left perturbation); translation mm], scaled by the "
-           "residual variance; intrinsics and robot poses taken as exact"},
-          {"covariance_valid", r.covariance_valid},
-          {"initialisation", HandEyeMethodName(run.method)},
-          {"closed_forms", closed},
-          {"converged", r.converged},
-          {"iterations", r.iterations},
-          {"observations", r.observations},
-          {"reprojection_rms_px", r.reprojection_rms_px},
-          {"residual_sigma_px", r.residual_sigma_px},
-          {"axxb",
-           {{"rms_rotation_deg", r.axxb_rms_rotation_deg},
-            {"rms_translation_mm", r.axxb_rms_translation_mm},
-            {"motions", motions}}},
-          {"views", per_view},
-          {"warnings", r.warnings}};
+  return {
+      {"format", "lasercell.hand_eye"},
+      {"version", 1},
+      {"tool", run.tool},
+      {"date", run.date},
+      {"camera", run.camera_path},
+      {"poses", run.poses_path},
+      {"frames", {{"parent", run.flange_frame}, {"child", run.camera_frame}}},
+      {"flange_from_camera", json::Pose(r.flange_from_camera)},
+      {"flange_from_camera_sigma", json::Sigma(r.flange_from_camera_covariance)},
+      {"flange_from_camera_covariance", json::Rows(r.flange_from_camera_covariance)},
+      {"base_from_board", json::Pose(r.base_from_board)},
+      {"base_from_board_sigma", json::Sigma(r.base_from_board_covariance)},
+      {"base_from_board_covariance", json::Rows(r.base_from_board_covariance)},
+      {"covariance_note",
+       std::string("6x6 over [rotation vector rad (left perturbation); translation mm], "
+                   "scaled by the residual variance; ") +
+           (r.camera_uncertainty_included
+                ? "plus the camera's intrinsics uncertainty; robot poses taken as exact"
+                : "intrinsics (" + r.camera_uncertainty_note + ") and robot poses taken as exact")},
+      {"camera_uncertainty_included", r.camera_uncertainty_included},
+      {"flange_from_camera_sigma_camera_part", json::Sigma(r.flange_from_camera_camera_covariance)},
+      {"covariance_valid", r.covariance_valid},
+      {"initialisation", HandEyeMethodName(run.method)},
+      {"closed_forms", closed},
+      {"converged", r.converged},
+      {"iterations", r.iterations},
+      {"observations", r.observations},
+      {"reprojection_rms_px", r.reprojection_rms_px},
+      {"residual_sigma_px", r.residual_sigma_px},
+      {"axxb",
+       {{"rms_rotation_deg", r.axxb_rms_rotation_deg},
+        {"rms_translation_mm", r.axxb_rms_translation_mm},
+        {"motions", motions}}},
+      {"views", per_view},
+      {"warnings", r.warnings}};
 }
 
 report::HtmlReport HandEyeReport(const HandEyeResult& r, const HandEyeViews& v,

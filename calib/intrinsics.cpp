@@ -639,6 +639,8 @@ void IntrinsicsCovariance(const State& s, const Eigen::MatrixXd& cov_all,
     }
     result.intrinsics_covariance =
         jf * cov_free * jf.transpose() * (result.residual_sigma_px * result.residual_sigma_px);
+    // The model carries it, so a calibration downstream can propagate it.
+    if (result.camera) result.camera->SetIntrinsicsCovariance(result.intrinsics_covariance);
     for (int i = 0; i < n_full; ++i) {
       result.intrinsics_sigma.push_back(
           std::sqrt(std::max(0.0, result.intrinsics_covariance(i, i))));

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "calib/camera_uncertainty.hpp"
 #include "calib/internal/laser_geometry.hpp"
 #include "calib/internal/laser_plane_fit.hpp"
 #include "core/error.hpp"
@@ -159,6 +160,48 @@ void FillPlane(const PlaneFit& fit, LaserPlaneResult& r) {
   }
 }
 
+void AddCameraUncertainty(
+    const CameraModel& camera, bool include,
+    const std::function<std::pair<Eigen::Vector3d, double>(const CameraModel&)>& refit,
+    LaserPlaneResult& r) {
+  if (!include) {
+    r.camera_uncertainty_note = "camera uncertainty not included (turned off)";
+    return;
+  }
+  if (const std::string problem = CameraPropagationProblem(camera); !problem.empty()) {
+    r.camera_uncertainty_note = "camera uncertainty not included: " + problem;
+    return;
+  }
+  const Eigen::Vector3d n0 = r.normal;
+  Eigen::MatrixXd cov;
+  try {
+    cov = PropagateIntrinsicsCovariance(camera, [&](const CameraModel& perturbed) {
+      auto [n, d] = refit(perturbed);
+      if (n.dot(n0) < 0) {  // the same orientation as the nominal plane
+        n = -n;
+        d = -d;
+      }
+      Eigen::VectorXd v(4);
+      v << n, d;
+      return v;
+    });
+  } catch (const InputError& e) {
+    r.camera_uncertainty_note =
+        std::string("camera uncertainty not included: a perturbed camera failed: ") + e.what();
+    r.warnings.push_back(r.camera_uncertainty_note);
+    return;
+  }
+  r.camera_covariance = cov;
+  r.camera_uncertainty_included = true;
+  r.covariance += r.camera_covariance;
+  r.camera_normal_sigma_deg =
+      std::sqrt(std::max(0.0, r.camera_covariance.topLeftCorner<3, 3>().trace())) * kRadToDeg;
+  r.camera_offset_sigma_mm = std::sqrt(std::max(0.0, r.camera_covariance(3, 3)));
+  r.normal_sigma_deg =
+      std::sqrt(std::max(0.0, r.covariance.topLeftCorner<3, 3>().trace())) * kRadToDeg;
+  r.offset_sigma_mm = std::sqrt(std::max(0.0, r.covariance(3, 3)));
+}
+
 double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b)) * kRadToDeg;
 }
@@ -270,7 +313,14 @@ std::string LaserPlaneResult::Summary() const {
   s.precision(6);
   s << "laser plane (" << method << "): n = [" << normal.x() << ", " << normal.y() << ", "
     << normal.z() << "], d = " << offset_mm << " mm; 1-sigma " << Num(normal_sigma_deg, 3)
-    << " deg / " << Num(offset_sigma_mm, 3) << " mm; rms " << Num(rms_mm, 3) << " mm";
+    << " deg / " << Num(offset_sigma_mm, 3) << " mm";
+  if (camera_uncertainty_included) {
+    s << " (the camera's part " << Num(camera_normal_sigma_deg, 3) << " deg / "
+      << Num(camera_offset_sigma_mm, 3) << " mm)";
+  } else {
+    s << " (camera uncertainty not included)";
+  }
+  s << "; rms " << Num(rms_mm, 3) << " mm";
   if (method == "heights") s << " (" << Num(rms_px, 3) << " px)";
   s << " over " << points << " points";
   if (!converged) s << "; NOT CONVERGED";

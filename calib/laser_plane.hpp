@@ -78,6 +78,11 @@ struct HeightPlaneOptions {
   /// Below this median angle between the camera rays and the fitted laser plane the result is
   /// flagged ill-conditioned (deg). Default 2 deg.
   double min_triangulation_angle_deg = 2.0;
+  /// Add the camera's own uncertainty (CameraModel::intrinsics_covariance) to the plane's
+  /// covariance, propagated by refitting the plane through perturbed cameras
+  /// (calib/camera_uncertainty.hpp; 2 refits per intrinsic). Default true; without a stored
+  /// covariance the result says it was not included.
+  bool include_camera_uncertainty = true;
   /// Throws OptionError naming the field.
   void Check() const;
 };
@@ -116,6 +121,9 @@ struct StripeOptions {
   bool joint_refinement = true;
   /// Plane-fit outliers: points farther than this many robust sigmas are dropped once. Default 4.
   double outlier_sigmas = 4.0;
+  /// As HeightPlaneOptions::include_camera_uncertainty (the refits repeat the board poses and
+  /// the joint refinement). Default true.
+  bool include_camera_uncertainty = true;
   /// The board detector's options (calib/target_detection.hpp). Default: the detector's own,
   /// but a corner refinement half window of at most 5 px: the laser stripe crosses the board and
   /// a window the size of the squares takes in its edges (on the real stripe set the default
@@ -164,15 +172,24 @@ struct LaserPlaneResult {
   bool converged = false;
   std::string termination;  ///< Ceres termination message.
   int iterations = 0;
-  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();     ///< Unit, oriented so offset <= 0.
-  double offset_mm = 0;                                  ///< d of n . p + d = 0.
-  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();    ///< p0 = -d n.
-  Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();  ///< Over [n; d].
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();   ///< Unit, oriented so offset <= 0.
+  double offset_mm = 0;                                ///< d of n . p + d = 0.
+  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();  ///< p0 = -d n.
+  /// Over [n; d]: the fit's own (its residuals) plus camera_covariance.
+  Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();
   double normal_sigma_deg = 0;  ///< 1 sigma of the normal's direction: sqrt(trace cov(n)).
   double offset_sigma_mm = 0;   ///< 1 sigma of d.
-  double rms_mm = 0;            ///< RMS point-to-plane residual of the used points.
-  double rms_px = 0;            ///< Method (a): RMS residual in px of peak row.
-  int points = 0;               ///< Observations used.
+  /// The part of `covariance` the camera's intrinsics covariance causes (zero when not
+  /// included): an error shared by every point measured with this camera and plane.
+  Eigen::Matrix4d camera_covariance = Eigen::Matrix4d::Zero();
+  bool camera_uncertainty_included = false;
+  /// Why not, when not included ("" when included).
+  std::string camera_uncertainty_note;
+  double camera_normal_sigma_deg = 0;         ///< The camera's part of normal_sigma_deg.
+  double camera_offset_sigma_mm = 0;          ///< The camera's part of offset_sigma_mm.
+  double rms_mm = 0;                          ///< RMS point-to-plane residual of the used points.
+  double rms_px = 0;                          ///< Method (a): RMS residual in px of peak row.
+  int points = 0;                             ///< Observations used.
   double median_triangulation_angle_deg = 0;  ///< Median angle of the rays to the plane.
   bool ill_conditioned = false;            ///< True when the geometry cannot determine the plane.
   std::optional<double> zero_distance_mm;  ///< Method (a): D0 (estimated or given).

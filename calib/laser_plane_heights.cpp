@@ -366,6 +366,17 @@ LaserPlaneResult CalibrateLaserPlaneFromHeights(const CameraModel& camera,
   // Leave one height out, when the rest still determines the plane.
   LeaveOneHeightOut(captures, obs, m, tilt_direction, fit, estimate, estimate_tilt, all_points,
                     result);
+  // The camera's own uncertainty: the same columns through perturbed cameras.
+  AddCameraUncertainty(
+      camera, options.include_camera_uncertainty,
+      [&](const CameraModel& perturbed) {
+        std::vector<ColumnObservation> moved = obs;
+        UnprojectColumns(perturbed, moved);
+        const PlaneFit refit = FitHeights(moved, m, tilt_direction, fit.normal, fit.offset,
+                                          fit.zero_distance, fit.tilt, estimate, estimate_tilt, -1);
+        return std::make_pair(refit.normal, refit.offset);
+      },
+      result);
   if (!result.converged)
     result.warnings.push_back("the solver did not converge: " + result.termination);
   return result;

@@ -37,6 +37,13 @@ nlohmann::json LaserPlaneJson(const LaserPlaneResult& r, const std::string& came
   j["covariance_n_d"] = cov;
   j["normal_sigma_deg"] = Number(r.normal_sigma_deg);
   j["offset_sigma_mm"] = Number(r.offset_sigma_mm);
+  j["camera_uncertainty_included"] = r.camera_uncertainty_included;
+  if (r.camera_uncertainty_included) {
+    j["camera_normal_sigma_deg"] = Number(r.camera_normal_sigma_deg);
+    j["camera_offset_sigma_mm"] = Number(r.camera_offset_sigma_mm);
+  } else {
+    j["camera_uncertainty_note"] = r.camera_uncertainty_note;
+  }
   j["rms_mm"] = Number(r.rms_mm);
   if (r.method == "heights") j["rms_px"] = Number(r.rms_px);
   j["points"] = r.points;
@@ -94,6 +101,10 @@ report::HtmlReport LaserPlaneReport(const LaserPlaneResult& r, const CameraModel
                                              FormatSignificant(r.point_mm.z(), 7) + "] mm"},
       {"1 sigma normal / offset", FormatSignificant(r.normal_sigma_deg, 3) + " deg / " +
                                       FormatSignificant(r.offset_sigma_mm, 3) + " mm"},
+      {"of it the camera's uncertainty",
+       r.camera_uncertainty_included ? FormatSignificant(r.camera_normal_sigma_deg, 3) + " deg / " +
+                                           FormatSignificant(r.camera_offset_sigma_mm, 3) + " mm"
+                                     : r.camera_uncertainty_note},
       {"RMS residual",
        FormatSignificant(r.rms_mm, 4) + " mm" +
            (r.method == "heights" ? " (" + FormatSignificant(r.rms_px, 3) + " px of peak row)"
@@ -184,6 +195,7 @@ LaserPlaneEntry LaserPlaneCellEntry(const LaserPlaneResult& result, EdgeProvenan
   entry.normal = result.normal;
   entry.point_mm = result.point_mm;
   entry.covariance = result.covariance;
+  if (result.camera_uncertainty_included) entry.camera_covariance = result.camera_covariance;
   provenance.residual_summary = result.method + ": rms " + FormatSignificant(result.rms_mm, 3) +
                                 " mm over " + std::to_string(result.points) + " points, 1-sigma " +
                                 FormatSignificant(result.normal_sigma_deg, 3) + " deg / " +

@@ -453,6 +453,18 @@ LaserPlaneResult CalibrateLaserPlaneFromStripeObservations(
   // Rays of every image in one plane through the camera centre: the points are on the laser
   // plane (the board planes place them) but the plane passes through the camera.
   FlagConditioning(result, kept.rays, options.min_triangulation_angle_deg);
+  // The camera's own uncertainty: the whole method (board poses, stripe points, joint
+  // refinement) again through perturbed cameras.
+  StripeOptions refit_options = options;
+  refit_options.include_camera_uncertainty = false;
+  AddCameraUncertainty(
+      camera, options.include_camera_uncertainty,
+      [&](const CameraModel& perturbed) {
+        const LaserPlaneResult refit = CalibrateLaserPlaneFromStripeObservations(
+            perturbed, observations, board, refit_options);
+        return std::make_pair(refit.normal, refit.offset_mm);
+      },
+      result);
   if (!result.converged)
     result.warnings.push_back("the solver did not converge: " + result.termination);
   return result;

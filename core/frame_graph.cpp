@@ -145,15 +145,20 @@ void FrameGraph::SetLaserPlane(const std::string& name, const LaserPlaneEntry& p
     throw InputError(what + ": normal has norm " + FormatDouble(plane.normal.norm()) +
                      "; expected a unit vector (norm within 1e-9 of 1)");
   }
-  if (plane.covariance) {
-    const Eigen::Matrix4d& c = *plane.covariance;
+  for (const auto& [field, matrix] : {std::pair{" covariance", &plane.covariance},
+                                      std::pair{" camera_covariance", &plane.camera_covariance}}) {
+    if (!*matrix) continue;
+    const Eigen::Matrix4d& c = **matrix;
     if (!c.allFinite()) {
-      throw InputError(what + " covariance has non-finite entries; pass a finite 4x4 matrix");
+      throw InputError(what + field + " has non-finite entries; pass a finite 4x4 matrix");
     }
     const double scale = std::max(1.0, c.cwiseAbs().maxCoeff());
     if ((c - c.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale) {
-      throw InputError(what + " covariance is not symmetric; pass a symmetric 4x4 matrix");
+      throw InputError(what + field + " is not symmetric; pass a symmetric 4x4 matrix");
     }
+  }
+  if (plane.camera_covariance && !plane.covariance) {
+    throw InputError(what + ": camera_covariance is the camera's part of covariance; give both");
   }
   AddFrame(plane.frame);
   laser_planes_[name] = plane;

@@ -99,6 +99,11 @@ struct LaserPlaneEntry {
   /// Optional 4x4 covariance over [n (3, unitless); d (mm)] with d = -n . p0 (rank 3: the
   /// normal is unit), as the calibration estimated it.
   std::optional<Eigen::Matrix4d> covariance;
+  /// Optional: the part of `covariance` the camera's own (intrinsics) uncertainty causes. That
+  /// error is shared by everything measured through the same camera, including calibrations
+  /// made with this plane (a sensor-to-robot placement), so a consumer that treats the plane and
+  /// such a calibration as independent must not count it twice.
+  std::optional<Eigen::Matrix4d> camera_covariance;
   EdgeProvenance provenance;  ///< Which calibration produced it.
 
   /// d of n . p + d = 0 (mm): minus the signed distance of the frame origin along n.

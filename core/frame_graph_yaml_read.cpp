@@ -132,7 +132,7 @@ void ReadLaserPlanes(Fields& top, FrameGraph& graph) {
   planes.Done();  // a plane listed twice
   for (const std::string& name : names) {
     Fields f = planes.Sub(name.c_str());
-    f.Known({"frame", "normal", "point_mm", "covariance", "provenance"});
+    f.Known({"frame", "normal", "point_mm", "covariance", "camera_covariance", "provenance"});
     f.Done();
     LaserPlaneEntry plane;
     plane.frame = FrameOf(f, "frame", graph);
@@ -140,6 +140,7 @@ void ReadLaserPlanes(Fields& top, FrameGraph& graph) {
     f.ReadRequired("point_mm", &plane.point_mm);
     Eigen::Matrix4d covariance;
     if (f.Read("covariance", &covariance)) plane.covariance = covariance;
+    if (f.Read("camera_covariance", &covariance)) plane.camera_covariance = covariance;
     plane.provenance = ProvenanceOf(f);
     try {
       graph.SetLaserPlane(name, plane);

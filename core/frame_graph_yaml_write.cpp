@@ -175,12 +175,16 @@ std::string FrameGraphToYaml(const FrameGraph& graph) {
       out += "    " + NameToken(name) + ":\n      frame: " + NameToken(plane.frame) +
              "\n      normal: " + vec(plane.normal) + "\n      point_mm: " + vec(plane.point_mm) +
              "\n";
-      if (plane.covariance) {
-        out += "      covariance: [";
+      for (const auto& [key, matrix] : {std::pair{"covariance", &plane.covariance},
+                                        std::pair{"camera_covariance", &plane.camera_covariance}}) {
+        if (!*matrix) continue;
+        const std::string indent(std::string(key).size() + 9, ' ');
+        out += "      " + std::string(key) + ": [";
         for (int r = 0; r < 4; ++r) {
-          if (r > 0) out += ",\n                   ";
+          if (r > 0) out += ",\n" + indent;
           for (int c = 0; c < 4; ++c) {
-            out += (c > 0 ? ", " : "") + Number((*plane.covariance)(r, c), what + " covariance");
+            if (c > 0) out += ", ";
+            out += Number((**matrix)(r, c), what + " " + key);
           }
         }
         out += "]\n";

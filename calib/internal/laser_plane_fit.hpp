@@ -73,6 +73,14 @@ PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_dista
 /// Copies the plane, its covariance and sigmas and the solver outcome into the result.
 void FillPlane(const PlaneFit& fit, LaserPlaneResult& r);
 
+/// Adds the camera's uncertainty to r's covariance and sigmas (calib/camera_uncertainty.hpp):
+/// `refit` solves the plane again through a perturbed camera (without propagating). Without a
+/// propagatable covariance, or when !include, records why in r.camera_uncertainty_note.
+void AddCameraUncertainty(
+    const CameraModel& camera, bool include,
+    const std::function<std::pair<Eigen::Vector3d, double>(const CameraModel&)>& refit,
+    LaserPlaneResult& r);
+
 /// Angle between two vectors, deg.
 double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b);
 

@@ -2,13 +2,16 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <random>
 #include <sstream>
 #include <string>
 
+#include "calib/camera_uncertainty.hpp"
 #include "core/error.hpp"
 #include "tests/cli_util.hpp"
 
@@ -20,6 +23,113 @@ CameraModel Opencv8() {
       "LENSMODEL_OPENCV8",
       {1132.0, 1131.5, 515.3, 508.6, -0.112, 0.071, 2.1e-4, -1.3e-4, -0.018, 0.011, -0.006, 0.002},
       1024, 1024);
+}
+
+// ---- The intrinsics covariance: kept by the model, stored in its file (which mrcal still
+// reads), checked on input; its first-order propagation (calib/camera_uncertainty.hpp) against
+// the analytic J Sigma J^T.
+
+/// A full-rank, correlated covariance of the 12 intrinsics: sigmas 0.15 px for fx fy cx cy,
+/// 1e-3 .. 1e-5 for the distortion, correlation 0.5^|i-j|.
+Eigen::MatrixXd Covariance() {
+  const double sigma[12] = {0.15, 0.15, 0.12, 0.12, 1e-3, 2e-3, 1e-5, 1e-5, 3e-3, 2e-3, 3e-3, 2e-3};
+  Eigen::MatrixXd c(12, 12);
+  for (int i = 0; i < 12; ++i) {
+    for (int j = 0; j < 12; ++j) c(i, j) = sigma[i] * sigma[j] * std::pow(0.5, std::abs(i - j));
+  }
+  return c;
+}
+
+TEST(CameraUncertainty, TheCovarianceRoundTripsThroughTheFileAndMrcalStillReadsIt) {
+  CameraModel model = Opencv8();
+  model.SetIntrinsicsCovariance(Covariance());
+  const test::TestDir dir("camera_covariance");
+  const std::string path = dir.File("model.cameramodel");
+  SaveCameraModel(path, model, "with covariance");
+  const CameraModel back = LoadCameraModel(path);
+  EXPECT_EQ(back.intrinsics(), model.intrinsics());
+  ASSERT_EQ(back.intrinsics_covariance().rows(), 12);
+  EXPECT_TRUE(back.intrinsics_covariance() == model.intrinsics_covariance());
+  // mrcal's Python reader ignores the extra key and reads the same model.
+  const test::CommandResult python = test::RunCommand(
+      "/usr/bin/python3 -c \"import sys, mrcal; m = mrcal.cameramodel(sys.argv[1]); "
+      "print(m.intrinsics()[0], m.intrinsics()[1][0])\" " +
+      path + " 2>&1");
+  ASSERT_EQ(python.exit_code, 0) << python.out;
+  EXPECT_NE(python.out.find("LENSMODEL_OPENCV8 1132.0"), std::string::npos) << python.out;
+  // A model without the key has no covariance.
+  const CameraModel plain = ParseCameraModel(CameraModelText(Opencv8()), "plain");
+  EXPECT_EQ(plain.intrinsics_covariance().size(), 0);
+  EXPECT_EQ(CameraModelText(Opencv8()).find("lasercell_intrinsics_covariance"), std::string::npos);
+}
+
+TEST(CameraUncertainty, ABadCovarianceIsRefusedNamingWhatIsWrong) {
+  CameraModel model = Opencv8();
+  const auto message = [&](const Eigen::MatrixXd& c) {
+    try {
+      model.SetIntrinsicsCovariance(c);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message(Eigen::MatrixXd::Identity(4, 4)).find("must be 12 x 12, got 4 x 4"),
+            std::string::npos);
+  Eigen::MatrixXd c = Covariance();
+  c(0, 1) += 1e-3;
+  EXPECT_NE(message(c).find("not symmetric"), std::string::npos);
+  c = Covariance();
+  c(2, 2) = -1e-4;
+  EXPECT_NE(message(c).find("negative variance"), std::string::npos);
+  c = Covariance();
+  c(3, 3) = std::nan("");
+  EXPECT_NE(message(c).find("not finite"), std::string::npos);
+  // In a file: the wrong count, and a value that is not a number, are file errors naming the key.
+  model.SetIntrinsicsCovariance(Covariance());
+  std::string text = CameraModelText(model);
+  const std::size_t last = text.rfind(',');
+  std::string short_text = text;
+  short_text.erase(last, text.find(']', last) - last);  // drops the last number
+  try {
+    ParseCameraModel(short_text, "short.cameramodel");
+    FAIL() << "accepted 143 numbers";
+  } catch (const FileError& e) {
+    EXPECT_NE(std::string(e.what()).find("short.cameramodel"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("must hold 144 finite numbers"), std::string::npos)
+        << e.what();
+  }
+  std::string word = text;
+  word.replace(word.find("'lasercell_intrinsics_covariance': [") + 37, 0, "x");
+  EXPECT_THROW(ParseCameraModel(word, "word.cameramodel"), FileError);
+}
+
+TEST(CameraUncertainty, PropagationEqualsTheJacobianSandwich) {
+  CameraModel model = Opencv8();
+  model.SetIntrinsicsCovariance(Covariance());
+  // f: the pixels of three points (nonlinear in the distortion terms).
+  const Eigen::Vector3d points[3] = {
+      {120.0, -80.0, 650.0}, {-300.0, 250.0, 700.0}, {10.0, 5.0, 400.0}};
+  const auto pixels = [&](const CameraModel& c) {
+    Eigen::VectorXd q(6);
+    for (int k = 0; k < 3; ++k) q.segment<2>(2 * k) = c.Project(points[k]);
+    return q;
+  };
+  const Eigen::MatrixXd propagated = PropagateIntrinsicsCovariance(model, pixels);
+  Eigen::MatrixXd j(6, 12);
+  for (int k = 0; k < 3; ++k) {
+    Eigen::Matrix<double, 2, Eigen::Dynamic> dq_di;
+    model.Project(points[k], nullptr, &dq_di);
+    j.middleRows<2>(2 * k) = dq_di;
+  }
+  const Eigen::MatrixXd analytic = j * model.intrinsics_covariance() * j.transpose();
+  EXPECT_LT((propagated - analytic).cwiseAbs().maxCoeff(), 1e-6 * analytic.cwiseAbs().maxCoeff())
+      << "propagated\n"
+      << propagated << "\nanalytic\n"
+      << analytic;
+  // Without a stored covariance there is nothing to propagate, and it says so.
+  EXPECT_NE(CameraPropagationProblem(Opencv8()).find("no intrinsics covariance"),
+            std::string::npos);
+  EXPECT_THROW(PropagateIntrinsicsCovariance(Opencv8(), pixels), InputError);
 }
 
 TEST(CameraModel, ProjectUnprojectRoundTrip) {

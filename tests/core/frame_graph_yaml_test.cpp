@@ -695,6 +695,7 @@ FrameGraph CellWithLaserPlane(std::mt19937& rng) {
   plane.point_mm = Eigen::Vector3d(g(rng), g(rng), g(rng)) * 300.0;
   Eigen::Matrix4d a = Eigen::Matrix4d::NullaryExpr([&]() { return g(rng) * 1e-4; });
   plane.covariance = (a * a.transpose()).eval();
+  plane.camera_covariance = (0.5 * a * a.transpose()).eval();
   plane.provenance = {"lasercell calibrate laser 0.1.0", "2026-11-26T06:00:00Z", "fnv1a64:0123",
                       "heights: rms 0.002 mm"};
   graph.SetLaserPlane("laser", plane);
@@ -713,6 +714,8 @@ TEST(FrameGraphYamlLaserPlanes, RoundTripIsBitExact) {
     EXPECT_EQ(a.normal, b.normal);  // bit-exact
     EXPECT_EQ(a.point_mm, b.point_mm);
     EXPECT_EQ(*a.covariance, *b.covariance);
+    ASSERT_TRUE(b.camera_covariance.has_value());
+    EXPECT_EQ(*a.camera_covariance, *b.camera_covariance);
     EXPECT_EQ(b.frame, "sensor");
     EXPECT_EQ(b.provenance.residual_summary, "heights: rms 0.002 mm");
   }
@@ -790,6 +793,17 @@ TEST(FrameGraphLaserPlanes, SetLaserPlaneChecksItsInput) {
   EXPECT_DOUBLE_EQ(graph.laser_planes().at("laser").OffsetMm(), 0.0);
   const FrameGraph copy = graph;
   EXPECT_EQ(copy.laser_planes().size(), 1u);
+  // The camera's part of the covariance needs the covariance it is part of.
+  plane.camera_covariance = Eigen::Matrix4d::Identity() * 1e-8;
+  try {
+    graph.SetLaserPlane("laser", plane);
+    FAIL() << "accepted camera_covariance without covariance";
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("camera_covariance is the camera's part of covariance"));
+  }
+  plane.covariance = Eigen::Matrix4d::Identity() * 1e-8;
+  (*plane.camera_covariance)(0, 1) = 1e-3;
+  EXPECT_THROW(graph.SetLaserPlane("laser", plane), InputError);
 }
 
 }  // namespace

@@ -247,6 +247,22 @@ TEST_F(SeatJob, ALaserPlaneCovarianceInTheCellWidensThePoseCovariance) {
   }
   const nlohmann::json j = JobResultJson(result);
   EXPECT_TRUE(j["instances"][0]["covariance_terms"].contains("laser_plane"));
+
+  // When three quarters of that covariance is the camera's part (shared with the placement
+  // calibrated through the same camera), the job counts only the rest: the term scales by 1/4
+  // (it is linear in the plane's covariance), and the result says why.
+  plane.camera_covariance = (0.75 * cov).eval();
+  cell.SetLaserPlane("laser", plane);
+  SaveFrameGraph(dir_->File("cell_plane_cov.yaml"), cell);
+  const JobResult shared = RunJob(ReadJobFile(dir_->File("plane_cov.job.yaml")), options);
+  ASSERT_EQ(shared.parts.instances.size(), 1u) << shared.Summary();
+  const Matrix6d& quarter = shared.parts.instances[0].covariance_terms.laser_plane;
+  EXPECT_LT((quarter - 0.25 * terms.laser_plane).norm(), 1e-3 * terms.laser_plane.norm());
+  bool noted = false;
+  for (const std::string& note : shared.notes) {
+    noted |= note.find("its camera part is not in the poses' covariance") != std::string::npos;
+  }
+  EXPECT_TRUE(noted);
 }
 
 TEST_F(SeatJob, TheSecondRunLoadsTheModelFromTheCacheAndGivesTheSamePose) {
