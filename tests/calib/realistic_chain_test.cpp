@@ -71,8 +71,8 @@ TEST(RealisticChain, CameraThenLaserPlaneThenHandEyeFromTheirOwnCaptures) {
 
   // 1. The camera from its rendered chessboard views.
   CommandResult r = RunCliMerged("calibrate camera --images '" + (sim / "images").string() +
-                                 "/chessboard_*.png' --board " + board + " --out " +
-                                 cam.string() + " --json " + (dir.path() / "cam.json").string());
+                                 "/chessboard_*.png' --board " + board + " --out " + cam.string() +
+                                 " --json " + (dir.path() / "cam.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const calib::CameraModel camera = calib::LoadCameraModel(cam.string());
   ASSERT_EQ(camera.intrinsics_covariance().rows(), camera.NumIntrinsics());
@@ -96,8 +96,8 @@ TEST(RealisticChain, CameraThenLaserPlaneThenHandEyeFromTheirOwnCaptures) {
   const fs::path laser_json = dir.path() / "laser.json";
   r = RunCliMerged("calibrate laser --camera " + cam.string() + " --planes " +
                    (sim / "profiles").string() + " --heights-mm " + heights + " --plate-normal " +
-                   Joined(planes.plate_normal_in_sensor) + " --cell " + cell.string() +
-                   " --json " + laser_json.string());
+                   Joined(planes.plate_normal_in_sensor) + " --cell " + cell.string() + " --json " +
+                   laser_json.string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const nlohmann::json laser = nlohmann::json::parse(test::Slurp(laser_json));
   ASSERT_TRUE(laser.at("camera_uncertainty_included").get<bool>()) << laser.dump();
@@ -122,10 +122,10 @@ TEST(RealisticChain, CameraThenLaserPlaneThenHandEyeFromTheirOwnCaptures) {
   EXPECT_LT(std::abs(offset_error_mm), 3 * offset_sigma) << r.out;
   // The plane's own fit determines it to better than the targets; the camera's part is what
   // the chain adds.
-  const double own_normal = std::sqrt(normal_sigma * normal_sigma -
-                                      camera_normal_sigma * camera_normal_sigma);
-  const double own_offset = std::sqrt(offset_sigma * offset_sigma -
-                                      camera_offset_sigma * camera_offset_sigma);
+  const double own_normal =
+      std::sqrt(normal_sigma * normal_sigma - camera_normal_sigma * camera_normal_sigma);
+  const double own_offset =
+      std::sqrt(offset_sigma * offset_sigma - camera_offset_sigma * camera_offset_sigma);
   EXPECT_LT(own_normal, 0.01) << r.out;
   EXPECT_LT(own_offset, 0.02) << r.out;
 
@@ -137,11 +137,11 @@ TEST(RealisticChain, CameraThenLaserPlaneThenHandEyeFromTheirOwnCaptures) {
                    "chessboard:" + std::to_string(config.chessboard.board.cols) + "x" +
                    std::to_string(config.chessboard.board.rows) + ":" +
                    std::to_string(static_cast<int>(config.chessboard.board.square_mm)) +
-                   " --poses " + (sim / "records/hand_eye_images.yaml").string() +
-                   " --json " + (dir.path() / "handeye.json").string());
+                   " --poses " + (sim / "records/hand_eye_images.yaml").string() + " --json " +
+                   (dir.path() / "handeye.json").string());
   ASSERT_EQ(r.exit_code, 0) << r.out;
-  const Eigen::Isometry3d got = LoadFrameGraph(he_cell.string()).Transform("vision_flange",
-                                                                           "sensor");
+  const Eigen::Isometry3d got =
+      LoadFrameGraph(he_cell.string()).Transform("vision_flange", "sensor");
   const double rot_deg = RotationDistance(got, truth.vision_flange_from_sensor) * 180 / M_PI;
   const double trans_mm = TranslationDistance(got, truth.vision_flange_from_sensor);
   const nlohmann::json he = nlohmann::json::parse(test::Slurp(dir.path() / "handeye.json"));
