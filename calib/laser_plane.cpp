@@ -144,14 +144,27 @@ PlaneFit Solve(const Eigen::Vector3d& normal0, double offset0, double zero_dista
   return fit;
 }
 
+namespace {
+
+/// 1 sigma of the normal's direction (deg): sqrt(trace) of the [n; d] covariance's n block.
+double NormalSigmaDeg(const Eigen::Matrix4d& covariance) {
+  return std::sqrt(std::max(0.0, covariance.topLeftCorner<3, 3>().trace())) * kRadToDeg;
+}
+
+/// 1 sigma of d (mm).
+double OffsetSigmaMm(const Eigen::Matrix4d& covariance) {
+  return std::sqrt(std::max(0.0, covariance(3, 3)));
+}
+
+}  // namespace
+
 void FillPlane(const PlaneFit& fit, LaserPlaneResult& r) {
   r.normal = fit.normal;
   r.offset_mm = fit.offset;
   r.point_mm = -fit.offset * fit.normal;
   r.covariance = fit.covariance;
-  r.normal_sigma_deg =
-      std::sqrt(std::max(0.0, fit.covariance.topLeftCorner<3, 3>().trace())) * kRadToDeg;
-  r.offset_sigma_mm = std::sqrt(std::max(0.0, fit.covariance(3, 3)));
+  r.normal_sigma_deg = NormalSigmaDeg(fit.covariance);
+  r.offset_sigma_mm = OffsetSigmaMm(fit.covariance);
   r.converged = fit.converged;
   r.iterations = fit.iterations;
   r.termination = fit.termination;
@@ -194,12 +207,10 @@ void AddCameraUncertainty(
   r.camera_covariance = cov;
   r.camera_uncertainty_included = true;
   r.covariance += r.camera_covariance;
-  r.camera_normal_sigma_deg =
-      std::sqrt(std::max(0.0, r.camera_covariance.topLeftCorner<3, 3>().trace())) * kRadToDeg;
-  r.camera_offset_sigma_mm = std::sqrt(std::max(0.0, r.camera_covariance(3, 3)));
-  r.normal_sigma_deg =
-      std::sqrt(std::max(0.0, r.covariance.topLeftCorner<3, 3>().trace())) * kRadToDeg;
-  r.offset_sigma_mm = std::sqrt(std::max(0.0, r.covariance(3, 3)));
+  r.camera_normal_sigma_deg = NormalSigmaDeg(r.camera_covariance);
+  r.camera_offset_sigma_mm = OffsetSigmaMm(r.camera_covariance);
+  r.normal_sigma_deg = NormalSigmaDeg(r.covariance);
+  r.offset_sigma_mm = OffsetSigmaMm(r.covariance);
 }
 
 double AngleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
