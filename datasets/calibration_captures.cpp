@@ -275,6 +275,12 @@ std::string PoseSweepTruthYaml(const SimConfig& config, const CellTruth& truth,
                                const PoseSweep& p) {
   const Eigen::Vector3d center = config.spheres.CentersInCell()[p.sphere];
   std::ostringstream o;
+  // The sweep block comes last: the exposure truth the caller appends belongs inside it.
+  o << "    sphere: " << p.sphere << "\n    sphere_radius_mm: " << Num(config.spheres.radius_mm)
+    << "\n    true_sphere_radius_mm: " << Num(truth.spheres.RadiusOf(p.sphere))
+    << "\n    sphere_center_in_cell: " << Vec(center) << "\n    sphere_center_in_vision_base: "
+    << Vec(truth.layout.cell_from_vision_base.inverse() * center)
+    << "\n    sphere_columns_at_middle: " << p.sphere_columns_at_middle << "\n";
   o << "    sweep:\n      type: joints\n      robot: vision_robot\n"
     << "      interpolation: linear in joint space between waypoints (nominal IK)\n"
     << "      t0_ns: " << config.timing.start_ns
@@ -290,12 +296,7 @@ std::string PoseSweepTruthYaml(const SimConfig& config, const CellTruth& truth,
   }
   o << "      range_offset_mm: " << Num(p.range_offset_mm) << "\n";
   o << "      tilt_deg: " << Num(p.tilt_deg) << "\n      azimuth_deg: " << Num(p.azimuth_deg)
-    << "\n      roll_deg: " << Num(p.roll_deg) << "\n    sphere: " << p.sphere
-    << "\n    sphere_radius_mm: " << Num(config.spheres.radius_mm)
-    << "\n    true_sphere_radius_mm: " << Num(truth.spheres.RadiusOf(p.sphere))
-    << "\n    sphere_center_in_cell: " << Vec(center) << "\n    sphere_center_in_vision_base: "
-    << Vec(truth.layout.cell_from_vision_base.inverse() * center)
-    << "\n    sphere_columns_at_middle: " << p.sphere_columns_at_middle << "\n";
+    << "\n      roll_deg: " << Num(p.roll_deg) << "\n";
   return o.str();
 }
 

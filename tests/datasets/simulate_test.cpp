@@ -3,6 +3,7 @@
 #include "datasets/simulate.hpp"
 
 #include <gtest/gtest.h>
+#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <cmath>
@@ -387,6 +388,7 @@ TEST(Simulate, RecordsTheLinearAxisAndThePlateHeightsWithoutTruth) {
 TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
   const SimConfig config = [] {
     SimConfig c = SmallConfig();
+    c.timing.timestamp_noise_s = 50e-6;  // captures.yaml then lists the true exposure times
     ShrinkCameraUnderSanitizer(c);
     return c;
   }();
@@ -438,6 +440,17 @@ TEST(Simulate, CaptureSetIsCompleteAndConsistent) {
     EXPECT_NE(captures.find("name: " + c.name), std::string::npos) << c.name;
   }
   EXPECT_NE(captures.find("hole_center_in_handling_base"), std::string::npos);
+  // ... and is YAML a reader takes: every capture's true exposure times sit in its sweep.
+  const YAML::Node parsed = YAML::Load(captures);
+  std::size_t with_exposures = 0;
+  for (const YAML::Node& c : parsed["captures"]) {
+    const YAML::Node times = c["sweep"]["true_exposure_ns"];
+    ASSERT_TRUE(times.IsSequence()) << c["name"].as<std::string>();
+    const std::string kind = c["kind"].as<std::string>();
+    const bool pose_sweep = kind == "eye_in_hand_sphere" || kind == "joint_poses_sphere";
+    with_exposures += times.size() == (pose_sweep ? 8u : 12u);
+  }
+  EXPECT_EQ(with_exposures, report.captures.size());
   // Images and their truth.
   for (const char* f :
        {"records/touches.yaml", "records/sphere_sweeps.yaml", "truth/touches.yaml",
