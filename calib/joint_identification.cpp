@@ -15,6 +15,7 @@
 
 #include "calib/cost_functions/kinematic_sphere_cost.hpp"
 #include "calib/internal/kinematic_sphere_seed.hpp"
+#include "calib/robot_positioning.hpp"
 #include "calib/sweep_bias.hpp"
 #include "core/error.hpp"
 #include "core/format.hpp"
@@ -332,6 +333,11 @@ std::string JointIdentificationResult::Summary() const {
   const int n = static_cast<int>(robot.joints().size());
   for (int j = 0; j < n; ++j) {
     std::snprintf(buf, sizeof(buf), " %.4f", robot.joints()[j].joint_offset_rad * kRadToDeg);
+    s += buf;
+  }
+  if (positioning.poses > 0) {
+    std::snprintf(buf, sizeof(buf), "; positioning 1-sigma %.4f mm (RMS over %d poses)",
+                  positioning.rms_mm, positioning.poses);
     s += buf;
   }
   const std::vector<std::string> fixed = observability.Fixed();
@@ -774,6 +780,7 @@ JointIdentificationResult IdentifyRobot(const DhChain& robot,
   const FinalJacobian f = Uncertainty(st, sweeps, flat, o, all_cols, robot_free, seed_obs, result);
   FillParameters(robot, st, o, all_cols, robot_free, f.active, spheres, result);
   FillResiduals(sweeps, f, o, result);
+  result.positioning = PositioningAtSweeps(result, sweeps);
   result.sweep_bias_ratio = SweepBiasRatio(result.sweeps);
   if (result.sweep_bias_ratio > kSweepBiasWarningRatio) {
     result.warnings.push_back(

@@ -92,6 +92,13 @@ struct SweepResidual {
   double mean_mm = 0;      ///< Mean signed distance (a pose error shows as a bias).
 };
 
+/// The predicted positioning 1-sigma over a set of robot poses (calib/robot_positioning.hpp).
+struct PositioningUncertainty {
+  double rms_mm = 0;  ///< RMS over the poses of sqrt(trace(Sigma_p)) (3D 1-sigma), mm.
+  double max_mm = 0;  ///< Largest sqrt(trace(Sigma_p)), mm.
+  int poses = 0;
+};
+
 /// Outcome of IdentifyRobot.
 struct JointIdentificationResult {
   bool converged = false;
@@ -123,6 +130,10 @@ struct JointIdentificationResult {
   /// hand_eye_rx.. tz, centre_<s>_x.., radius).
   Eigen::MatrixXd covariance;
   std::vector<std::string> covariance_names;
+  /// Predicted 1-sigma of where the laser's working point lands in the base, over the sweeps'
+  /// poses, from the covariance of the robot parameters and hand-eye that were estimated
+  /// (PositioningAtSweeps).
+  PositioningUncertainty positioning;
   std::vector<std::string> warnings;
   /// One line: converged, RMS, offsets, fixed parameters.
   std::string Summary() const;

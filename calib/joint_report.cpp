@@ -36,6 +36,15 @@ nlohmann::json ObservabilityJson(const ObservabilityReport& o) {
           {"unidentifiable", dirs}};
 }
 
+// Predicted 1-sigma of the working point in the base (calib/robot_positioning.hpp).
+nlohmann::json PositioningJson(const PositioningUncertainty& u, const char* includes) {
+  return {{"rms", u.rms_mm},
+          {"max", u.max_mm},
+          {"poses", u.poses},
+          {"point", "centroid of each sweep's laser points, middle profile's joints"},
+          {"includes", includes}};
+}
+
 nlohmann::json SweepsJson(const std::vector<SweepResidual>& sweeps) {
   nlohmann::json out = nlohmann::json::array();
   for (const SweepResidual& s : sweeps) {
@@ -176,6 +185,9 @@ nlohmann::json JointCalibrationJson(const JointIdentificationResult& r, const Sp
       {"points_rejected", r.points_rejected},
       {"variance_factor", r.variance_factor},
       {"sweep_bias_ratio", r.sweep_bias_ratio},
+      {"positioning_sigma_mm",
+       PositioningJson(r.positioning, run.with_hand_eye ? "robot parameters and hand-eye"
+                                                        : "robot parameters (hand-eye held)")},
       {"joint_offsets", OffsetsJson(r)},
       {"radius_mm", r.radius_mm},
       {"radius_sigma_mm", r.radius_sigma_mm},
@@ -229,6 +241,7 @@ nlohmann::json LaserHandEyeJson(const LaserHandEyeResult& r, const SphereSweepRu
           {"covariance", json::Covariance(r.covariance)},
           {"residual_rms_mm", r.rms_mm},
           {"points_used", r.points_used},
+          {"positioning_sigma_mm", PositioningJson(r.positioning, "hand-eye only (robot held)")},
           {"radius_mm", r.radius_mm},
           {"radius_sigma_mm", r.radius_sigma_mm},
           {"spheres", SpheresJson(r.sphere_centres_in_base, r.sphere_centre_sigmas)},

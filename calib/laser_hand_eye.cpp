@@ -7,12 +7,14 @@
 namespace lasercell::calib {
 
 std::string LaserHandEyeResult::Summary() const {
-  char buf[200];
+  char buf[300];
   std::snprintf(buf, sizeof(buf),
-                "%s, rms %.4f mm over %zu points, %zu sweeps; 1-sigma %.4f mm / %.5f deg",
+                "%s, rms %.4f mm over %zu points, %zu sweeps; 1-sigma %.4f mm / %.5f deg; "
+                "positioning 1-sigma %.4f mm (hand-eye only, robot held)",
                 converged ? "converged" : "NOT converged", rms_mm, points_used, sweeps.size(),
                 std::sqrt(covariance.bottomRightCorner<3, 3>().trace()),
-                std::sqrt(covariance.topLeftCorner<3, 3>().trace()) * 180 / std::numbers::pi);
+                std::sqrt(covariance.topLeftCorner<3, 3>().trace()) * 180 / std::numbers::pi,
+                positioning.rms_mm);
   return buf;
 }
 
@@ -39,6 +41,7 @@ LaserHandEyeResult CalibrateLaserHandEye(const DhChain& robot,
   out.sweeps = r.sweeps;
   out.residuals_mm = r.residuals_mm;
   out.observability = r.observability;
+  out.positioning = r.positioning;
   out.warnings = r.warnings;
   return out;
 }

@@ -38,6 +38,10 @@ struct LaserHandEyeResult {
   std::vector<SweepResidual> sweeps;
   std::vector<double> residuals_mm;
   ObservabilityReport observability;
+  /// Predicted 1-sigma of the laser's working point in the base over the sweeps' poses, from
+  /// the hand-eye covariance alone: the robot model is held as exact, so its own uncertainty
+  /// is not in it (calibrate it jointly with `IdentifyRobot` and estimate_hand_eye for that).
+  PositioningUncertainty positioning;
   std::vector<std::string> warnings;
   /// One line: converged, RMS, translation and rotation 1-sigma.
   std::string Summary() const;

@@ -15,6 +15,7 @@
 #include "calib/camera_model.hpp"
 #include "calib/cost_functions/kinematic_sphere_cost.hpp"
 #include "calib/robot_observability.hpp"
+#include "calib/robot_positioning.hpp"
 #include "calib/sweep_bias.hpp"
 #include "core/error.hpp"
 #include "datasets/robots.hpp"
@@ -186,12 +187,17 @@ TEST(JointIdentification, RecoversOffsetsAndPositionsHeldOutPoses) {
 }
 
 // Monte Carlo: 100 noise draws of a small problem (15 poses, 6 profiles, 12 points each, known
-// centres): each of the 6 offsets' truth lies inside the reported 1 sigma 60-76 % of the time.
+// centres): each of the 6 offsets' truth lies inside the reported 1 sigma 60-76 % of the time,
+// and the predicted positioning covariance (calib/robot_positioning.hpp) of the working point at
+// 34 poses no solve saw fits the positioning errors: mean squared Mahalanobis distance 3 (chi-
+// square, 3 dof) within its Monte-Carlo spread.
 TEST(JointIdentification, ReportedSigmaCoversTheTruth) {
   const testing::PlannedPoses& all = FiftyPoses();
   testing::PlannedPoses poses = all;
   poses.plans.resize(16);
   int inside = 0, total = 0;
+  double mahalanobis2 = 0;
+  int positioned = 0;
   for (int draw = 0; draw < lasercell::test::Draws(100); ++draw) {
     const std::vector<SphereSweep> sweeps =
         testing::SyntheticSweeps(poses, 4, 0.1, 1000 + static_cast<std::uint64_t>(draw), 5, 0);
@@ -208,12 +214,31 @@ TEST(JointIdentification, ReportedSigmaCoversTheTruth) {
       inside += std::abs(err) <= r.parameter_sigmas[j];
       ++total;
     }
+    // One held-out pose per draw (the plans the solve did not get), in turn.
+    const std::vector<double>& q =
+        all.plans[16 + static_cast<std::size_t>(draw) % (all.plans.size() - 16)]
+            .trajectory.joints_rad[1];
+    const Eigen::Vector3d err =
+        testing::MeasuredPointInBase(r.robot, r.flange_from_sensor, q) -
+        testing::MeasuredPointInBase(poses.truth.true_vision_robot,
+                                     poses.truth.vision_flange_from_sensor, q);
+    const Eigen::Matrix3d cov = PointCovarianceInBase(r, q, Eigen::Vector3d(0, 0, 700));
+    // Offsets only: rank <= 6 but a 3x3 of a 6-joint robot is full rank at a general pose.
+    mahalanobis2 += err.dot(cov.ldlt().solve(err));
+    ++positioned;
   }
   const double fraction = static_cast<double>(inside) / total;
-  std::printf("joint offsets inside 1 sigma: %.3f of %d\n", fraction, total);
+  const double mean_m2 = mahalanobis2 / positioned;
+  std::printf(
+      "joint offsets inside 1 sigma: %.3f of %d; positioning: mean squared Mahalanobis "
+      "%.2f over %d held-out poses (3 expected)\n",
+      fraction, total, mean_m2, positioned);
   if (lasercell::test::StatisticsAsserted()) {
     EXPECT_GE(fraction, 0.60);
     EXPECT_LE(fraction, 0.76);
+    // Mean of 100 chi-square(3) draws: sd sqrt(6/100) = 0.245; 3.3 sd either way.
+    EXPECT_GT(mean_m2, 2.2);
+    EXPECT_LT(mean_m2, 3.8);
   }
 }
 

@@ -120,6 +120,13 @@ TEST_F(CalibrateJointsCli, TouchesMakeJointOneIdentifiable) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "touch.json"));
   EXPECT_TRUE(j["observability"]["unidentifiable"].empty());
+  // The predicted positioning 1 sigma of the working point, at every sweep's pose.
+  const auto& pos = j["positioning_sigma_mm"];
+  EXPECT_EQ(pos["poses"].get<std::size_t>(), j["sweeps"].size());
+  EXPECT_EQ(pos["includes"], "robot parameters (hand-eye held)");
+  EXPECT_GT(pos["rms"].get<double>(), 0.0);
+  EXPECT_LE(pos["rms"].get<double>(), pos["max"].get<double>());
+  EXPECT_NE(run.out.find("positioning 1-sigma"), std::string::npos) << run.out;
   const lasercell::FrameGraph truth =
       lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
   const auto& true_chain = dynamic_cast<const lasercell::DhChain&>(truth.Robot("vision_robot"));
@@ -140,6 +147,7 @@ TEST_F(CalibrateJointsCli, HandEyeLaserUpdatesTheFlangeSensorEdge) {
   const nlohmann::json j = nlohmann::json::parse(Slurp(dir_ / "he.json"));
   EXPECT_EQ(j["format"], "lasercell.laser_hand_eye");
   EXPECT_EQ(j["version"], 1);
+  EXPECT_EQ(j["positioning_sigma_mm"]["includes"], "hand-eye only (robot held)");
   const lasercell::FrameGraph truth =
       lasercell::LoadFrameGraph((dir_ / "sim/truth/cell.yaml").string());
   const Eigen::Isometry3d x_true = truth.Transform("vision_flange", "sensor");
