@@ -1,14 +1,13 @@
 // `lasercell calibrate joints` (joint-offset identification of the vision robot
 // from sphere sweeps, calib/joint_identification.hpp) and `lasercell calibrate
 // handeye-laser` (eye-in-hand laser variant, calib/laser_hand_eye.hpp). Both
-// read the sweep list (records/sphere_sweeps.yaml, triangulated by
-// triangulation/sphere_sweeps.hpp: the exact path of `scan triangulate`), the
-// robot and the flange <-> sensor edge of the cell (calib/robot_in_cell.hpp),
-// optionally the handling robot's touches of the sphere tops
-// (calib::ParseTouchesYaml; up = +z of handling_base unless --up), solve, and
-// update only their own parts of CELL.yaml: the robot's DH table (joints) or
-// the vision_flange <-> sensor edge (handeye-laser, or joints
-// --with-handeye). JSON and report: calib/joint_report.hpp.
+// load their problem with triangulation::LoadSphereSweepProblem (the sweep list
+// triangulated by the exact path of `scan triangulate`, the robot and the
+// flange <-> sensor edge of the cell, optionally the handling robot's touches of
+// the sphere tops; up = +z of handling_base unless --up), solve, and update only
+// their own parts of CELL.yaml: the robot's DH table (joints) or the
+// vision_flange <-> sensor edge (handeye-laser, or joints --with-handeye). JSON
+// and report: calib/joint_report.hpp.
 //
 // The laser plane: --laser-plane nx,ny,nz,d (sensor frame, n . p + d = 0, mm),
 // else the cell's calibrated `laser` plane.
@@ -17,15 +16,12 @@
 #include <string>
 #include <vector>
 
-#include "calib/camera_model.hpp"
-#include "calib/half_sphere_calibration.hpp"
 #include "calib/joint_identification.hpp"
 #include "calib/joint_report.hpp"
 #include "calib/laser_hand_eye.hpp"
 #include "calib/robot_in_cell.hpp"
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
-#include "core/io/file_util.hpp"
 #include "core/json_io.hpp"
 #include "core/number_list.hpp"
 #include "tools/cmd_calibrate_handeye_sections.hpp"
@@ -44,48 +40,34 @@ struct JointsArgs {
   int max_points = 300;
 };
 
-// What both commands load: the cell's robot, the hand-eye guess, the
-// triangulated sweeps and the solver options shared by both (noise, radius,
-// points, known centres from touches).
-struct Inputs {
-  FrameGraph graph;
-  calib::RobotInCell robot;
-  Eigen::Isometry3d flange_from_sensor;
-  std::vector<calib::SphereSweep> sweeps;
-  calib::JointIdentificationOptions solver;
+// What both commands load (triangulation::LoadSphereSweepProblem) and the run description
+// their JSON and report carry.
+struct Inputs : triangulation::SphereSweepProblem {
   calib::SphereSweepRun run;
 };
 
 Inputs Load(const JointsArgs& a) {
-  Inputs in;
-  in.graph = LoadFrameGraph(a.cell);
-  in.robot = calib::FindRobot(in.graph, a.robot, a.cell);
-  in.flange_from_sensor =
-      calib::FlangeFromSensor(in.graph, in.robot.flange, a.sensor_frame, a.cell);
-  const calib::CameraModel camera = calib::LoadCameraModel(a.camera);
-  Eigen::Vector4d plane;
+  triangulation::SphereSweepProblemSpec spec;
+  spec.cell = a.cell;
+  spec.camera = a.camera;
+  spec.sweeps = a.sweeps;
+  spec.set = a.set;
+  spec.robot = a.robot;
+  spec.sensor_frame = a.sensor_frame;
   if (!a.laser_plane.empty()) {
     const std::vector<double> v = ParseNumberList(a.laser_plane, "--laser-plane", 4);
-    plane = Eigen::Vector4d(v[0], v[1], v[2], v[3]);
-    const double n = plane.head<3>().norm();
-    if (!(n > 0)) throw OptionError("--laser-plane: the normal must be non-zero");
-    plane /= n;
-  } else {
-    plane = calib::CellLaserPlane(in.graph, a.cell, a.sensor_frame);
+    if (!(Eigen::Vector3d(v[0], v[1], v[2]).norm() > 0)) {
+      throw OptionError("--laser-plane: the normal must be non-zero");
+    }
+    spec.laser_plane = Eigen::Vector4d(v[0], v[1], v[2], v[3]);
   }
-  in.sweeps = triangulation::LoadSphereSweeps(a.sweeps, a.set, camera, plane);
-  in.solver.point_sigma_mm = a.point_sigma_mm;
-  in.solver.radius_mm = a.radius_mm;
-  in.solver.max_points_per_sweep = a.max_points;
-  if (!a.touches.empty()) {
-    const std::vector<double> up = ParseNumberList(a.up, "--up", 3);
-    const calib::KnownSphereCentres k = calib::CentresFromTouches(
-        calib::ParseTouchesYaml(io::ReadFileBytes(a.touches), a.touches), a.touches, in.graph,
-        in.robot.base, a.radius_mm, Eigen::Vector3d(up[0], up[1], up[2]));
-    in.solver.known_centres_in_base = k.centres_in_base;
-    in.solver.known_centre_sigma_mm = k.sigma_mm;
-    if (in.solver.radius_mm <= 0) in.solver.radius_mm = k.radius_mm;
-  }
+  spec.touches = a.touches;
+  const std::vector<double> up = ParseNumberList(a.up, "--up", 3);
+  spec.up = Eigen::Vector3d(up[0], up[1], up[2]);
+  spec.point_sigma_mm = a.point_sigma_mm;
+  spec.radius_mm = a.radius_mm;
+  spec.max_points_per_sweep = a.max_points;
+  Inputs in{triangulation::LoadSphereSweepProblem(spec), {}};
   in.run = {a.robot, a.sweeps, a.set, in.sweeps.size(), a.touches, a.with_handeye, a.dh_deltas};
   return in;
 }

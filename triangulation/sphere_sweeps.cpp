@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <utility>
 
+#include "calib/half_sphere_calibration.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "core/yaml_fields.hpp"
@@ -122,6 +123,39 @@ std::vector<calib::SphereSweep> LoadSphereSweeps(const std::string& path, const 
     sweeps.push_back(std::move(sweep));
   }
   return sweeps;
+}
+
+SphereSweepProblem LoadSphereSweepProblem(const SphereSweepProblemSpec& spec) {
+  SphereSweepProblem p;
+  p.graph = LoadFrameGraph(spec.cell);
+  p.robot = calib::FindRobot(p.graph, spec.robot, spec.cell);
+  p.flange_from_sensor =
+      calib::FlangeFromSensor(p.graph, p.robot.flange, spec.sensor_frame, spec.cell);
+  const calib::CameraModel camera = calib::LoadCameraModel(spec.camera);
+  Eigen::Vector4d plane;
+  if (spec.laser_plane) {
+    plane = *spec.laser_plane;
+    const double n = plane.head<3>().norm();
+    if (!(n > 0) || !plane.allFinite()) {
+      throw OptionError("laser_plane: the normal must be finite and non-zero");
+    }
+    plane /= n;
+  } else {
+    plane = calib::CellLaserPlane(p.graph, spec.cell, spec.sensor_frame);
+  }
+  p.sweeps = LoadSphereSweeps(spec.sweeps, spec.set, camera, plane);
+  p.solver.point_sigma_mm = spec.point_sigma_mm;
+  p.solver.radius_mm = spec.radius_mm;
+  p.solver.max_points_per_sweep = spec.max_points_per_sweep;
+  if (!spec.touches.empty()) {
+    const calib::KnownSphereCentres k = calib::CentresFromTouches(
+        calib::ParseTouchesYaml(io::ReadFileBytes(spec.touches), spec.touches), spec.touches,
+        p.graph, p.robot.base, spec.radius_mm, spec.up);
+    p.solver.known_centres_in_base = k.centres_in_base;
+    p.solver.known_centre_sigma_mm = k.sigma_mm;
+    if (p.solver.radius_mm <= 0) p.solver.radius_mm = k.radius_mm;
+  }
+  return p;
 }
 
 }  // namespace lasercell::triangulation

@@ -14,11 +14,15 @@
 // gives for that profile file.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "calib/camera_model.hpp"
 #include "calib/joint_identification.hpp"
+#include "calib/robot_in_cell.hpp"
+#include "core/frame_graph.hpp"
 #include "triangulation/triangulator.hpp"
 
 namespace lasercell::triangulation {
@@ -60,5 +64,39 @@ std::vector<calib::SphereSweep> LoadSphereSweeps(const std::string& path, const 
                                                  const calib::CameraModel& camera,
                                                  const Eigen::Vector4d& plane_in_sensor,
                                                  const TriangulatorOptions& options = {});
+
+/// What the robot-side calibrations from sphere sweeps read (`calibrate joints`,
+/// `calibrate handeye-laser`). Units mm.
+struct SphereSweepProblemSpec {
+  std::string cell;                 ///< cell.yaml with the robot and the flange <-> sensor edge.
+  std::string camera;               ///< The sensor camera (.cameramodel).
+  std::string sweeps;               ///< The sweep list (records/sphere_sweeps.yaml).
+  std::string set = "joint_poses";  ///< Sweep set in the list.
+  std::string robot = "vision_robot";
+  std::string sensor_frame = "sensor";
+  /// Laser plane n . p + d = 0 in the sensor frame (normalized here); empty: the cell's
+  /// calibrated `laser` plane.
+  std::optional<Eigen::Vector4d> laser_plane;
+  /// Sphere tops touched by the handling robot (records/touches.yaml); empty: centres free.
+  std::string touches;
+  Eigen::Vector3d up = Eigen::Vector3d::UnitZ();  ///< Against gravity in handling_base.
+  double point_sigma_mm = 0.1;                    ///< A-priori point noise.
+  double radius_mm = 0;                           ///< Initial sphere radius; 0: from the data.
+  int max_points_per_sweep = 300;
+};
+
+/// The loaded problem: the cell, its robot, the hand-eye start, the triangulated sweeps and
+/// the solver options the spec sets (noise, radius, points, centres known from the touches).
+struct SphereSweepProblem {
+  FrameGraph graph;
+  calib::RobotInCell robot;
+  Eigen::Isometry3d flange_from_sensor = Eigen::Isometry3d::Identity();
+  std::vector<calib::SphereSweep> sweeps;
+  calib::JointIdentificationOptions solver;
+};
+
+/// Loads cell, camera, plane, sweeps and touches. Throws FileError/OptionError/InputError
+/// naming the file or field (a zero plane normal is an OptionError on `laser_plane`).
+SphereSweepProblem LoadSphereSweepProblem(const SphereSweepProblemSpec& spec);
 
 }  // namespace lasercell::triangulation

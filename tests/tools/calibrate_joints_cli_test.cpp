@@ -214,6 +214,13 @@ TEST_F(CalibrateJointsCli, MissingLaserPlaneAndUnknownSetAreNamed) {
   run = RunCli("calibrate joints" + Common(cell) + " --set nope");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_THAT(run.err, HasSubstr("has no sweep set 'nope'"));
+  run = RunCli("calibrate joints --cell " + cell + " --camera " + cam + " --sweeps " + sweeps +
+               " --laser-plane=0,0,0,5");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("--laser-plane: the normal must be non-zero"));
+  run = RunCli("calibrate joints" + Common(cell) + " --up 0,1");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_THAT(run.err, HasSubstr("--up"));
 }
 
 }  // namespace
