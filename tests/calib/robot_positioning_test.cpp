@@ -79,6 +79,14 @@ TEST(PointCovarianceInBase, RejectsBadInput) {
   }
   EXPECT_THROW(PointCovarianceInBase(r, {0, 0, 0, 0, 0, std::nan("")}, Eigen::Vector3d::Zero()),
                InputError);
+  JointIdentificationResult misnamed = r;
+  misnamed.covariance_names[2] = "hand_eye_yz";
+  try {
+    PointCovarianceInBase(misnamed, {0, 0, 0, 0, 0, 0}, Eigen::Vector3d::Zero());
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("unknown covariance parameter 'hand_eye_yz'"));
+  }
   JointIdentificationResult wrong = r;
   wrong.covariance_names.pop_back();
   try {
