@@ -9,6 +9,7 @@
 
 #include "core/error.hpp"
 #include "core/se3.hpp"
+#include "datasets/sim_profile.hpp"
 #include "tests/calib/sphere_sweep_sim.hpp"
 #include "tests/calib/sphere_test_util.hpp"
 #include "tests/sanitizer_scale.hpp"
@@ -38,6 +39,29 @@ PoseError Compare(const Eigen::Isometry3d& est, const Eigen::Isometry3d& truth,
   return e;
 }
 
+// A result against the simulated truth: the errors, and the Mahalanobis distance of the error
+// under the reported 6x6 covariance; printed as one `[ measured ]` line headed `what`.
+struct Scored {
+  PoseError error;
+  double mahalanobis;
+};
+Scored Score(const HalfSphereCalibrationResult& r, const testing::SimulatedSphereSweep& sim,
+             const char* what) {
+  const Scored s{
+      Compare(r.handling_base_from_sweep, sim.handling_base_from_sweep, sim.centers_in_sweep),
+      std::sqrt([&] {
+        const Vector6d xi = RotationVectorTranslation(sim.handling_base_from_sweep *
+                                                      r.handling_base_from_sweep.inverse());
+        return xi.dot(r.covariance.inverse() * xi);
+      }())};
+  std::printf(
+      "[ measured ] %s: %s; error vs truth: rotation %.5f deg, translation %.4f mm, at the "
+      "spheres %.4f mm; Mahalanobis %.2f (6 dof)\n",
+      what, r.Summary().c_str(), s.error.rotation_deg, s.error.translation_mm,
+      s.error.at_spheres_mm, s.mahalanobis);
+  return s;
+}
+
 // The full chain on the simulated cell: render + triangulate the sphere sweep, segment, fit,
 // match the 4 touches (simulator default: sigma 0.05 mm per axis), rigid fit.
 // Simulation profile: ideal (DefaultSphereSweep; a regression check of the algorithms' own error).
@@ -55,20 +79,55 @@ TEST(CalibrateHalfSpheres, SimulatedCellAgreesWithTheTruthWithinItsReportedSigma
     EXPECT_LT((s.center_in_sweep - sim.centers_in_sweep[static_cast<std::size_t>(s.sphere)]).norm(),
               0.05);
   }
-  const PoseError e =
-      Compare(r.handling_base_from_sweep, sim.handling_base_from_sweep, sim.centers_in_sweep);
-  const Vector6d xi = RotationVectorTranslation(sim.handling_base_from_sweep *
-                                                r.handling_base_from_sweep.inverse());
-  const double mahalanobis = std::sqrt(xi.dot(r.covariance.inverse() * xi));
-  std::printf("[ measured ] touch sigma 0.05: %s\n", r.Summary().c_str());
-  std::printf(
-      "[ measured ] error vs truth: rotation %.5f deg, translation %.4f mm, at the spheres "
-      "%.4f mm; Mahalanobis %.2f (6 dof)\n",
-      e.rotation_deg, e.translation_mm, e.at_spheres_mm, mahalanobis);
+  const double mahalanobis = Score(r, sim, "touch sigma 0.05").mahalanobis;
   // 6-dof chi2 at p = 0.999: 22.5 -> Mahalanobis 4.7.
   EXPECT_LT(mahalanobis, 4.7);
   EXPECT_TRUE(r.unmatched_swept.empty());
   EXPECT_TRUE(r.unmatched_touches.empty());
+}
+
+// The same chain on the realistic profile (datasets/SIMULATOR.md, Profiles: speckle, ghosts and
+// dropouts on the sweep, timestamp noise, sphere radii up to 0.05 mm off the 25 mm the touches
+// file states), seed 437, the true camera and plane (the chain through calibrated ones is
+// `lasercell bench table1`, BENCHMARKS.md). Asserted: the error within the reported covariance
+// (Mahalanobis, 6 dof, p = 0.999), at the stated touch noise and at CMM-grade touches with the
+// radii fitted. The 0.05 mm / 0.01 deg targets are not met here (BENCHMARKS.md, half-sphere
+// section): the stated 0.05 mm touches alone leave 0.012 deg of 1 sigma.
+TEST(CalibrateHalfSpheres, RealisticSweepAgreesWithTheTruthWithinItsReportedSigma) {
+  if (lasercell::test::kSanitizerBuild) {
+    GTEST_SKIP() << "a second rendered sweep; the chain runs under the sanitizer in the test above";
+  }
+  datasets::SimConfig config = datasets::SimConfigForProfile(datasets::SimProfile::kRealistic);
+  config.seed = 437;
+  const testing::SimulatedSphereSweep sim =
+      testing::SimulateSphereSweep(config, datasets::StreamSeed(437, 0x5F));
+  const SphereSegmentationResult seg = SegmentSpheres(sim.cloud);
+  ASSERT_EQ(seg.spheres.size(), 4u) << seg.Summary();
+  HalfSphereCalibrationOptions options;
+  options.touch_sigma_mm = config.touches.sigma_mm;  // what the touches file states
+  const HalfSphereCalibrationResult r =
+      CalibrateHalfSpheres(SweptSpheresFrom(seg), Touches(sim.touches), options);
+  ASSERT_EQ(r.spheres.size(), 4u);
+  EXPECT_LT(Score(r, sim, "realistic, touches 0.05 mm, radius fixed").mahalanobis, 4.7);
+  // At CMM-grade touches (0.005 mm per axis) the rest shows: the realistic radii are up to
+  // 0.05 mm off the stated 25 mm, which a fixed radius turns into centre heights the covariance
+  // does not hold (chi2/dof 13.2/6, Mahalanobis 5.3 on this seed); fitted radii take it up.
+  datasets::SimConfig fine = config;
+  fine.touches.sigma_mm = 0.005;
+  const testing::SimulatedSphereSweep sim_fine =
+      testing::SimulateSphereSweep(fine, datasets::StreamSeed(437, 0x5F));
+  SphereSegmentationOptions free_radius;
+  free_radius.fix_radius = false;
+  options.touch_sigma_mm = fine.touches.sigma_mm;
+  const HalfSphereCalibrationResult f =
+      CalibrateHalfSpheres(SweptSpheresFrom(SegmentSpheres(sim_fine.cloud, free_radius)),
+                           Touches(sim_fine.touches), options);
+  EXPECT_LT(Score(f, sim_fine, "realistic, touches 0.005 mm, free radii").mahalanobis, 4.7);
+  // The fixed radius at the same touches, printed for BENCHMARKS.md (not asserted: it is the
+  // case the covariance does not hold).
+  const HalfSphereCalibrationResult x = CalibrateHalfSpheres(
+      SweptSpheresFrom(SegmentSpheres(sim_fine.cloud)), Touches(sim_fine.touches), options);
+  Score(x, sim_fine, "realistic, touches 0.005 mm, radius fixed");
 }
 
 // Target: <= 0.05 mm / 0.01 deg from the truth with 4 spheres. The transform's translation is the
