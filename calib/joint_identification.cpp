@@ -82,8 +82,7 @@ Columns MakeColumns(const JointIdentificationOptions& o, const std::vector<bool>
   }
   if (o.estimate_hand_eye) {
     c.hand_eye = c.count;
-    for (const char* n : {"hand_eye_rx", "hand_eye_ry", "hand_eye_rz", "hand_eye_tx", "hand_eye_ty",
-                          "hand_eye_tz"}) {
+    for (const char* n : kHandEyeParameterNames) {
       c.names.emplace_back(n);
       c.fixable.push_back(false);
       ++c.count;

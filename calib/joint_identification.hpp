@@ -31,6 +31,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -91,6 +92,11 @@ struct SweepResidual {
   double max_abs_mm = 0;   ///< Largest |distance|.
   double mean_mm = 0;      ///< Mean signed distance (a pose error shows as a bias).
 };
+
+/// Names of the hand-eye columns of JointIdentificationResult::covariance, in the order of the
+/// left perturbation [rotation vector rad; translation mm].
+inline constexpr std::array<const char*, 6> kHandEyeParameterNames = {
+    "hand_eye_rx", "hand_eye_ry", "hand_eye_rz", "hand_eye_tx", "hand_eye_ty", "hand_eye_tz"};
 
 /// The predicted positioning 1-sigma over a set of robot poses (calib/robot_positioning.hpp).
 struct PositioningUncertainty {

@@ -47,13 +47,13 @@ Eigen::Matrix3d PointCovarianceInBase(const JointIdentificationResult& result,
   for (Eigen::Index c = 0; c < n; ++c) {
     const std::string& name = result.covariance_names[static_cast<std::size_t>(c)];
     if (name.rfind("hand_eye_", 0) == 0) {
-      const std::size_t at =
-          name.size() == 11 ? std::string("rxryrztxtytz").find(name.substr(9)) : std::string::npos;
-      if (at == std::string::npos || at % 2 != 0) {
+      const auto* found =
+          std::find(kHandEyeParameterNames.begin(), kHandEyeParameterNames.end(), name);
+      if (found == kHandEyeParameterNames.end()) {
         throw InputError("positioning uncertainty: unknown covariance parameter '" + name +
                          "' (hand_eye_rx .. hand_eye_tz)");
       }
-      const int axis = static_cast<int>(at / 2);  // rx..tz -> 0..5
+      const auto axis = static_cast<int>(found - kHandEyeParameterNames.begin());
       const double h = axis < 3 ? kAngleStep : kLengthStep;
       double w_u[6] = {0, 0, 0, 0, 0, 0};
       Eigen::Vector3d side[2];

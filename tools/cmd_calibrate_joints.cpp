@@ -31,13 +31,11 @@
 namespace lasercell::tools {
 namespace {
 
+// The library's problem spec, its fields bound to the flags, and what only the CLI parses.
 struct JointsArgs {
-  std::string cell, camera, sweeps, set, report, json, robot = "vision_robot", output;
-  std::string laser_plane, touches, up = "0,0,1";
-  std::string sensor_frame = "sensor";
+  triangulation::SphereSweepProblemSpec spec;
+  std::string report, json, output, laser_plane, up = "0,0,1";
   bool with_handeye = false, dh_deltas = false;
-  double point_sigma_mm = 0.1, radius_mm = 0;
-  int max_points = 300;
 };
 
 // What both commands load (triangulation::LoadSphereSweepProblem) and the run description
@@ -47,13 +45,7 @@ struct Inputs : triangulation::SphereSweepProblem {
 };
 
 Inputs Load(const JointsArgs& a) {
-  triangulation::SphereSweepProblemSpec spec;
-  spec.cell = a.cell;
-  spec.camera = a.camera;
-  spec.sweeps = a.sweeps;
-  spec.set = a.set;
-  spec.robot = a.robot;
-  spec.sensor_frame = a.sensor_frame;
+  triangulation::SphereSweepProblemSpec spec = a.spec;
   if (!a.laser_plane.empty()) {
     const std::vector<double> v = ParseNumberList(a.laser_plane, "--laser-plane", 4);
     if (!(Eigen::Vector3d(v[0], v[1], v[2]).norm() > 0)) {
@@ -61,14 +53,11 @@ Inputs Load(const JointsArgs& a) {
     }
     spec.laser_plane = Eigen::Vector4d(v[0], v[1], v[2], v[3]);
   }
-  spec.touches = a.touches;
   const std::vector<double> up = ParseNumberList(a.up, "--up", 3);
   spec.up = Eigen::Vector3d(up[0], up[1], up[2]);
-  spec.point_sigma_mm = a.point_sigma_mm;
-  spec.radius_mm = a.radius_mm;
-  spec.max_points_per_sweep = a.max_points;
   Inputs in{triangulation::LoadSphereSweepProblem(spec), {}};
-  in.run = {a.robot, a.sweeps, a.set, in.sweeps.size(), a.touches, a.with_handeye, a.dh_deltas};
+  in.run = {spec.robot,   spec.sweeps,    spec.set,   in.sweeps.size(),
+            spec.touches, a.with_handeye, a.dh_deltas};
   return in;
 }
 
@@ -79,13 +68,13 @@ void RunJoints(const JointsArgs& a) {
   const calib::JointIdentificationResult r =
       calib::IdentifyRobot(in.robot.chain, in.flange_from_sensor, in.sweeps, in.solver);
   FrameGraph updated = in.graph;
-  updated.SetRobot(a.robot, r.robot);
+  updated.SetRobot(a.spec.robot, r.robot);
   if (a.with_handeye) {
     updated.SetStaticEdge(calib::FlangeSensorEdge(
-        in.robot.flange, a.sensor_frame, r.flange_from_sensor, r.flange_from_sensor_covariance,
+        in.robot.flange, a.spec.sensor_frame, r.flange_from_sensor, r.flange_from_sensor_covariance,
         "lasercell calibrate joints --with-handeye", r.rms_mm, r.points_used, in.sweeps.size()));
   }
-  const std::string out = a.output.empty() ? a.cell : a.output;
+  const std::string out = a.output.empty() ? a.spec.cell : a.output;
   SaveFrameGraph(out, updated);
   json::WriteFile(a.json, calib::JointCalibrationJson(r, in.run));
   if (!a.report.empty())
@@ -102,9 +91,9 @@ void RunHandEyeLaser(const JointsArgs& a) {
       calib::CalibrateLaserHandEye(in.robot.chain, in.flange_from_sensor, in.sweeps, o);
   FrameGraph updated = in.graph;
   updated.SetStaticEdge(calib::FlangeSensorEdge(
-      in.robot.flange, a.sensor_frame, r.flange_from_sensor, r.covariance,
+      in.robot.flange, a.spec.sensor_frame, r.flange_from_sensor, r.covariance,
       "lasercell calibrate handeye-laser", r.rms_mm, r.points_used, in.sweeps.size()));
-  const std::string out = a.output.empty() ? a.cell : a.output;
+  const std::string out = a.output.empty() ? a.spec.cell : a.output;
   SaveFrameGraph(out, updated);
   json::WriteFile(a.json, calib::LaserHandEyeJson(r, in.run));
   if (!a.report.empty()) report::WriteHtmlReport(a.report, calib::LaserHandEyeReport(r, in.run));
@@ -114,36 +103,36 @@ void RunHandEyeLaser(const JointsArgs& a) {
 // `required`: --cell, --camera and --sweeps are CLI-required (joints); handeye-laser checks them
 // itself because its sections variant needs none of them.
 void AddShared(CLI::App* cmd, JointsArgs& a, bool required = true) {
-  CLI::Option* cell =
-      cmd->add_option("--cell", a.cell, "cell.yaml with the robot and the flange<->sensor edge");
-  CLI::Option* camera = cmd->add_option("--camera", a.camera, "Sensor camera model (.cameramodel)");
+  CLI::Option* cell = cmd->add_option("--cell", a.spec.cell,
+                                      "cell.yaml with the robot and the flange<->sensor edge");
+  CLI::Option* camera =
+      cmd->add_option("--camera", a.spec.camera, "Sensor camera model (.cameramodel)");
   CLI::Option* sweeps =
-      cmd->add_option("--sweeps", a.sweeps, "Sphere-sweep list (records/sphere_sweeps.yaml)");
+      cmd->add_option("--sweeps", a.spec.sweeps, "Sphere-sweep list (records/sphere_sweeps.yaml)");
   if (required) {
     cell->required();
     camera->required();
     sweeps->required();
   }
   cmd->add_option("--laser-plane", a.laser_plane,
-                  "Laser plane nx,ny,nz,d in the sensor frame (n.p + d = 0, "
-                  "mm); default: the "
+                  "Laser plane nx,ny,nz,d in the sensor frame (n.p + d = 0, mm); default: the "
                   "cell's calibrated 'laser' plane");
-  cmd->add_option("--touches", a.touches,
-                  "Sphere tops touched by the handling robot (records/touches.yaml): fixes "
-                  "the "
+  cmd->add_option("--touches", a.spec.touches,
+                  "Sphere tops touched by the handling robot (records/touches.yaml): fixes the "
                   "sphere centres (mapped through the cell), making joint 1 identifiable");
   cmd->add_option("--up", a.up,
-                  "With --touches: direction against gravity in handling_base "
-                  "(default 0,0,1); "
+                  "With --touches: direction against gravity in handling_base (default 0,0,1); "
                   "centre = touched top - radius * up");
-  cmd->add_option("--robot", a.robot, "Robot name in the cell (default vision_robot)");
-  cmd->add_option("--sensor-frame", a.sensor_frame, "Sensor frame name (default sensor)");
-  cmd->add_option("--point-sigma", a.point_sigma_mm, "A-priori point noise, mm (default 0.1)")
+  cmd->add_option("--robot", a.spec.robot, "Robot name in the cell (default vision_robot)");
+  cmd->add_option("--sensor-frame", a.spec.sensor_frame, "Sensor frame name (default sensor)");
+  cmd->add_option("--point-sigma", a.spec.point_sigma_mm, "A-priori point noise, mm (default 0.1)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--sphere-radius", a.radius_mm, "Initial sphere radius, mm (0: from the data)")
+  cmd->add_option("--sphere-radius", a.spec.radius_mm,
+                  "Initial sphere radius, mm (0: from the data)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--max-points", a.max_points,
-                  "Points per sweep used (default " + std::to_string(a.max_points) + ")")
+  cmd->add_option(
+         "--max-points", a.spec.max_points_per_sweep,
+         "Points per sweep used (default " + std::to_string(a.spec.max_points_per_sweep) + ")")
       ->check(CLI::Range(10, 100000));
   cmd->add_option("--output", a.output, "Write the updated cell here (default: --cell in place)");
   cmd->add_option("--report", a.report, "HTML report");
@@ -153,15 +142,13 @@ void AddShared(CLI::App* cmd, JointsArgs& a, bool required = true) {
 }  // namespace
 
 void AddCalibrateJointsCommands(CLI::App& calibrate) {
-  CLI::App* joints =
-      calibrate.add_subcommand("joints",
-                               "Joint offsets (and optionally DH deltas, hand-eye) of the "
-                               "vision robot from "
-                               "sphere sweeps; updates only the robot model in CELL.yaml");
+  CLI::App* joints = calibrate.add_subcommand(
+      "joints",
+      "Joint offsets (and optionally DH deltas, hand-eye) of the vision robot "
+      "from sphere sweeps; updates only the robot model in CELL.yaml");
   auto ja = std::make_shared<JointsArgs>();
-  ja->set = "joint_poses";
   AddShared(joints, *ja);
-  joints->add_option("--set", ja->set, "Sweep set in the list (default joint_poses)");
+  joints->add_option("--set", ja->spec.set, "Sweep set in the list (default joint_poses)");
   joints->add_flag("--with-handeye", ja->with_handeye,
                    "Also estimate vision_flange_from_sensor (updates that edge too)");
   joints->add_flag("--dh-deltas", ja->dh_deltas, "Also estimate a, d, alpha of every joint");
@@ -172,27 +159,26 @@ void AddCalibrateJointsCommands(CLI::App& calibrate) {
       "Eye-in-hand laser sensor: vision_flange_from_sensor from sphere sweeps "
       "taken from several robot poses (robot model held)");
   auto ha = std::make_shared<JointsArgs>();
-  ha->set = "eye_in_hand";
-  // Hand-eye has only 6 unknowns (+ spheres): every point helps, and it stays
-  // fast (~1 s).
-  ha->max_points = 5000;
+  ha->spec.set = "eye_in_hand";
+  // Hand-eye has only 6 unknowns (+ spheres): every point helps, and it stays fast (~1 s).
+  ha->spec.max_points_per_sweep = 5000;
   AddShared(he, *ha, /*required=*/false);
-  he->add_option("--set", ha->set, "Sweep set in the list (default eye_in_hand)");
+  he->add_option("--set", ha->spec.set, "Sweep set in the list (default eye_in_hand)");
   auto sa = std::make_shared<HandEyeSectionArgs>();
   AddHandEyeSectionOptions(he, *sa);
   he->callback([ha, sa] {
     if (HandEyeSectionsRequested(*sa)) {
-      sa->cell = ha->cell;
+      sa->cell = ha->spec.cell;
       sa->output = ha->output;
       sa->json = ha->json;
       sa->report = ha->report;
-      sa->robot = ha->robot;
-      sa->sensor_frame = ha->sensor_frame;
-      sa->radius_mm = ha->radius_mm;
+      sa->robot = ha->spec.robot;
+      sa->sensor_frame = ha->spec.sensor_frame;
+      sa->radius_mm = ha->spec.radius_mm;
       RunHandEyeSections(*sa);
       return;
     }
-    if (ha->cell.empty() || ha->camera.empty() || ha->sweeps.empty()) {
+    if (ha->spec.cell.empty() || ha->spec.camera.empty() || ha->spec.sweeps.empty()) {
       throw OptionError(
           "calibrate handeye-laser: give --cell, --camera and --sweeps (sphere sweeps), or "
           "--profiles, --poses, --pose-format, --sphere-side and --sphere-radius (one "
