@@ -26,12 +26,12 @@
 #include <string>
 
 #include "calib/camera_model.hpp"
-#include "calib/laser_plane_heights_record.hpp"
 #include "core/frame_graph.hpp"
 #include "core/se3.hpp"
 #include "datasets/sensor.hpp"
 #include "datasets/sim_profile.hpp"
 #include "datasets/simulate.hpp"
+#include "tests/calib/realistic_cli_util.hpp"
 #include "tests/cli_util.hpp"
 #include "tests/sanitizer_scale.hpp"
 
@@ -42,23 +42,13 @@ namespace fs = std::filesystem;
 using test::CommandResult;
 using test::RunCliMerged;
 
-std::string Joined(const Eigen::Vector3d& v) {
-  char buf[200];
-  std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g", v.x(), v.y(), v.z());
-  return buf;
-}
-
 TEST(RealisticChain, CameraThenLaserPlaneThenHandEyeFromTheirOwnCaptures) {
   if (test::kSanitizerBuild) {
     GTEST_SKIP() << "35 rendered images and three calibrations take minutes under the "
                     "sanitizer; their pieces run there in CameraUncertainty, LaserPlane* and "
                     "HandEyeCli";
   }
-  datasets::SimConfig config = datasets::SimConfigForProfile(datasets::SimProfile::kRealistic);
-  config.seed = 413;
-  config.capture_spheres = config.capture_seats = config.capture_trajectory = false;
-  config.capture_laser_line_images = config.write_meshes = config.capture_touches = false;
-  config.capture_eye_in_hand = config.capture_joint_poses = false;
+  datasets::SimConfig config = test::RealisticConfigWithoutCaptures(413);
   config.capture_planes = config.capture_chessboard_images = true;
   config.capture_hand_eye_images = true;
   const test::TestDir dir("realistic_chain");
@@ -67,12 +57,9 @@ TEST(RealisticChain, CameraThenLaserPlaneThenHandEyeFromTheirOwnCaptures) {
   const datasets::CellTruth truth = datasets::MakeCellTruth(config);
   const fs::path cam = dir.path() / "camera.cameramodel";
   const fs::path cell = dir.path() / "cell.yaml";
-  const std::string board = "chessboard:9x6:40";
 
   // 1. The camera from its rendered chessboard views.
-  CommandResult r = RunCliMerged("calibrate camera --images '" + (sim / "images").string() +
-                                 "/chessboard_*.png' --board " + board + " --out " + cam.string() +
-                                 " --json " + (dir.path() / "cam.json").string());
+  CommandResult r = test::CalibrateCameraByCli(sim, cam, dir.path() / "cam.json");
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const calib::CameraModel camera = calib::LoadCameraModel(cam.string());
   ASSERT_EQ(camera.intrinsics_covariance().rows(), camera.NumIntrinsics());
@@ -86,18 +73,8 @@ TEST(RealisticChain, CameraThenLaserPlaneThenHandEyeFromTheirOwnCaptures) {
   }
 
   // 2. The laser plane through the calibrated camera.
-  const calib::PlaneHeightsRecord planes =
-      calib::ReadPlaneHeightsYaml((sim / "records/planes.yaml").string());
-  std::string heights;
-  for (double h : planes.heights_mm) {
-    if (!heights.empty()) heights += ',';
-    heights += FormatDouble(h);
-  }
   const fs::path laser_json = dir.path() / "laser.json";
-  r = RunCliMerged("calibrate laser --camera " + cam.string() + " --planes " +
-                   (sim / "profiles").string() + " --heights-mm " + heights + " --plate-normal " +
-                   Joined(planes.plate_normal_in_sensor) + " --cell " + cell.string() + " --json " +
-                   laser_json.string());
+  r = test::CalibrateLaserByCli(sim, cam, cell, laser_json);
   ASSERT_EQ(r.exit_code, 0) << r.out;
   const nlohmann::json laser = nlohmann::json::parse(test::Slurp(laser_json));
   ASSERT_TRUE(laser.at("camera_uncertainty_included").get<bool>()) << laser.dump();

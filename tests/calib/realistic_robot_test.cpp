@@ -28,7 +28,6 @@
 
 #include "calib/camera_model.hpp"
 #include "calib/laser_hand_eye.hpp"
-#include "calib/laser_plane_heights_record.hpp"
 #include "calib/robot_positioning.hpp"
 #include "core/format.hpp"
 #include "core/frame_graph.hpp"
@@ -37,6 +36,7 @@
 #include "core/se3.hpp"
 #include "datasets/sim_profile.hpp"
 #include "datasets/simulate.hpp"
+#include "tests/calib/realistic_cli_util.hpp"
 #include "tests/cli_util.hpp"
 #include "tests/sanitizer_scale.hpp"
 #include "triangulation/sphere_sweeps.hpp"
@@ -48,26 +48,13 @@ namespace fs = std::filesystem;
 using test::CommandResult;
 using test::RunCliMerged;
 
-std::string Joined(const Eigen::Vector3d& v) {
-  return FormatDouble(v.x()) + "," + FormatDouble(v.y()) + "," + FormatDouble(v.z());
-}
-
 // The camera and the laser plane from the simulated captures, by the CLI as a user runs them.
 Eigen::Vector4d CalibrateCameraAndPlane(const fs::path& dir, const fs::path& sim,
                                         const fs::path& cam) {
-  CommandResult r =
-      RunCliMerged("calibrate camera --images '" + (sim / "images").string() +
-                   "/chessboard_*.png' --board chessboard:9x6:40 --out " + cam.string());
+  CommandResult r = test::CalibrateCameraByCli(sim, cam);
   EXPECT_EQ(r.exit_code, 0) << r.out;
-  const calib::PlaneHeightsRecord planes =
-      calib::ReadPlaneHeightsYaml((sim / "records/planes.yaml").string());
-  std::string heights;
-  for (double h : planes.heights_mm) heights += (heights.empty() ? "" : ",") + FormatDouble(h);
   const fs::path json = dir / "laser.json";
-  r = RunCliMerged("calibrate laser --camera " + cam.string() + " --planes " +
-                   (sim / "profiles").string() + " --heights-mm " + heights + " --plate-normal " +
-                   Joined(planes.plate_normal_in_sensor) + " --cell " +
-                   (dir / "laser_cell.yaml").string() + " --json " + json.string());
+  r = test::CalibrateLaserByCli(sim, cam, dir / "laser_cell.yaml", json);
   EXPECT_EQ(r.exit_code, 0) << r.out;
   const nlohmann::json plane = nlohmann::json::parse(test::Slurp(json)).at("plane");
   return Eigen::Vector4d(plane["normal"][0], plane["normal"][1], plane["normal"][2],
@@ -105,10 +92,7 @@ TEST(RealisticRobot, JointsAndHandEyeFromTheNominalRobotPositionHeldOutPoses) {
                     "minutes under the sanitizer; their pieces run there in JointIdentification, "
                     "LaserHandEye, PointCovarianceInBase and CalibrateJointsCli";
   }
-  datasets::SimConfig config = datasets::SimConfigForProfile(datasets::SimProfile::kRealistic);
-  config.seed = 431;
-  config.capture_spheres = config.capture_seats = config.capture_trajectory = false;
-  config.capture_laser_line_images = config.write_meshes = config.capture_hand_eye_images = false;
+  datasets::SimConfig config = test::RealisticConfigWithoutCaptures(431);
   config.capture_planes = config.capture_chessboard_images = true;
   config.capture_eye_in_hand = config.capture_joint_poses = config.capture_touches = true;
   const test::TestDir dir("realistic_robot");
