@@ -20,7 +20,7 @@ std::string CameraPropagationProblem(const CameraModel& camera) {
   return "";
 }
 
-Eigen::MatrixXd PropagateIntrinsicsCovariance(
+IntrinsicsAxes PropagateIntrinsicsAxes(
     const CameraModel& camera, const std::function<Eigen::VectorXd(const CameraModel&)>& f) {
   if (const std::string problem = CameraPropagationProblem(camera); !problem.empty()) {
     throw InputError("cannot propagate the camera's uncertainty: " + problem);
@@ -34,18 +34,32 @@ Eigen::MatrixXd PropagateIntrinsicsCovariance(
     for (std::size_t i = 0; i < values.size(); ++i) values[i] += step(static_cast<Eigen::Index>(i));
     return f(CameraModel(camera.lensmodel(), values, camera.width_px(), camera.height_px()));
   };
-  Eigen::MatrixXd cov;
+  std::vector<Eigen::VectorXd> steps, responses;
   for (Eigen::Index k = 0; k < lambda.size(); ++k) {
     // Directions of (numerically) zero variance: a fixed parameter, fy tied to fx.
     if (!(lambda(k) > 1e-14 * largest)) continue;
-    const Eigen::VectorXd step =
-        kPropagationStep * std::sqrt(lambda(k)) * eigen.eigenvectors().col(k);
-    const Eigen::VectorXd d = (0.5 / kPropagationStep) * (evaluate(step) - evaluate(-step));
-    if (cov.size() == 0) cov = Eigen::MatrixXd::Zero(d.size(), d.size());
-    LASERCELL_CHECK(d.size() == cov.rows(), "the propagated function changed its output size");
-    cov += d * d.transpose();
+    const Eigen::VectorXd sigma_step = std::sqrt(lambda(k)) * eigen.eigenvectors().col(k);
+    const Eigen::VectorXd step = kPropagationStep * sigma_step;
+    responses.push_back((0.5 / kPropagationStep) * (evaluate(step) - evaluate(-step)));
+    LASERCELL_CHECK(responses.back().size() == responses.front().size(),
+                    "the propagated function changed its output size");
+    steps.push_back(sigma_step);
   }
-  return cov;
+  IntrinsicsAxes axes;
+  const auto k = static_cast<Eigen::Index>(steps.size());
+  axes.intrinsics_steps = Eigen::MatrixXd::Zero(lambda.size(), k);
+  axes.responses = Eigen::MatrixXd::Zero(k > 0 ? responses[0].size() : 0, k);
+  for (Eigen::Index j = 0; j < k; ++j) {
+    axes.intrinsics_steps.col(j) = steps[static_cast<std::size_t>(j)];
+    axes.responses.col(j) = responses[static_cast<std::size_t>(j)];
+  }
+  return axes;
+}
+
+Eigen::MatrixXd PropagateIntrinsicsCovariance(
+    const CameraModel& camera, const std::function<Eigen::VectorXd(const CameraModel&)>& f) {
+  const IntrinsicsAxes axes = PropagateIntrinsicsAxes(camera, f);
+  return axes.responses * axes.responses.transpose();
 }
 
 }  // namespace lasercell::calib

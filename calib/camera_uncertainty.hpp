@@ -33,6 +33,18 @@ constexpr double kPropagationStep = 0.1;
 /// intrinsics.
 std::string CameraPropagationProblem(const CameraModel& camera);
 
+/// The propagation along each principal axis kept apart: column k of `intrinsics_steps` is the
+/// +1-sigma step s_k / h of the intrinsics (lens model's order), column k of `responses` the
+/// matching d_k = df at that step. responses * responses^T is the covariance.
+struct IntrinsicsAxes {
+  Eigen::MatrixXd intrinsics_steps;  ///< NumIntrinsics() x K.
+  Eigen::MatrixXd responses;         ///< f's size x K.
+};
+
+/// PropagateIntrinsicsCovariance, axis by axis (the same evaluations of f).
+IntrinsicsAxes PropagateIntrinsicsAxes(const CameraModel& camera,
+                                       const std::function<Eigen::VectorXd(const CameraModel&)>& f);
+
 /// Covariance of f(camera) caused by camera.intrinsics_covariance() (see the file comment). f
 /// returns the same number of values for every camera it is given; it is called with copies of
 /// `camera` whose intrinsics are perturbed (and whose covariance is cleared). Throws InputError

@@ -34,6 +34,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -146,6 +147,11 @@ struct HalfSphereSweepOptions {
   /// Appended to the failure when no sphere is found, e.g. the cloud reader's unit hint
   /// (io::ReadReport::unit_hint); may be empty.
   std::string sweep_unit_hint;
+  /// Optional: the displacement (sweep frame, mm; 3 x K) of sweep point i under each of the
+  /// sensor's K error modes at +1 sigma (triangulation/sensor_error_field.hpp). When set, the
+  /// result holds the calibration's response to each mode (mode_response): the spheres' points
+  /// move, their fits and the rigid fit follow, to first order.
+  std::function<Eigen::Matrix<double, 3, Eigen::Dynamic>(std::size_t)> point_displacements;
 };
 
 /// Names of a run's inputs, for messages, the result JSON and the report (paths, usually).
@@ -170,6 +176,10 @@ struct HalfSphereSweepResult {
   double radius_mm = 0;       ///< Radius used (option or touches file).
   double touch_sigma_mm = 0;  ///< Touch sigma used (option or touches file).
   Eigen::Vector3d up_in_handling_base = Eigen::Vector3d::UnitZ();  ///< Normalized.
+  /// With options.point_displacements: column k is the left perturbation [rotvec (rad);
+  /// translation (mm)] of handling_base_from_sweep at the sensor's mode k (+1 sigma); 0 columns
+  /// otherwise (StaticEdge::sensor_response).
+  Eigen::Matrix<double, 6, Eigen::Dynamic> mode_response;
 };
 
 /// Segments the spheres out of `sweep` (SegmentSpheres, radius fixed unless free_radius) and

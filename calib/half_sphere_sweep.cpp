@@ -1,11 +1,13 @@
 // CalibrateHalfSpheresInSweep: the composition of segmentation (sphere_segmentation.hpp) and
 // calibration (half_sphere_calibration.hpp) that `lasercell calibrate spheres` runs.
+#include <Eigen/Cholesky>
 #include <cstdio>
 #include <string>
 
 #include "calib/half_sphere_calibration.hpp"
 #include "core/error.hpp"
 #include "core/provenance.hpp"
+#include "core/se3.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -14,6 +16,67 @@ std::string Num(double v, const char* format) {
   char buf[64];
   std::snprintf(buf, sizeof buf, format, v);
   return buf;
+}
+
+// First-order move of a fitted sphere when its points move by dp_i (3 x K each): the fit's
+// normal equations sum_i g_i (|p_i - c| - r) = 0 with g_i = [u_i; 1] (u_i the unit direction
+// from the centre; without the 1 when the radius is fixed) give
+//   d[c; r] = (sum_i g_i g_i^T)^-1 sum_i g_i u_i^T dp_i       over the fit's inliers.
+// Rows 0-2: the centre, row 3: the radius (zero when fixed).
+Eigen::Matrix<double, 4, Eigen::Dynamic> SphereResponse(
+    const PointCloud& sweep, const SegmentedSphere& sphere, Eigen::Index modes,
+    const std::function<Eigen::Matrix<double, 3, Eigen::Dynamic>(std::size_t)>& displace) {
+  const bool free_radius = !sphere.fit.radius_fixed;
+  const int n = free_radius ? 4 : 3;
+  Eigen::Matrix4d normal = Eigen::Matrix4d::Zero();
+  Eigen::Matrix<double, 4, Eigen::Dynamic> rhs =
+      Eigen::Matrix<double, 4, Eigen::Dynamic>::Zero(4, modes);
+  for (std::size_t j = 0; j < sphere.indices.size(); ++j) {
+    if (sphere.fit.outlier[j]) continue;
+    const std::size_t i = sphere.indices[j];
+    const Eigen::Vector3d u = (sweep.positions[i] - sphere.fit.center).normalized();
+    Eigen::Vector4d g(u.x(), u.y(), u.z(), free_radius ? 1.0 : 0.0);
+    normal += g * g.transpose();
+    const Eigen::Matrix<double, 3, Eigen::Dynamic> dp = displace(i);
+    LASERCELL_CHECK(dp.cols() == modes, "point_displacements changed its number of modes");
+    rhs += g * (u.transpose() * dp);
+  }
+  Eigen::Matrix<double, 4, Eigen::Dynamic> out =
+      Eigen::Matrix<double, 4, Eigen::Dynamic>::Zero(4, modes);
+  out.topRows(n) = normal.topLeftCorner(n, n).ldlt().solve(rhs.topRows(n));
+  return out;
+}
+
+// The calibration's response to each sensor mode: the swept spheres moved by +-1 sigma of the
+// mode, calibrated again against the same touches; central difference of the left perturbation.
+Eigen::Matrix<double, 6, Eigen::Dynamic> ModeResponse(const PointCloud& sweep,
+                                                      const HalfSphereSweepResult& run,
+                                                      const std::vector<SphereTouch>& touches,
+                                                      const HalfSphereCalibrationOptions& options,
+                                                      const HalfSphereSweepOptions& sweep_options) {
+  const std::vector<SweptSphere> swept = SweptSpheresFrom(run.segmentation);
+  const Eigen::Index modes = sweep_options.point_displacements(0).cols();
+  std::vector<Eigen::Matrix<double, 4, Eigen::Dynamic>> response;
+  for (const SegmentedSphere& s : run.segmentation.spheres) {
+    response.push_back(SphereResponse(sweep, s, modes, sweep_options.point_displacements));
+  }
+  const Eigen::Isometry3d base_inverse = run.calibration.handling_base_from_sweep.inverse();
+  Eigen::Matrix<double, 6, Eigen::Dynamic> out(6, modes);
+  for (Eigen::Index k = 0; k < modes; ++k) {
+    Vector6d xi[2];
+    for (int side = 0; side < 2; ++side) {
+      const double sign = side == 0 ? 1.0 : -1.0;
+      std::vector<SweptSphere> moved = swept;
+      for (std::size_t s = 0; s < moved.size(); ++s) {
+        moved[s].center_in_sweep += sign * response[s].col(k).head<3>();
+        moved[s].radius_mm += sign * response[s](3, k);
+      }
+      const HalfSphereCalibrationResult r = CalibrateHalfSpheres(moved, touches, options);
+      xi[side] = RotationVectorTranslation(r.handling_base_from_sweep * base_inverse);
+    }
+    out.col(k) = 0.5 * (xi[0] - xi[1]);
+  }
+  return out;
 }
 
 }  // namespace
@@ -66,6 +129,9 @@ HalfSphereSweepResult CalibrateHalfSpheresInSweep(const PointCloud& sweep,
     for (const auto& w : seg.spheres[s.swept].fit.warnings) {
       run.calibration.warnings.push_back("sphere " + std::to_string(s.sphere) + ": " + w);
     }
+  }
+  if (options.point_displacements) {
+    run.mode_response = ModeResponse(sweep, run, touches.touches, calibration, options);
   }
   run.calibrated = true;
   return run;

@@ -5,6 +5,7 @@
 
 #include "calib/laser_plane.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -173,10 +174,30 @@ void FillPlane(const PlaneFit& fit, LaserPlaneResult& r) {
   }
 }
 
+namespace {
+
+// The principal axes of the fit's own plane covariance as error modes (the camera unchanged).
+std::vector<SensorErrorMode> FitModes(const Eigen::Matrix4d& covariance) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eigen(covariance);
+  const double largest = eigen.eigenvalues().maxCoeff();
+  std::vector<SensorErrorMode> modes;
+  for (int k = 3; k >= 0; --k) {  // largest first
+    const double lambda = eigen.eigenvalues()(k);
+    if (!(lambda > 1e-12 * largest)) continue;
+    SensorErrorMode m;
+    m.plane_step = std::sqrt(lambda) * eigen.eigenvectors().col(k);
+    modes.push_back(std::move(m));
+  }
+  return modes;
+}
+
+}  // namespace
+
 void AddCameraUncertainty(
     const CameraModel& camera, bool include,
     const std::function<std::pair<Eigen::Vector3d, double>(const CameraModel&)>& refit,
     LaserPlaneResult& r) {
+  r.error_modes = FitModes(r.covariance);
   if (!include) {
     r.camera_uncertainty_note = "camera uncertainty not included (turned off)";
     return;
@@ -186,9 +207,9 @@ void AddCameraUncertainty(
     return;
   }
   const Eigen::Vector3d n0 = r.normal;
-  Eigen::MatrixXd cov;
+  IntrinsicsAxes axes;
   try {
-    cov = PropagateIntrinsicsCovariance(camera, [&](const CameraModel& perturbed) {
+    axes = PropagateIntrinsicsAxes(camera, [&](const CameraModel& perturbed) {
       auto [n, d] = refit(perturbed);
       if (n.dot(n0) < 0) {  // the same orientation as the nominal plane
         n = -n;
@@ -204,7 +225,17 @@ void AddCameraUncertainty(
     r.warnings.push_back(r.camera_uncertainty_note);
     return;
   }
-  r.camera_covariance = cov;
+  r.camera_covariance = axes.responses * axes.responses.transpose();
+  std::vector<SensorErrorMode> modes;
+  for (Eigen::Index k = 0; k < axes.responses.cols(); ++k) {
+    SensorErrorMode m;
+    const Eigen::VectorXd step = axes.intrinsics_steps.col(k);
+    m.intrinsics_step.assign(step.data(), step.data() + step.size());
+    m.plane_step = axes.responses.col(k);
+    modes.push_back(std::move(m));
+  }
+  modes.insert(modes.end(), r.error_modes.begin(), r.error_modes.end());
+  r.error_modes = std::move(modes);
   r.camera_uncertainty_included = true;
   r.covariance += r.camera_covariance;
   r.camera_normal_sigma_deg = NormalSigmaDeg(r.camera_covariance);

@@ -42,6 +42,7 @@
 #include "calib/board.hpp"
 #include "calib/camera_model.hpp"
 #include "calib/target_detection.hpp"
+#include "core/frame_graph.hpp"
 #include "core/image8.hpp"
 
 namespace lasercell::calib {
@@ -185,6 +186,10 @@ struct LaserPlaneResult {
   bool camera_uncertainty_included = false;
   /// Why not, when not included ("" when included).
   std::string camera_uncertainty_note;
+  /// `covariance` as independent error modes (core/frame_graph.hpp SensorErrorMode): the
+  /// camera's principal axes with the plane refitted through each (when included), then the
+  /// principal axes of the fit's own covariance.
+  std::vector<SensorErrorMode> error_modes;
   double camera_normal_sigma_deg = 0;         ///< The camera's part of normal_sigma_deg.
   double camera_offset_sigma_mm = 0;          ///< The camera's part of offset_sigma_mm.
   double rms_mm = 0;                          ///< RMS point-to-plane residual of the used points.

@@ -196,6 +196,7 @@ LaserPlaneEntry LaserPlaneCellEntry(const LaserPlaneResult& result, EdgeProvenan
   entry.point_mm = result.point_mm;
   entry.covariance = result.covariance;
   if (result.camera_uncertainty_included) entry.camera_covariance = result.camera_covariance;
+  entry.error_modes = result.error_modes;
   provenance.residual_summary = result.method + ": rms " + FormatSignificant(result.rms_mm, 3) +
                                 " mm over " + std::to_string(result.points) + " points, 1-sigma " +
                                 FormatSignificant(result.normal_sigma_deg, 3) + " deg / " +

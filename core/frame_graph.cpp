@@ -68,6 +68,34 @@ void CheckEdgeCovariance(const Matrix6d& covariance, const std::string& what) {
   }
 }
 
+void CheckErrorModes(const std::vector<SensorErrorMode>& modes, const std::string& what) {
+  for (std::size_t k = 0; k < modes.size(); ++k) {
+    const SensorErrorMode& m = modes[k];
+    const std::string field = what + " error_modes[" + std::to_string(k) + "]";
+    if (!m.plane_step.allFinite() ||
+        !std::all_of(m.intrinsics_step.begin(), m.intrinsics_step.end(),
+                     [](double v) { return std::isfinite(v); })) {
+      throw InputError(field + " has non-finite values; pass finite steps");
+    }
+    if (!m.intrinsics_step.empty() && !modes[0].intrinsics_step.empty() &&
+        m.intrinsics_step.size() != modes[0].intrinsics_step.size()) {
+      throw InputError(field + " steps " + std::to_string(m.intrinsics_step.size()) +
+                       " intrinsics where error_modes[0] steps " +
+                       std::to_string(modes[0].intrinsics_step.size()) +
+                       "; every mode steps the same camera (or none)");
+    }
+  }
+}
+
+void CheckSensorResponse(const SensorModeResponse& r, const std::string& what) {
+  if (!IsLowerSnakeCase(r.laser)) {
+    throw InputError(what + " sensor_response.laser '" + r.laser +
+                     "' is not a laser plane name (lower snake case)");
+  }
+  if (r.columns.cols() == 0 || !r.columns.allFinite()) {
+    throw InputError(what + " sensor_response needs one finite column of 6 values per error mode");
+  }
+}
 }  // namespace
 
 void StaticEdge::SetParentFromChild(const Eigen::Isometry3d& pose) {
@@ -112,6 +140,7 @@ void FrameGraph::SetStaticEdge(const StaticEdge& edge) {
   }
   CheckQuaternionPose(edge.parent_from_child, what + " parent_from_child");
   if (edge.covariance) CheckEdgeCovariance(*edge.covariance, what);
+  if (edge.sensor_response) CheckSensorResponse(*edge.sensor_response, what);
   for (const DynamicEdge& d : dynamic_edges_) {
     if (SamePair(d.parent, d.child, edge.parent, edge.child)) {
       throw InputError(what + ": frames '" + edge.parent + "' and '" + edge.child +
@@ -160,6 +189,7 @@ void FrameGraph::SetLaserPlane(const std::string& name, const LaserPlaneEntry& p
   if (plane.camera_covariance && !plane.covariance) {
     throw InputError(what + ": camera_covariance is the camera's part of covariance; give both");
   }
+  CheckErrorModes(plane.error_modes, what);
   AddFrame(plane.frame);
   laser_planes_[name] = plane;
 }
@@ -346,6 +376,15 @@ TransformWithCovarianceResult FrameGraph::TransformWithCovariance(const std::str
         result.covariance = ComposeCovariance(to_from_here, result.covariance, cov);
       } else {
         result.edges_without_covariance.push_back(edge.parent + " <- " + edge.child);
+      }
+      if (edge.sensor_response) {
+        // Forward: A Exp(xi) E B = Exp(Ad(A) xi) A E B; backward: A E^-1 Exp(-xi) B.
+        SensorModeResponse moved = *edge.sensor_response;
+        moved.columns =
+            step.forward
+                ? Matrix6d(Adjoint(to_from_here)) * moved.columns
+                : Matrix6d(-Adjoint(to_from_here * parent_from_child.inverse())) * moved.columns;
+        result.sensor_responses.push_back(std::move(moved));
       }
     } else {
       const DynamicEdge& edge = dynamic_edges_[step.index];

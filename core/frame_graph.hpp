@@ -63,6 +63,20 @@ struct EdgeProvenance {
 
 /// A fixed transform between two frames, parent_from_child (p_in_parent = T * p_in_child),
 /// stored as the cell file holds it.
+/// How a calibrated edge moved with each error mode of the laser-triangulation sensor whose
+/// points it was calibrated from (LaserPlaneEntry::error_modes): a consumer that measures
+/// through the same sensor counts that shared error once, with its sign, instead of as two
+/// independent errors (localize/laser_plane_uncertainty.hpp).
+struct SensorModeResponse {
+  std::string laser;  ///< Name of the laser plane whose error_modes the columns follow.
+  /// provenance.input_digest of that plane when the edge was calibrated: a plane calibrated
+  /// again has other modes, and a consumer then ignores the response (and says so).
+  std::string plane_digest;
+  /// Column k: left perturbation [rotvec (rad); translation (mm)] of parent_from_child at mode
+  /// k's +1 sigma. Exactly 6 rows, one column per mode.
+  Eigen::Matrix<double, 6, Eigen::Dynamic> columns;
+};
+
 struct StaticEdge {
   std::string parent;  ///< Frame the pose maps into.
   std::string child;   ///< Frame the pose maps from.
@@ -72,6 +86,9 @@ struct StaticEdge {
   QuaternionPose parent_from_child;
   EdgeProvenance provenance;
   std::optional<Matrix6d> covariance;  ///< Over [rotvec rad; translation mm], left perturbation.
+  /// Optional: the edge's response to a sensor's error modes (calibrated through that sensor).
+  /// Its share is not in `covariance`.
+  std::optional<SensorModeResponse> sensor_response;
 
   /// parent_from_child as a matrix (parent_from_child.ToIsometry()); the stored coefficients
   /// stay untouched.
@@ -89,6 +106,16 @@ struct DynamicEdge {
   std::string robot;   ///< Robot name, key into JointValues, e.g. "vision_robot".
 };
 
+/// One direction of a laser-triangulation sensor's calibration error, at +1 sigma: a step of the
+/// camera's intrinsics (empty: the camera unchanged) and the laser plane's step [dn; dd] that
+/// goes with it (the plane refitted through the stepped camera, or a principal axis of the
+/// plane fit's own covariance). The sensor's error is sum_k a_k mode_k with independent
+/// a_k ~ N(0, 1); every point measured through the sensor shares it.
+struct SensorErrorMode {
+  std::vector<double> intrinsics_step;                   ///< Camera lens model's order.
+  Eigen::Vector4d plane_step = Eigen::Vector4d::Zero();  ///< [dn (unitless); dd (mm)].
+};
+
 /// A laser light plane, n . p + d = 0 for points p of `frame` (for a laser-triangulation sensor
 /// the `sensor` frame, i.e. the camera frame). Stored as the cell file holds it: the unit normal
 /// and a point on the plane (p0), both kept exactly as given or read.
@@ -104,6 +131,10 @@ struct LaserPlaneEntry {
   /// made with this plane (a sensor-to-robot placement), so a consumer that treats the plane and
   /// such a calibration as independent must not count it twice.
   std::optional<Eigen::Matrix4d> camera_covariance;
+  /// Optional: the sensor's error modes (camera and plane together), sum_k plane_step
+  /// plane_step^T = covariance. Calibrations made through this sensor store their response to
+  /// them (StaticEdge::sensor_response).
+  std::vector<SensorErrorMode> error_modes;
   EdgeProvenance provenance;  ///< Which calibration produced it.
 
   /// d of n . p + d = 0 (mm): minus the signed distance of the frame origin along n.
@@ -126,6 +157,9 @@ struct TransformWithCovarianceResult {
   /// Static edges on the path without a covariance ("parent <- child", in path order from
   /// `to`): counted as exact, so `covariance` understates the uncertainty by their share.
   std::vector<std::string> edges_without_covariance;
+  /// The sensor_response of each static edge on the path that has one, its columns moved into
+  /// left perturbations of to_from_from (in the `to` frame).
+  std::vector<SensorModeResponse> sensor_responses;
   /// True when the path passes through a dynamic (robot) edge. Its joint-reading and
   /// kinematic-model uncertainty is not modelled: the robot edge counts as exact.
   bool crosses_dynamic_edge = false;

@@ -132,7 +132,8 @@ void ReadLaserPlanes(Fields& top, FrameGraph& graph) {
   planes.Done();  // a plane listed twice
   for (const std::string& name : names) {
     Fields f = planes.Sub(name.c_str());
-    f.Known({"frame", "normal", "point_mm", "covariance", "camera_covariance", "provenance"});
+    f.Known({"frame", "normal", "point_mm", "covariance", "camera_covariance", "error_modes",
+             "provenance"});
     f.Done();
     LaserPlaneEntry plane;
     plane.frame = FrameOf(f, "frame", graph);
@@ -141,6 +142,16 @@ void ReadLaserPlanes(Fields& top, FrameGraph& graph) {
     Eigen::Matrix4d covariance;
     if (f.Read("covariance", &covariance)) plane.covariance = covariance;
     if (f.Read("camera_covariance", &covariance)) plane.camera_covariance = covariance;
+    if (f.Has("error_modes")) {
+      for (Fields& m : f.List("error_modes")) {
+        m.Known({"intrinsics_step", "plane_step"});
+        m.Done();
+        SensorErrorMode mode;
+        m.Read("intrinsics_step", &mode.intrinsics_step);
+        m.ReadRequired("plane_step", &mode.plane_step);
+        plane.error_modes.push_back(std::move(mode));
+      }
+    }
     plane.provenance = ProvenanceOf(f);
     try {
       graph.SetLaserPlane(name, plane);
@@ -148,6 +159,25 @@ void ReadLaserPlanes(Fields& top, FrameGraph& graph) {
       f.FailHere(std::string(": ") + e.what());
     }
   }
+}
+
+/// An edge's sensor_response: {laser, plane_digest, columns: 6 values per error mode}.
+SensorModeResponse ReadSensorResponse(Fields& edge) {
+  Fields f = edge.Sub("sensor_response");
+  f.Known({"laser", "plane_digest", "columns"});
+  f.Done();
+  SensorModeResponse r;
+  f.ReadRequired("laser", &r.laser);
+  f.ReadRequired("plane_digest", &r.plane_digest);
+  std::vector<double> values;
+  f.ReadRequired("columns", &values);
+  if (values.empty() || values.size() % 6 != 0) {
+    f.Fail("columns", "holds " + std::to_string(values.size()) +
+                          " values; expected 6 per error mode (rotation rad, translation mm)");
+  }
+  r.columns = Eigen::Map<const Eigen::Matrix<double, 6, Eigen::Dynamic>>(
+      values.data(), 6, static_cast<Eigen::Index>(values.size() / 6));
+  return r;
 }
 
 /// Rejects the fields an edge of this type does not have (after the check for typos).
@@ -163,8 +193,8 @@ void ReadEdges(Fields& top, FrameGraph& graph) {
   std::vector<Fields> edges = top.List("edges");
   for (std::size_t i = 0; i < edges.size(); ++i) {
     Fields& edge = edges[i];
-    edge.Known(
-        {"parent", "child", "type", "parent_from_child", "covariance", "provenance", "robot"});
+    edge.Known({"parent", "child", "type", "parent_from_child", "covariance", "sensor_response",
+                "provenance", "robot"});
     edge.Done();
     std::string type;
     edge.ReadRequired("type", &type);
@@ -179,8 +209,8 @@ void ReadEdges(Fields& top, FrameGraph& graph) {
     }
     pairs.emplace_back(parent, child);
     if (type == "static") {
-      CheckTypeFields(edge,
-                      {"parent", "child", "type", "parent_from_child", "covariance", "provenance"});
+      CheckTypeFields(edge, {"parent", "child", "type", "parent_from_child", "covariance",
+                             "sensor_response", "provenance"});
       robots_used.emplace_back();
       StaticEdge s;
       s.parent = parent;
@@ -188,6 +218,7 @@ void ReadEdges(Fields& top, FrameGraph& graph) {
       edge.ReadRequiredPose("parent_from_child", &s.parent_from_child);
       Matrix6d covariance;
       if (edge.Read("covariance", &covariance)) s.covariance = covariance;
+      if (edge.Has("sensor_response")) s.sensor_response = ReadSensorResponse(edge);
       s.provenance = ProvenanceOf(edge);
       try {
         graph.SetStaticEdge(s);

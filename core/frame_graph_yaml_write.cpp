@@ -112,6 +112,18 @@ void WriteStaticEdge(std::string& out, const StaticEdge& edge) {
     }
     out += "]\n";
   }
+  if (edge.sensor_response) {
+    const SensorModeResponse& r = *edge.sensor_response;
+    out += "    sensor_response:\n      laser: " + NameToken(r.laser) +
+           "\n      plane_digest: " + Quoted(r.plane_digest) + "\n      columns: [";
+    for (Eigen::Index k = 0; k < r.columns.cols(); ++k) {
+      if (k > 0) out += ",\n                ";
+      for (int i = 0; i < 6; ++i) {
+        out += (i > 0 ? ", " : "") + Number(r.columns(i, k), what + " sensor_response");
+      }
+    }
+    out += "]\n";
+  }
   const EdgeProvenance& p = edge.provenance;
   out += "    provenance: {tool: " + Quoted(p.tool) + ", date: " + Quoted(p.date) +
          ", input_digest: " + Quoted(p.input_digest) +
@@ -188,6 +200,22 @@ std::string FrameGraphToYaml(const FrameGraph& graph) {
           }
         }
         out += "]\n";
+      }
+      if (!plane.error_modes.empty()) out += "      error_modes:\n";
+      for (const SensorErrorMode& m : plane.error_modes) {
+        out += "        - {";
+        if (!m.intrinsics_step.empty()) {
+          out += "intrinsics_step: [";
+          for (std::size_t i = 0; i < m.intrinsics_step.size(); ++i) {
+            out += (i > 0 ? ", " : "") + Number(m.intrinsics_step[i], what + " error_modes");
+          }
+          out += "], ";
+        }
+        out += "plane_step: [";
+        for (int i = 0; i < 4; ++i) {
+          out += (i > 0 ? ", " : "") + Number(m.plane_step(i), what + " error_modes");
+        }
+        out += "]}\n";
       }
       const EdgeProvenance& p = plane.provenance;
       out += "      provenance: {tool: " + Quoted(p.tool) + ", date: " + Quoted(p.date) +

@@ -16,6 +16,7 @@
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
 #include "core/provenance.hpp"
+#include "triangulation/half_sphere_profiles.hpp"
 #include "triangulation/laser_plane_captures.hpp"
 #include "triangulation/linear_sweep.hpp"
 #include "triangulation/profile_io.hpp"
@@ -72,28 +73,29 @@ LaserPlaneEntry CalibrateLaser(const std::string& dir, const calib::CameraModel&
 }
 
 StaticEdge CalibrateSpheres(const std::string& dir, const calib::CameraModel& camera,
-                            const LaserPlaneEntry& plane, int threads, std::string* summary) {
-  const triangulation::Triangulator triangulator(
-      camera,
-      Eigen::Vector4d(plane.normal.x(), plane.normal.y(), plane.normal.z(), plane.OffsetMm()));
+                            const FrameGraph& cell, int threads, std::string* summary) {
   triangulation::SweepOptions options =
       triangulation::ReadLinearSweepRecord(In(dir, "records/linear_sweep.yaml")).Options();
   options.threads = threads;
   const std::string profiles = In(dir, "profiles/spheres.lcp");
-  const triangulation::SweepResult sweep =
-      triangulation::AssembleSweep(triangulation::ReadProfiles(profiles), triangulator, options);
   const std::string touches_file = In(dir, "records/touches.yaml");
   const std::string touches_text = io::ReadFileBytes(touches_file);
   const calib::SphereTouches touches = calib::ParseTouchesYaml(touches_text, touches_file);
-  const calib::HalfSphereSweepResult run = calib::CalibrateHalfSpheresInSweep(
-      sweep.cloud, touches, {}, {"cell.yaml", profiles, touches_file, "sensor"});
+  // Through the same camera and plane as every later sweep: the edge keeps its response to
+  // their error modes so that a job counts the shared error once.
+  const triangulation::HalfSphereFromProfiles out = triangulation::CalibrateHalfSpheresFromProfiles(
+      cell, "cell.yaml", camera, triangulation::ReadProfiles(profiles), options, "laser", touches,
+      {}, {"cell.yaml", profiles, touches_file, "sensor"});
+  const calib::HalfSphereSweepResult& run = out.run;
   if (!run.calibrated) throw FileError(profiles, run.failure);
   *summary = run.calibration.Summary();
   InputDigest digest;
   digest.AddFile(profiles);
   digest.Add(touches_text);
-  return calib::HalfSphereEdge(run.calibration, "sensor",
-                               calib::HalfSphereProvenance(run.calibration, digest.Text()));
+  StaticEdge edge = calib::HalfSphereEdge(
+      run.calibration, "sensor", calib::HalfSphereProvenance(run.calibration, digest.Text()));
+  edge.sensor_response = triangulation::SensorResponseOf(run, cell, "laser");
+  return edge;
 }
 
 }  // namespace
@@ -115,7 +117,7 @@ CaptureCalibration CalibrateCaptureFolder(const std::string& capture_dir,
   if (progress) progress("laser plane", 2.0 / 3.0);
   FrameGraph cell;
   cell.SetLaserPlane("laser", plane);
-  cell.SetStaticEdge(CalibrateSpheres(capture_dir, saved, plane, threads, &out.spheres_summary));
+  cell.SetStaticEdge(CalibrateSpheres(capture_dir, saved, cell, threads, &out.spheres_summary));
   out.cell_file = In(out_dir, "cell.yaml");
   SaveFrameGraph(out.cell_file, cell);
   if (progress) progress("spheres", 1.0);

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <memory>
 
 #include "calib/camera_model.hpp"
 #include "core/error.hpp"
@@ -10,6 +11,7 @@
 #include "core/provenance.hpp"
 #include "registration/localization_json.hpp"
 #include "triangulation/linear_sweep.hpp"
+#include "triangulation/sensor_error_field.hpp"
 #include "triangulation/triangulator.hpp"
 
 namespace lasercell::localize {
@@ -36,10 +38,10 @@ triangulation::SweepOptions SweepOptionsOf(const Job& job, int threads) {
 
 // The covariance of target <- sensor (the calibrated edges that place the sweep) and what it
 // leaves out. A robot sweep is evaluated at its middle profile's joints.
-std::optional<Matrix6d> PlacementCovariance(const FrameGraph& cell, const Job& job,
-                                            const triangulation::ProfileSet& profiles,
-                                            const triangulation::SweepOptions& sweep,
-                                            std::vector<std::string>* notes) {
+TransformWithCovarianceResult PlacementCovariance(const FrameGraph& cell, const Job& job,
+                                                  const triangulation::ProfileSet& profiles,
+                                                  const triangulation::SweepOptions& sweep,
+                                                  std::vector<std::string>* notes) {
   JointValues joints;
   if (sweep.motion == triangulation::SweepMotion::kRobot && !profiles.profiles.empty()) {
     const std::string robot = sweep.robot.empty() ? profiles.header.robot : sweep.robot;
@@ -55,15 +57,34 @@ std::optional<Matrix6d> PlacementCovariance(const FrameGraph& cell, const Job& j
                      " <- sensor passes a robot: joint and kinematic uncertainty are not in the "
                      "pose covariances");
   }
-  return placement.covariance;
+  return placement;
+}
+
+// The placement's response to the plane's error modes, when an edge on the path holds one for
+// this plane calibration; empty (0 columns) otherwise, with a note when one is stale.
+Eigen::Matrix<double, 6, Eigen::Dynamic> PlacementResponse(
+    const TransformWithCovarianceResult& placement, const std::string& laser,
+    const LaserPlaneEntry& plane, std::vector<std::string>* notes) {
+  Eigen::Matrix<double, 6, Eigen::Dynamic> sum;
+  for (const SensorModeResponse& r : placement.sensor_responses) {
+    if (r.laser != laser) continue;
+    const auto modes = static_cast<Eigen::Index>(plane.error_modes.size());
+    if (r.plane_digest != plane.provenance.input_digest || r.columns.cols() != modes) {
+      notes->push_back("a placement edge's response to laser plane '" + laser +
+                       "' was computed for another calibration of it; not used");
+      continue;
+    }
+    sum = sum.cols() == 0 ? r.columns : Eigen::Matrix<double, 6, Eigen::Dynamic>(sum + r.columns);
+  }
+  return sum;
 }
 
 // The laser plane's uncertainty when the plane came from the cell with a covariance; otherwise
 // unset, with a note.
-std::optional<LaserPlaneUncertainty> PlaneUncertainty(const FrameGraph& cell, const Job& job,
-                                                      const triangulation::ScanSetup& setup,
-                                                      const triangulation::SweepResult& sweep,
-                                                      std::vector<std::string>* notes) {
+std::optional<LaserPlaneUncertainty> PlaneUncertainty(
+    const FrameGraph& cell, const Job& job, const triangulation::ScanSetup& setup,
+    const triangulation::SweepResult& sweep, const TransformWithCovarianceResult& placement,
+    const calib::CameraModel& camera, std::vector<std::string>* notes) {
   const auto it = cell.laser_planes().find(job.laser);
   if (it == cell.laser_planes().end() || !it->second.covariance) {
     notes->push_back("laser plane '" + job.laser +
@@ -73,6 +94,21 @@ std::optional<LaserPlaneUncertainty> PlaneUncertainty(const FrameGraph& cell, co
   LaserPlaneUncertainty u;
   u.plane_in_sensor = setup.laser_plane;
   u.covariance = *it->second.covariance;
+  u.target_from_sensor = sweep.frame_from_sensor;
+  const Eigen::Matrix<double, 6, Eigen::Dynamic> response =
+      it->second.error_modes.empty() ? Eigen::Matrix<double, 6, Eigen::Dynamic>()
+                                     : PlacementResponse(placement, job.laser, it->second, notes);
+  if (response.cols() > 0) {
+    // Camera and plane mode by mode, with what each did to the placement calibrated through
+    // them: the shared error counted once, with its sign (laser_plane_uncertainty.hpp).
+    auto field = std::make_shared<const triangulation::SensorErrorField>(camera, it->second);
+    u.mode_displacements = [field](const Eigen::Vector3d& p) { return field->Displacements(p); };
+    u.placement_response = response;
+    notes->push_back("laser plane '" + job.laser + "': its " + std::to_string(response.cols()) +
+                     " error modes (camera and plane) are in the poses' covariance together "
+                     "with what they did to the placement");
+    return u;
+  }
   // The camera's part of the plane's error is shared with the placement calibrated through the
   // same camera and plane, which absorbs most of it; first-order independence would count it
   // as if nothing absorbed it (Table I: 3-6x the hole's actual error along the line of sight).
@@ -82,7 +118,6 @@ std::optional<LaserPlaneUncertainty> PlaneUncertainty(const FrameGraph& cell, co
                      "': its camera part is not in the poses' covariance (shared with the "
                      "placement calibrated through the same camera)");
   }
-  u.target_from_sensor = sweep.frame_from_sensor;
   return u;
 }
 
@@ -235,10 +270,14 @@ JobResult JobRunner::Run(const triangulation::ProfileSet& profiles,
 
   const auto loc_start = Clock::now();
   LocalizePartsOptions parts_options = PartsOptionsOf(job_, threads_);
-  parts_options.placement_covariance =
+  const TransformWithCovarianceResult placement =
       PlacementCovariance(cell_, job_, profiles, setup_.options, &result.notes);
-  parts_options.laser_plane = PlaneUncertainty(cell_, job_, setup_, result.sweep, &result.notes);
-  result.notes.push_back("camera intrinsics uncertainty is not in the pose covariances");
+  parts_options.placement_covariance = placement.covariance;
+  parts_options.laser_plane = PlaneUncertainty(cell_, job_, setup_, result.sweep, placement,
+                                               triangulator_->camera(), &result.notes);
+  if (!parts_options.laser_plane || !parts_options.laser_plane->mode_displacements) {
+    result.notes.push_back("camera intrinsics uncertainty is not in the pose covariances");
+  }
   parts_options.progress = options_.progress;
   std::vector<PartRequest> requests;
   for (std::size_t i = 0; i < job_.parts.size(); ++i) {

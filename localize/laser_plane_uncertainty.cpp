@@ -24,6 +24,10 @@ void LaserPlaneUncertainty::Check() const {
     fail("covariance", "must be symmetric");
   }
   if (target_from_sensor.empty()) fail("target_from_sensor", "must hold a pose per profile");
+  if (static_cast<bool>(mode_displacements) != (placement_response.cols() > 0)) {
+    fail("mode_displacements", "and placement_response go together: give both or neither");
+  }
+  if (!placement_response.allFinite()) fail("placement_response", "must be finite");
 }
 
 Matrix6d LaserPlanePoseCovariance(const LaserPlaneUncertainty& plane,
@@ -41,8 +45,12 @@ Matrix6d LaserPlanePoseCovariance(const LaserPlaneUncertainty& plane,
                      " points cannot constrain a pose (need >= 6)");
   }
   const double d = plane.plane_in_sensor[3];
+  const bool modes = static_cast<bool>(plane.mode_displacements);
+  const Eigen::Index k_modes = plane.placement_response.cols();
   Matrix6d h = Matrix6d::Zero();
   Eigen::Matrix<double, 6, 4> b = Eigen::Matrix<double, 6, 4>::Zero();
+  Eigen::Matrix<double, 6, Eigen::Dynamic> b_modes =
+      Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, k_modes);
   for (std::size_t i = 0; i < points.size(); ++i) {
     const auto profile = static_cast<std::size_t>(profiles[i]);
     if (profiles[i] < 0 || profile >= plane.target_from_sensor.size()) {
@@ -56,6 +64,12 @@ Matrix6d LaserPlanePoseCovariance(const LaserPlaneUncertainty& plane,
     a.head<3>() = points[i].cross(normals[i]);
     a.tail<3>() = normals[i];
     h.noalias() += a * a.transpose();
+    if (modes) {
+      const Eigen::Matrix<double, 3, Eigen::Dynamic> dp = plane.mode_displacements(p_sensor);
+      LASERCELL_CHECK(dp.cols() == k_modes, "mode_displacements disagrees with the modes");
+      b_modes.noalias() += a * ((normals[i].transpose() * target_from_sensor.linear()) * dp);
+      continue;
+    }
     // n_i^T R_i dp_i = (n_i^T R_i p_sensor) (p_sensor^T dn + dd) / d, eq. (1).
     Eigen::Matrix<double, 1, 4> dp_row;
     dp_row.head<3>() = p_sensor.transpose();
@@ -72,6 +86,11 @@ Matrix6d LaserPlanePoseCovariance(const LaserPlaneUncertainty& plane,
   }
   const Matrix6d h_plus =
       eig.eigenvectors() * inverse.asDiagonal() * eig.eigenvectors().transpose();
+  if (modes) {
+    const Eigen::Matrix<double, 6, Eigen::Dynamic> x = h_plus * b_modes + plane.placement_response;
+    const Matrix6d cov = x * x.transpose();
+    return 0.5 * (cov + cov.transpose());
+  }
   const Eigen::Matrix<double, 6, 4> a_mat = h_plus * b;
   const Matrix6d cov = a_mat * plane.covariance * a_mat.transpose();
   return 0.5 * (cov + cov.transpose());

@@ -18,6 +18,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -31,8 +32,19 @@ struct LaserPlaneUncertainty {
   Eigen::Matrix4d covariance = Eigen::Matrix4d::Zero();       ///< Over [n; d] (rank 3).
   /// target_from_sensor of each profile, indexed by the cloud's `profile` attribute.
   std::vector<Eigen::Isometry3d> target_from_sensor;
+  /// Optional, both or neither: the sensor's error modes (camera and plane together,
+  /// triangulation/sensor_error_field.hpp: a sensor-frame point's displacement, 3 x K, at each
+  /// mode's +1 sigma) and the placement's response to the same modes (6 x K, left
+  /// perturbations of target <- sensor in the target frame), for a placement calibrated
+  /// through the same sensor (StaticEdge::sensor_response). Then each mode moves the pose by
+  /// x_k = H^+ B_k + placement_response_k (eq. 2 with the mode's dp, plus what the placement
+  /// did), the term is sum_k x_k x_k^T, and `covariance` is not used.
+  std::function<Eigen::Matrix<double, 3, Eigen::Dynamic>(const Eigen::Vector3d&)>
+      mode_displacements;
+  Eigen::Matrix<double, 6, Eigen::Dynamic> placement_response;
   /// Throws OptionError naming the field: plane not finite, n not unit (1e-6), |d| < 1 mm,
-  /// covariance not finite or not symmetric, or no sensor pose.
+  /// covariance not finite or not symmetric, no sensor pose, mode_displacements without
+  /// placement_response (or the reverse), placement_response not finite.
   void Check() const;
 };
 

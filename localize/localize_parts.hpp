@@ -12,8 +12,10 @@
 //   4. poses target_from_<part> and grasps target_from_<grasp> = target_from_part *
 //      part_from_grasp, with a 6x6 covariance (left perturbation in the target frame, [rotation
 //      rad; translation mm]) that adds the ICP pose covariance, the covariance of the
-//      calibrated edges that put the sweep into the target frame and the laser plane's
-//      (laser_plane_uncertainty.hpp), first order, independent,
+//      calibrated edges that put the sweep into the target frame and the sensor's (laser
+//      plane, and with its error modes the camera too, together with what they did to a
+//      placement calibrated through them: laser_plane_uncertainty.hpp), first order,
+//      independent,
 //   5. graspability: accepted, not ambiguous (flat or symmetric parts are flagged, not posed
 //      silently), ICP RMSE within max_rmse_factor x scan_noise_mm, and the grasp position's
 //      3-sigma radius within grasp_tolerance_mm; otherwise the reason is given.
@@ -51,9 +53,10 @@ struct LocalizePartsOptions {
   /// Covariance of the target frame <- sensor placement (the calibrated edges on the path), left
   /// perturbation in the target frame; unset when unknown. Added to every pose covariance.
   std::optional<Matrix6d> placement_covariance;
-  /// The calibrated laser plane's covariance and the sweep's sensor poses; unset when unknown.
-  /// Each pose then gains the plane's share over the points its part explains (the scene must
-  /// carry the `profile` attribute).
+  /// The calibrated laser plane's covariance (or the sensor's error modes with the
+  /// placement's response to them) and the sweep's sensor poses; unset when unknown. Each pose
+  /// then gains the sensor's share over the points its part explains (the scene must carry the
+  /// `profile` attribute).
   std::optional<LaserPlaneUncertainty> laser_plane;
   int threads = 0;            ///< 0 = all cores.
   ProgressCallback progress;  ///< Called after each search ("<part> #k") with its fraction.
@@ -86,9 +89,12 @@ struct GraspPose {
 
 /// The terms `PartInstance::covariance` adds (same convention; zero when absent).
 struct PoseCovarianceTerms {
-  Matrix6d icp = Matrix6d::Zero();          ///< ICP normal equations x residual variance.
-  Matrix6d placement = Matrix6d::Zero();    ///< Calibrated edges target <- sensor.
-  Matrix6d laser_plane = Matrix6d::Zero();  ///< Laser plane calibration.
+  Matrix6d icp = Matrix6d::Zero();        ///< ICP normal equations x residual variance.
+  Matrix6d placement = Matrix6d::Zero();  ///< Calibrated edges target <- sensor.
+  /// Laser plane calibration; with the sensor's error modes, camera and plane together,
+  /// including what they did to the placement (then `placement` holds only the placement's own
+  /// noise, e.g. the touches).
+  Matrix6d laser_plane = Matrix6d::Zero();
 };
 
 /// One found part instance.

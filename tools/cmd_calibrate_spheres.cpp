@@ -1,5 +1,7 @@
-// `lasercell calibrate spheres --cell CELL.yaml --sweep SWEEP.ply --touches touches.yaml
-//  [--radius-mm R] [--free-radius] [--sweep-frame NAME] [--touch-sigma-mm S] [--up X,Y,Z]
+// `lasercell calibrate spheres --cell CELL.yaml (--sweep SWEEP.ply | --profiles SPHERES.lcp
+//  --camera CAM.cameramodel --velocity-mm-s VX,VY,VZ [--t0-ns T0] [--laser NAME])
+//  --touches touches.yaml [--radius-mm R] [--free-radius] [--sweep-frame NAME] [--touch-sigma-mm S]
+//  [--up X,Y,Z]
 //  [--report FILE.html] [--json FILE.json]`
 //
 // Half-sphere calibration (Skotheim et al. 2012, calibration step 3): segments the half spheres
@@ -15,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/camera_model.hpp"
 #include "calib/half_sphere_calibration.hpp"
 #include "calib/half_sphere_report.hpp"
 #include "core/error.hpp"
@@ -25,12 +28,18 @@
 #include "core/json_io.hpp"
 #include "core/provenance.hpp"
 #include "tools/commands.hpp"
+#include "triangulation/half_sphere_profiles.hpp"
+#include "triangulation/profile_io.hpp"
 
 namespace lasercell::tools {
 namespace {
 
 struct SpheresArgs {
   std::string cell, sweep, touches, report, json;
+  std::string profiles, camera, laser = "laser";  // the sweep as profiles (instead of --sweep)
+  std::vector<double> velocity;
+  long long t0_ns = 0;
+  bool have_t0 = false;
   std::string sweep_frame = "sensor";
   calib::HalfSphereSweepOptions options;  // radius_mm, touch_sigma_mm: 0 = from the touches file
   std::vector<double> up = {0, 0, 1};
@@ -44,27 +53,55 @@ void Run(SpheresArgs a) {
   const calib::SphereTouches touches = calib::ParseTouchesYaml(touches_text, a.touches);
   if (a.up.size() != 3) throw InputError("--up: expected X,Y,Z");
   a.options.up_in_handling_base = Eigen::Vector3d(a.up[0], a.up[1], a.up[2]);
-  const calib::HalfSphereInputNames names{a.cell, a.sweep, a.touches, a.sweep_frame};
+  if (a.sweep.empty() == a.profiles.empty()) {
+    throw OptionError("give the sweep as --sweep CLOUD or as --profiles FILE.lcp (one of them)");
+  }
+  if (!a.profiles.empty() && (a.camera.empty() || a.velocity.size() != 3)) {
+    throw OptionError(
+        "--profiles needs --camera CAMERA.cameramodel and --velocity-mm-s vx,vy,vz (the linear "
+        "sweep, as for scan triangulate)");
+  }
+  const calib::HalfSphereInputNames names{a.cell, a.sweep.empty() ? a.profiles : a.sweep, a.touches,
+                                          a.sweep_frame};
 
-  io::ReadReport read;
-  const PointCloud sweep = io::ReadPointCloud(a.sweep, &read);
-  a.options.sweep_unit_hint = read.unit_hint;
-  const calib::HalfSphereSweepResult run =
-      calib::CalibrateHalfSpheresInSweep(sweep, touches, a.options, names);
-  if (!run.calibrated) throw FileError(a.sweep, run.failure);
+  calib::HalfSphereSweepResult run;
+  bool modes = false;
+  if (a.sweep.empty()) {
+    // From profiles: triangulated here through the cell's plane, with its error modes.
+    triangulation::SweepOptions sweep;
+    sweep.motion = triangulation::SweepMotion::kLinear;
+    sweep.velocity_mm_s = Eigen::Vector3d(a.velocity[0], a.velocity[1], a.velocity[2]);
+    if (a.have_t0) sweep.t0_ns = a.t0_ns;
+    triangulation::HalfSphereFromProfiles out = triangulation::CalibrateHalfSpheresFromProfiles(
+        graph, a.cell, calib::LoadCameraModel(a.camera), triangulation::ReadProfiles(a.profiles),
+        sweep, a.laser, touches, a.options, names);
+    run = std::move(out.run);
+    modes = out.modes_propagated;
+  } else {
+    io::ReadReport read;
+    const PointCloud cloud = io::ReadPointCloud(a.sweep, &read);
+    a.options.sweep_unit_hint = read.unit_hint;
+    run = calib::CalibrateHalfSpheresInSweep(cloud, touches, a.options, names);
+  }
+  if (!run.calibrated) throw FileError(names.sweep, run.failure);
   const calib::HalfSphereCalibrationResult& result = run.calibration;
 
   InputDigest digest;
-  digest.AddFile(a.sweep);
+  digest.AddFile(names.sweep);
   digest.Add(touches_text);
-  const StaticEdge edge = calib::HalfSphereEdge(result, a.sweep_frame,
-                                                calib::HalfSphereProvenance(result, digest.Text()));
+  StaticEdge edge = calib::HalfSphereEdge(result, a.sweep_frame,
+                                          calib::HalfSphereProvenance(result, digest.Text()));
+  edge.sensor_response = triangulation::SensorResponseOf(run, graph, a.laser);
   json::WriteFile(a.json, calib::HalfSphereResultJson(run, names, edge));
   if (!a.report.empty()) report::WriteHtmlReport(a.report, calib::HalfSphereReport(run, names));
   graph.SetStaticEdge(edge);
   SaveFrameGraph(a.cell, graph);
   std::printf("%s\nhandling_base_from_%s: %s\n", result.Summary().c_str(), a.sweep_frame.c_str(),
               PoseToFileNotation(result.handling_base_from_sweep).c_str());
+  std::printf("camera and laser plane error modes: %s\n",
+              edge.sensor_response ? "propagated (the edge keeps its response to them)"
+              : modes              ? "propagated, without a response"
+                      : "not propagated (give --profiles and --camera, and a plane with modes)");
   for (const auto& w : result.warnings) std::printf("warning: %s\n", w.c_str());
 }
 
@@ -78,7 +115,19 @@ void AddCalibrateSpheresCommand(CLI::App& calibrate) {
   auto a = std::make_shared<SpheresArgs>();
   cmd->add_option("--cell", a->cell, "cell.yaml to update (only its handling_base edge)")
       ->required();
-  cmd->add_option("--sweep", a->sweep, "Sweep cloud (PLY/PCD, mm) in the sweep frame")->required();
+  cmd->add_option("--sweep", a->sweep, "Sweep cloud (PLY/PCD, mm) in the sweep frame");
+  cmd->add_option("--profiles", a->profiles,
+                  "Or the sweep's profiles (.lcp), triangulated through --camera and the cell's "
+                  "laser plane: the edge then keeps its response to their error modes");
+  cmd->add_option("--camera", a->camera, "Camera model (.cameramodel), with --profiles");
+  cmd->add_option("--laser", a->laser, "Laser plane of the cell, with --profiles")
+      ->capture_default_str();
+  cmd->add_option("--velocity-mm-s", a->velocity,
+                  "Linear sweep velocity vx,vy,vz (mm/s, sensor frame at t0), with --profiles")
+      ->delimiter(',')
+      ->expected(3);
+  cmd->add_option("--t0-ns", a->t0_ns, "Sweep start (ns; default: the first profile's time)")
+      ->each([a](const std::string&) { a->have_t0 = true; });
   cmd->add_option("--touches", a->touches, "Touches file (format lasercell.touches)")->required();
   cmd->add_option("--radius-mm", a->options.radius_mm,
                   "Sphere radius (default: the touches file's sphere_radius_mm)");

@@ -126,6 +126,14 @@ TEST(CameraUncertainty, PropagationEqualsTheJacobianSandwich) {
       << "propagated\n"
       << propagated << "\nanalytic\n"
       << analytic;
+  // Axis by axis: the steps span the covariance (sum of s_k s_k^T) and each response is the
+  // Jacobian times its step, so the columns are what a consumer can propagate mode by mode.
+  const IntrinsicsAxes axes = PropagateIntrinsicsAxes(model, pixels);
+  const Eigen::MatrixXd spanned = axes.intrinsics_steps * axes.intrinsics_steps.transpose();
+  EXPECT_LT((spanned - model.intrinsics_covariance()).cwiseAbs().maxCoeff(),
+            1e-9 * model.intrinsics_covariance().cwiseAbs().maxCoeff());
+  const Eigen::MatrixXd linear = j * axes.intrinsics_steps;
+  EXPECT_LT((axes.responses - linear).cwiseAbs().maxCoeff(), 1e-3 * linear.cwiseAbs().maxCoeff());
   // Without a stored covariance there is nothing to propagate, and it says so.
   EXPECT_NE(CameraPropagationProblem(Opencv8()).find("no intrinsics covariance"),
             std::string::npos);

@@ -13,8 +13,12 @@
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/se3.hpp"
+#include "datasets/simulate.hpp"
+#include "datasets/simulate_records.hpp"
+#include "tests/calib/realistic_cli_util.hpp"
 #include "tests/calib/sphere_sweep_sim.hpp"
 #include "tests/cli_util.hpp"
+#include "triangulation/linear_sweep.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -175,6 +179,70 @@ TEST_F(CalibrateSpheresCli, BadTouchesFilesAreClearErrors) {
       << run.err;
   // The cell file is untouched by failed runs.
   EXPECT_EQ(LoadFrameGraph((dir_ / "cell.yaml").string()).static_edges().size(), 1u);
+}
+
+// From the profiles: the sweep triangulated through the camera and the cell's plane, whose
+// error modes the edge then answers (sensor_response, tied to the plane's calibration digest).
+// A plane-only offset mode moves every point along its line of sight, so the placement moves.
+TEST(CalibrateSpheresFromProfilesCli, TheEdgeKeepsItsResponseToThePlanesErrorModes) {
+  datasets::SimConfig config;
+  config.seed = 17;
+  config.capture_planes = config.capture_seats = config.capture_trajectory = false;
+  config.capture_chessboard_images = config.capture_laser_line_images = false;
+  config.capture_eye_in_hand = config.capture_joint_poses = config.write_meshes = false;
+  const fs::path dir = ::lasercell::test::MakeTestDir("spheres_profiles_cli");
+  datasets::SimulateCell(config, (dir / "sim").string(), {}, 0);
+  const Eigen::Vector4d truth =
+      datasets::ReadSensorTruth((dir / "sim/truth/sensor.yaml").string()).LaserPlane();
+  LaserPlaneEntry plane;
+  plane.normal = truth.head<3>();
+  plane.point_mm = -truth[3] * truth.head<3>();
+  SensorErrorMode offset, tilt;
+  offset.plane_step << 0, 0, 0, 0.02;
+  tilt.plane_step << 1e-4 * truth.head<3>().unitOrthogonal(), 0;
+  plane.error_modes = {offset, tilt};
+  plane.covariance = (offset.plane_step * offset.plane_step.transpose() +
+                      tilt.plane_step * tilt.plane_step.transpose())
+                         .eval();
+  plane.provenance.input_digest = "fnv1a64:feed";
+  FrameGraph cell;
+  cell.SetLaserPlane("laser", plane);
+  SaveFrameGraph((dir / "cell.yaml").string(), cell);
+  const triangulation::LinearSweepRecord record =
+      triangulation::ReadLinearSweepRecord((dir / "sim/records/linear_sweep.yaml").string());
+  const std::string args =
+      "calibrate spheres --cell " + (dir / "cell.yaml").string() + " --touches " +
+      (dir / "sim/records/touches.yaml").string() + " --camera " +
+      (dir / "sim/truth/camera.cameramodel").string() + " --profiles " +
+      (dir / "sim/profiles/spheres.lcp").string() +
+      " --velocity-mm-s=" + ::lasercell::test::CsvOf(record.velocity_mm_s_in_sensor) + " --t0-ns " +
+      std::to_string(record.t0_ns);
+  const CommandResult run = RunCli(args);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("error modes: propagated"), std::string::npos) << run.out;
+  const FrameGraph read = LoadFrameGraph((dir / "cell.yaml").string());
+  ASSERT_EQ(read.static_edges().size(), 1u);
+  const StaticEdge& edge = read.static_edges()[0];
+  ASSERT_TRUE(edge.sensor_response.has_value());
+  EXPECT_EQ(edge.sensor_response->laser, "laser");
+  EXPECT_EQ(edge.sensor_response->plane_digest, "fnv1a64:feed");
+  ASSERT_EQ(edge.sensor_response->columns.cols(), 2);
+  // 0.02 mm along ~0.7 m lines of sight scales the sweep by ~3e-5: tens of micrometres at
+  // the spheres, and the placement follows by as much.
+  const double moved = edge.sensor_response->columns.col(0).tail<3>().norm();
+  EXPECT_GT(moved, 0.005);
+  EXPECT_LT(moved, 0.2);
+
+  // Either the cloud or the profiles, and the profiles need the camera and the motion.
+  CommandResult bad = RunCli(args + " --sweep " + (dir / "x.ply").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("one of them"), std::string::npos) << bad.err;
+  bad = RunCli("calibrate spheres --cell " + (dir / "cell.yaml").string() + " --touches " +
+               (dir / "sim/records/touches.yaml").string() + " --profiles " +
+               (dir / "sim/profiles/spheres.lcp").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--profiles needs --camera"), std::string::npos) << bad.err;
+  ::lasercell::test::RemoveTestDir(dir);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // Simulation profile: ideal (DefaultSphereSweep, tests/calib/sphere_sweep_sim.hpp).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <string>
 
 #include "calib/half_sphere_calibration.hpp"
@@ -62,6 +63,62 @@ TEST(CalibrateHalfSpheresInSweep, ComposesSegmentationAndCalibration) {
   const std::string html = HalfSphereReport(run, names).Html();
   EXPECT_NE(html.find("handling_base_from_sweep_start"), std::string::npos);
   EXPECT_NE(html.find("Per-sphere residuals"), std::string::npos);
+}
+
+// The response to a sensor's error modes (options.point_displacements) against moving the
+// points: exactly E M^-1 for a rigid move M of the whole sweep (a translation, a rotation about
+// the cloud's centroid), and a full re-segmentation and calibration of the moved cloud for a
+// non-rigid one (a depth scale, like an offset error of the laser plane).
+TEST(CalibrateHalfSpheresInSweep, ModeResponseFollowsThePointsMovedByEachMode) {
+  const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
+  const SphereTouches touches = TouchesOf(sim);
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : sim.cloud.positions) centroid += p;
+  centroid /= static_cast<double>(sim.cloud.size());
+  const Eigen::Vector3d t(0.03, -0.02, 0.05), w(1e-4, -2e-4, 5e-5);
+  const double scale = 1e-4;
+  const auto modes = [&](std::size_t i) {
+    const Eigen::Vector3d& p = sim.cloud.positions[i];
+    Eigen::Matrix<double, 3, Eigen::Dynamic> d(3, 3);
+    d.col(0) = t;
+    d.col(1) = w.cross(p - centroid);
+    d.col(2) = Eigen::Vector3d(0, 0, scale * p.z());
+    return d;
+  };
+  HalfSphereSweepOptions options;
+  options.point_displacements = modes;
+  const HalfSphereSweepResult run = CalibrateHalfSpheresInSweep(sim.cloud, touches, options);
+  ASSERT_TRUE(run.calibrated) << run.failure;
+  ASSERT_EQ(run.mode_response.cols(), 3);
+  const Eigen::Isometry3d e = run.calibration.handling_base_from_sweep;
+  const auto rigid = [&](const Eigen::Isometry3d& m) {
+    return Vector6d(RotationVectorTranslation(e * m.inverse() * e.inverse()));
+  };
+  const Vector6d by_translation = rigid(Eigen::Isometry3d(Eigen::Translation3d(t)));
+  const Vector6d by_rotation =
+      rigid(Eigen::Translation3d(centroid) * Eigen::AngleAxisd(w.norm(), w.normalized()) *
+            Eigen::Translation3d(-centroid));
+  EXPECT_LT((run.mode_response.col(0) - by_translation).norm(), 1e-4 * by_translation.norm())
+      << run.mode_response.col(0).transpose() << " vs " << by_translation.transpose();
+  EXPECT_LT((run.mode_response.col(1) - by_rotation).norm(), 2e-2 * by_rotation.norm())
+      << run.mode_response.col(1).transpose() << " vs " << by_rotation.transpose();
+  // The depth scale: the whole step again on the moved clouds.
+  Vector6d side[2];
+  for (int s = 0; s < 2; ++s) {
+    PointCloud moved = sim.cloud;
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+      moved.positions[i] += (s == 0 ? 1.0 : -1.0) * modes(i).col(2);
+    }
+    const HalfSphereSweepResult r = CalibrateHalfSpheresInSweep(moved, touches, {});
+    ASSERT_TRUE(r.calibrated) << r.failure;
+    side[s] = RotationVectorTranslation(r.calibration.handling_base_from_sweep * e.inverse());
+  }
+  const Vector6d brute = 0.5 * (side[0] - side[1]);
+  std::printf("[ measured ] depth-scale mode: response %s, refitted %s\n",
+              ::testing::PrintToString(run.mode_response.col(2).transpose().eval()).c_str(),
+              ::testing::PrintToString(brute.transpose().eval()).c_str());
+  EXPECT_GT(brute.tail<3>().norm(), 0.01);  // the mode moves the placement measurably
+  EXPECT_LT((run.mode_response.col(2) - brute).norm(), 0.05 * brute.norm());
 }
 
 TEST(CalibrateHalfSpheresInSweep, NoSphereInTheSweepIsReportedNotThrown) {

@@ -80,6 +80,20 @@ TEST(RealisticChain, CameraThenLaserPlaneThenHandEyeFromTheirOwnCaptures) {
   ASSERT_TRUE(laser.at("camera_uncertainty_included").get<bool>()) << laser.dump();
   const LaserPlaneEntry plane = LoadFrameGraph(cell.string()).laser_planes().at("laser");
   ASSERT_TRUE(plane.camera_covariance.has_value());  // what a job must not count twice
+  // The error modes: the camera's axes (each with its refitted plane), then the fit's own; they
+  // add up to the plane's covariance, and the camera's ones to its camera part.
+  ASSERT_GT(plane.error_modes.size(), 3u);
+  Eigen::Matrix4d all = Eigen::Matrix4d::Zero(), camera_modes = Eigen::Matrix4d::Zero();
+  for (const SensorErrorMode& m : plane.error_modes) {
+    all += m.plane_step * m.plane_step.transpose();
+    if (m.intrinsics_step.empty()) continue;
+    EXPECT_EQ(m.intrinsics_step.size(), static_cast<std::size_t>(camera.NumIntrinsics()));
+    camera_modes += m.plane_step * m.plane_step.transpose();
+  }
+  EXPECT_LT((all - *plane.covariance).cwiseAbs().maxCoeff(),
+            1e-6 * plane.covariance->cwiseAbs().maxCoeff());
+  EXPECT_LT((camera_modes - *plane.camera_covariance).cwiseAbs().maxCoeff(),
+            1e-6 * plane.camera_covariance->cwiseAbs().maxCoeff());
   Eigen::Vector4d t = truth.sensor.laser.Coefficients();
   if (t(3) > 0) t = -t;
   const double normal_error_deg =

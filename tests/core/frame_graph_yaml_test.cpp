@@ -568,7 +568,7 @@ TEST(FrameGraphYamlTest, BadFilesNameTheFileAndTheProblem) {
        "line 14: unknown field 'edges[0].parent_from_child.rotation_xyzw'"},
       {Replace(v, "    type: static\n", "    type: static\n    robot: arm\n"),
        "line 14: unknown field 'edges[0].robot' (known fields here: parent, child, type, "
-       "parent_from_child, covariance, provenance)"},
+       "parent_from_child, covariance, sensor_response, provenance)"},
       {Replace(v, "    type: dynamic\n", "    type: dynamic\n    covariance: [1]\n"),
        "line 24: unknown field 'edges[2].covariance' (known fields here: parent, child, type, "
        "robot)"},

@@ -130,6 +130,46 @@ TEST(LaserPlanePoseCovarianceTest, ZeroCovarianceGivesZero) {
   EXPECT_EQ(cov.norm(), 0.0);
 }
 
+// Mode by mode: a plane-only mode with no placement response is the plane path with the
+// covariance step step^T; a rigid translation t of every sensor point, with the response of a
+// placement calibrated through the same sensor (it maps the moved points back: -R t), cancels.
+TEST(LaserPlanePoseCovarianceTest, ModesAgreeWithThePlanePathAndCancelAShiftThePlacementTook) {
+  Sweep s = MakeSweep();
+  const Eigen::Vector4d step(0.0, 0.0, 0.0, 0.2);
+  LaserPlaneUncertainty by_plane = s.plane;
+  by_plane.covariance = step * step.transpose();
+  const double d = s.plane.plane_in_sensor[3];
+  LaserPlaneUncertainty by_mode = s.plane;
+  by_mode.mode_displacements = [&](const Eigen::Vector3d& p) {
+    Eigen::Matrix<double, 3, Eigen::Dynamic> dp(3, 1);
+    dp.col(0) = p * (p.dot(step.head<3>()) + step[3]) / d;  // eq. (1)
+    return dp;
+  };
+  by_mode.placement_response = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, 1);
+  const Matrix6d a = LaserPlanePoseCovariance(by_plane, s.points, s.normals, s.profiles);
+  const Matrix6d b = LaserPlanePoseCovariance(by_mode, s.points, s.normals, s.profiles);
+  EXPECT_LT((a - b).norm(), 1e-9 * a.norm());
+
+  const Eigen::Vector3d t(0.05, -0.03, 0.02);  // sensor frame, mm
+  LaserPlaneUncertainty shift = s.plane;
+  shift.mode_displacements = [&](const Eigen::Vector3d&) {
+    return Eigen::Matrix<double, 3, Eigen::Dynamic>(t);
+  };
+  // Every profile's sensor has the same orientation in this sweep.
+  const Eigen::Matrix3d r = s.plane.target_from_sensor[0].linear();
+  shift.placement_response = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, 1);
+  shift.placement_response.col(0).tail<3>() = -r * t;
+  const Matrix6d cancelled = LaserPlanePoseCovariance(shift, s.points, s.normals, s.profiles);
+  shift.placement_response.setZero();
+  const Matrix6d alone = LaserPlanePoseCovariance(shift, s.points, s.normals, s.profiles);
+  EXPECT_NEAR(std::sqrt(alone.trace()), t.norm(), 1e-6);
+  EXPECT_LT(std::sqrt(cancelled.trace()), 1e-9);
+
+  LaserPlaneUncertainty half = s.plane;
+  half.mode_displacements = by_mode.mode_displacements;
+  EXPECT_THROW(half.Check(), OptionError);  // displacements without a response
+}
+
 TEST(LaserPlanePoseCovarianceTest, BadInputNamesTheProblem) {
   Sweep s = MakeSweep();
   std::vector<std::int32_t> short_profiles(s.profiles.begin(), s.profiles.end() - 1);

@@ -1,0 +1,46 @@
+#pragma once
+// The half-sphere sensor-to-robot calibration (calib/half_sphere_calibration.hpp) started from
+// the sphere sweep's profiles instead of a cloud: the sweep is triangulated here through the
+// calibrated camera and the cell's laser plane, so the calibration also knows how each of that
+// sensor's error modes (core/frame_graph.hpp SensorErrorMode) moved it. The edge keeps that
+// response (StaticEdge::sensor_response) and a job measuring through the same camera and plane
+// counts their shared error once, with its sign (localize/laser_plane_uncertainty.hpp), instead
+// of twice or not at all.
+
+#include <optional>
+#include <string>
+
+#include "calib/camera_model.hpp"
+#include "calib/half_sphere_calibration.hpp"
+#include "core/frame_graph.hpp"
+#include "triangulation/profile_io.hpp"
+#include "triangulation/sweep.hpp"
+
+namespace lasercell::triangulation {
+
+/// What CalibrateHalfSpheresFromProfiles produced.
+struct HalfSphereFromProfiles {
+  SweepResult sweep;                 ///< The triangulated sphere sweep (sweep frame: "sensor").
+  calib::HalfSphereSweepResult run;  ///< With mode_response when the plane has error modes.
+  /// The plane's error modes were propagated (false: the plane has none; the edge then carries
+  /// no sensor_response).
+  bool modes_propagated = false;
+};
+
+/// Triangulates `profiles` through `camera` and the laser plane `laser` of `cell` with `sweep`
+/// (ScanSetupFromCell's checks; `cell_name` names the cell in messages), then runs
+/// CalibrateHalfSpheresInSweep with `options` (point_displacements set here when the plane has
+/// error modes). Throws what those throw.
+HalfSphereFromProfiles CalibrateHalfSpheresFromProfiles(
+    const FrameGraph& cell, const std::string& cell_name, const calib::CameraModel& camera,
+    const ProfileSet& profiles, const SweepOptions& sweep, const std::string& laser,
+    const calib::SphereTouches& touches, calib::HalfSphereSweepOptions options,
+    const calib::HalfSphereInputNames& names);
+
+/// The edge's sensor_response for `run` (the plane `laser` of `cell`, its provenance digest);
+/// nullopt when the run has no mode response.
+std::optional<SensorModeResponse> SensorResponseOf(const calib::HalfSphereSweepResult& run,
+                                                   const FrameGraph& cell,
+                                                   const std::string& laser);
+
+}  // namespace lasercell::triangulation
