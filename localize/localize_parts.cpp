@@ -76,7 +76,10 @@ Matrix6d LaserPlaneTerm(const LaserPlaneUncertainty& plane, const PointCloud& ex
 }
 
 // A grasp's own fit: ICP over the model's refinement points and the scan points within
-// `radius` of the grasp origin, from the part's pose. Refused (note set) when either side has
+// `radius` of the grasp origin, from the part's pose, the scan's normals given so that a scan
+// point is not paired with a model point on a face at another angle (IcpOptions::
+// max_normal_angle_rad: a feature's rim seen from above, paired with its unseen wall, would
+// claim a sideways constraint the scan does not hold). Refused (note set) when either side has
 // too few points, ICP gives no valid covariance (the region does not fix the pose), or the
 // fit moves the grasp farther than the part's ICP correspondence distance (it slid).
 struct LocalFit {
@@ -103,18 +106,24 @@ LocalFit FitAroundGrasp(const PartModel& model, const PointCloud& scene,
     normals.push_back(ppf.refinement_normals()[i]);
   }
   const Eigen::Vector3d origin_in_target = target_from_part * origin_in_part;
-  std::vector<Eigen::Vector3d> source;
-  for (const Eigen::Vector3d& p : scene.positions) {
-    if ((p - origin_in_target).squaredNorm() <= r_sq) source.push_back(p);
+  const bool with_normals = scene.normals.size() == scene.positions.size();
+  std::vector<Eigen::Vector3d> source, source_normals;
+  for (std::size_t i = 0; i < scene.positions.size(); ++i) {
+    if ((scene.positions[i] - origin_in_target).squaredNorm() > r_sq) continue;
+    source.push_back(scene.positions[i]);
+    if (with_normals) source_normals.push_back(scene.normals[i]);
   }
   constexpr std::size_t kMaxSource = 6000, kMinPoints = 50;
   if (source.size() > kMaxSource) {  // every k-th point: deterministic, spread over the region
-    std::vector<Eigen::Vector3d> thinned;
+    std::vector<Eigen::Vector3d> thinned, thinned_normals;
     const double step = static_cast<double>(source.size()) / kMaxSource;
     for (std::size_t k = 0; k < kMaxSource; ++k) {
-      thinned.push_back(source[static_cast<std::size_t>(k * step)]);
+      const auto i = static_cast<std::size_t>(k * step);
+      thinned.push_back(source[i]);
+      if (with_normals) thinned_normals.push_back(source_normals[i]);
     }
     source = std::move(thinned);
+    source_normals = std::move(thinned_normals);
   }
   fit.points = source.size();
   if (target.size() < kMinPoints || source.size() < kMinPoints) {
@@ -128,7 +137,7 @@ LocalFit FitAroundGrasp(const PartModel& model, const PointCloud& scene,
   const Eigen::Isometry3d centered_from_target =
       (target_from_part * ppf.model_from_centered()).inverse();
   const registration::IcpResult r =
-      registration::AlignIcp(source, tree, normals, centered_from_target, icp);
+      registration::AlignIcp(source, tree, normals, centered_from_target, icp, source_normals);
   fit.rmse_mm = r.rmse_mm;
   fit.target_from_part = r.target_from_source.inverse() * ppf.model_from_centered().inverse();
   fit.shift_mm = (fit.target_from_part * origin_in_part - origin_in_target).norm();

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <numbers>
 #include <sstream>
 #include <vector>
 
@@ -70,6 +71,8 @@ struct IcpProblem {
   double max_sq = 0.0;  // squared max correspondence distance, mm^2
   std::vector<Match> matches;
   std::vector<Eigen::Vector3d> moved;
+  std::span<const Eigen::Vector3d> source_normals;  // empty: no normal compatibility test
+  double min_normal_cos = -1.0;                     // |cos| below this: not a correspondence
 };
 
 // Nearest target point and residual for every source point at the current pose; returns the
@@ -83,6 +86,10 @@ std::vector<double> Associate(IcpProblem& p, const Eigen::Isometry3d& pose) {
       Neighbor nn;
       Match& m = p.matches[i];
       m.valid = p.target.Nearest(p.moved[i], &nn) && nn.distance_sq <= p.max_sq;
+      if (m.valid && !p.source_normals.empty()) {
+        const double cos = p.target_normals[nn.index].dot(pose.linear() * p.source_normals[i]);
+        m.valid = std::abs(cos) >= p.min_normal_cos;
+      }
       if (!m.valid) continue;
       m.target = nn.index;
       m.residual = p.plane ? p.target_normals[nn.index].dot(p.moved[i] - target_points[nn.index])
@@ -396,6 +403,10 @@ void IcpOptions::Check() const {
   positive(rotation_tolerance_rad, "rotation_tolerance_rad");
   if (max_iterations < 1) throw OptionError("IcpOptions.max_iterations must be >= 1");
   if (min_correspondences < 3) throw OptionError("IcpOptions.min_correspondences must be >= 3");
+  if (!(max_normal_angle_rad >= 0.0 && max_normal_angle_rad <= std::numbers::pi / 2)) {
+    throw OptionError("IcpOptions.max_normal_angle_rad = " + std::to_string(max_normal_angle_rad) +
+                      ": must be in [0, pi/2] rad (0 = no normal test)");
+  }
   if (!(covariance_block_mm >= 0.0) || !std::isfinite(covariance_block_mm)) {
     throw OptionError("IcpOptions.covariance_block_mm = " + std::to_string(covariance_block_mm) +
                       ": must be >= 0 mm (0 = every residual independent)");
@@ -425,13 +436,24 @@ std::string IcpResult::Summary() const {
 
 IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target,
                    std::span<const Eigen::Vector3d> target_normals,
-                   const Eigen::Isometry3d& initial_target_from_source, const IcpOptions& options) {
+                   const Eigen::Isometry3d& initial_target_from_source, const IcpOptions& options,
+                   std::span<const Eigen::Vector3d> source_normals) {
   options.Check();
   const bool plane = options.metric == IcpMetric::kPointToPlane;
   if (plane && target_normals.size() != target.size()) {
     throw InputError("AlignIcp: point-to-plane needs one target normal per target point (" +
                      std::to_string(target_normals.size()) + " normals for " +
                      std::to_string(target.size()) + " points)");
+  }
+  const bool normal_test = options.max_normal_angle_rad > 0.0 && !source_normals.empty();
+  if (normal_test &&
+      (source_normals.size() != source.size() || target_normals.size() != target.size())) {
+    throw InputError(
+        "AlignIcp: the normal compatibility test needs one normal per source and "
+        "target point (" +
+        std::to_string(source_normals.size()) + " for " + std::to_string(source.size()) +
+        " source, " + std::to_string(target_normals.size()) + " for " +
+        std::to_string(target.size()) + " target points)");
   }
   IcpResult result;
   result.target_from_source = initial_target_from_source;
@@ -444,7 +466,9 @@ IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target
       plane,
       options.max_correspondence_distance_mm * options.max_correspondence_distance_mm,
       std::vector<Match>(n),
-      std::vector<Eigen::Vector3d>(n)};
+      std::vector<Eigen::Vector3d>(n),
+      normal_test ? source_normals : std::span<const Eigen::Vector3d>{},
+      normal_test ? std::cos(options.max_normal_angle_rad) : -1.0};
 
   result.termination = IcpTermination::kMaxIterations;
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {

@@ -90,6 +90,17 @@ struct IcpOptions {
   /// Side of the cubes (source frame) whose residuals the covariance treats as one correlated
   /// group, mm; 0 = every residual independent. >= 0. See the file comment.
   double covariance_block_mm = 0.0;
+  /// Normal compatibility (Rusinkiewicz & Levoy 2001): when AlignIcp is given source normals, a
+  /// pair whose source and target normals differ by more than this angle (either orientation)
+  /// is not a correspondence. Near a sharp edge the nearest model point may lie on the other
+  /// face; its normal then measures a top-face point's distance to a wall's plane, a constraint
+  /// across the surface that the scan does not hold (and an edge's mixed-pixel range biases).
+  /// 0 (default) = no test; 45 deg is the usual choice. In [0, pi/2] rad. Only callers that
+  /// pass normals can use it: the grasp's local fit (localize/localize_parts.cpp) does;
+  /// LocalizeInCloud's ICP does not yet. Off by default: on the realistic Table I it made the
+  /// reported covariance hold the hole's error better but the worst errors larger
+  /// (BENCHMARKS.md, "The hole's sideways position").
+  double max_normal_angle_rad = 0.0;
   int threads = 1;  ///< 0 = all cores, 1 = calling thread.
   /// Throws OptionError naming the field when a value is out of range.
   void Check() const;
@@ -131,9 +142,12 @@ const char* ToString(IcpTermination termination);
 
 /// Aligns `source` to the target cloud held by `target` (kd-tree; `target_normals` unit, same
 /// order, required for point-to-plane) starting from `initial_target_from_source`.
+/// `source_normals` (unit, one per source point, or empty) enable the normal compatibility test
+/// of IcpOptions::max_normal_angle_rad; InputError when their count is wrong.
 IcpResult AlignIcp(std::span<const Eigen::Vector3d> source, const KdTree& target,
                    std::span<const Eigen::Vector3d> target_normals,
                    const Eigen::Isometry3d& initial_target_from_source,
-                   const IcpOptions& options = {});
+                   const IcpOptions& options = {},
+                   std::span<const Eigen::Vector3d> source_normals = {});
 
 }  // namespace lasercell::registration

@@ -199,6 +199,7 @@ void ReadIcp(yaml::Fields& r, LocalizeOptions* o) {
   s.Read("rotation_tolerance_rad", &i.rotation_tolerance_rad);
   s.Read("min_correspondences", &i.min_correspondences);
   s.Read("covariance_block_mm", &i.covariance_block_mm);
+  s.Read("max_normal_angle_rad", &i.max_normal_angle_rad);
   s.Done();
   r.Read("icp_max_distance_relative", &o->icp_max_distance_relative);
   r.Read("icp_covariance_block_relative", &o->icp_covariance_block_relative);

@@ -147,6 +147,52 @@ TEST(IcpTest, ReportsTooFewCorrespondencesAndDegeneracy) {
               1e-3);  // damped, not drifting
 }
 
+TEST(IcpTest, NormalCompatibilityDropsPairsAcrossAnEdge) {
+  // A step: the top face z = 0 (x <= 0) and the wall x = 0 below it (z < 0), as a model's
+  // refinement points. The scan sees the top face only, and its last column overhangs the edge
+  // by 0.6 mm (an edge's mixed pixels): those points' nearest model points are on the wall.
+  std::vector<Eigen::Vector3d> model, model_normals, scan, scan_normals;
+  for (int y = -20; y <= 20; ++y) {
+    for (int x = -30; x <= 0; ++x) {
+      model.push_back({x * 1.0, y * 1.0, 0.0});
+      model_normals.push_back(Eigen::Vector3d::UnitZ());
+    }
+    for (int z = 1; z <= 20; ++z) {
+      model.push_back({0.0, y * 1.0, -z * 1.0});
+      model_normals.push_back(Eigen::Vector3d::UnitX());
+    }
+    for (int x = -30; x <= 0; ++x) {
+      scan.push_back({x * 1.0 + 0.6, y * 1.0, -0.7});
+      // The scanner's normals point back at it: flipped against the model's (still compatible).
+      scan_normals.push_back(-Eigen::Vector3d::UnitZ());
+    }
+  }
+  const KdTree tree(model);
+  IcpOptions options;
+  options.max_iterations = 1;
+  options.kernel = RobustKernel::kNone;
+  const IcpResult plain =
+      AlignIcp(scan, tree, model_normals, Eigen::Isometry3d::Identity(), options, scan_normals);
+  EXPECT_EQ(IcpOptions{}.max_normal_angle_rad, 0.0);  // off unless asked for
+  options.max_normal_angle_rad = M_PI / 4;
+  const IcpResult tested =
+      AlignIcp(scan, tree, model_normals, Eigen::Isometry3d::Identity(), options, scan_normals);
+  // Without the test the overhanging column (41 points) matches the wall and pulls the scan
+  // back along x; with it those pairs are dropped, and x is left alone.
+  EXPECT_LT(plain.target_from_source.translation().x(), -0.05);
+  EXPECT_NEAR(tested.target_from_source.translation().x(), 0.0, 1e-6);
+  EXPECT_NEAR(tested.target_from_source.translation().z(), 0.7, 1e-6);
+
+  options.max_normal_angle_rad = 2.0;
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("max_normal_angle_rad")));
+  options.max_normal_angle_rad = M_PI / 4;
+  const std::vector<Eigen::Vector3d> too_few(3, Eigen::Vector3d::UnitZ());
+  EXPECT_THAT(
+      [&] { AlignIcp(scan, tree, model_normals, Eigen::Isometry3d::Identity(), options, too_few); },
+      ::testing::ThrowsMessage<InputError>(HasSubstr("one normal per source and target point")));
+}
+
 TEST(IcpTest, RejectsBadOptionsAndInput) {
   IcpOptions options;
   options.max_correspondence_distance_mm = 0.0;

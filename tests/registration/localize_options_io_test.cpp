@@ -73,7 +73,8 @@ verification_cell_relative: 0.4
 run_icp: false
 icp: {metric: point_to_point, kernel: huber, kernel_scale_mm: 0.7, min_kernel_scale_mm: 0.3,
       max_correspondence_distance_mm: 9, max_iterations: 25, translation_tolerance_mm: 0.002,
-      rotation_tolerance_rad: 0.00002, min_correspondences: 8, covariance_block_mm: 7.5}
+      rotation_tolerance_rad: 0.00002, min_correspondences: 8, covariance_block_mm: 7.5,
+      max_normal_angle_rad: 0.6}
 icp_max_distance_relative: 0.04
 icp_covariance_block_relative: 0.03
 icp_rounds: 3
@@ -183,6 +184,7 @@ TEST(ReadLocalizeOptions, EveryKeyReachesItsField) {
   EXPECT_EQ(o.icp.rotation_tolerance_rad, 0.00002);
   EXPECT_EQ(o.icp.min_correspondences, 8u);
   EXPECT_EQ(o.icp.covariance_block_mm, 7.5);
+  EXPECT_EQ(o.icp.max_normal_angle_rad, 0.6);
   EXPECT_EQ(o.icp_max_distance_relative, 0.04);
   EXPECT_EQ(o.icp_covariance_block_relative, 0.03);
   EXPECT_EQ(o.icp_rounds, 3);
