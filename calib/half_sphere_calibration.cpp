@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/pose_covariance.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -324,7 +325,7 @@ StaticEdge HalfSphereEdge(const HalfSphereCalibrationResult& result, const std::
 }
 
 std::string HalfSphereCalibrationResult::Summary() const {
-  const Eigen::Vector3d r = fit.RotationSigmaDeg(), t = fit.TranslationSigmaMm();
+  const Eigen::Vector3d r = RotationSigmaDeg(covariance), t = TranslationSigmaMm(covariance);
   char buf[300];
   std::snprintf(buf, sizeof buf,
                 "handling_base_from_sweep over %zu spheres: rms %.4f mm, max %.4f mm, chi2/dof "

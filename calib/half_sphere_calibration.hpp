@@ -59,6 +59,8 @@ struct SphereTouches {
   std::string frame = "handling_base";     ///< Frame of the points.
   double stated_sigma_mm = 0.05;           ///< Per-axis 1-sigma of a touch point, mm.
   std::optional<double> sphere_radius_mm;  ///< Nominal sphere radius, if stated.
+  /// The spheres' radius tolerance, +- mm about sphere_radius_mm (a ball's grade), if stated.
+  std::optional<double> sphere_radius_tolerance_mm;
   std::optional<Eigen::Isometry3d> handling_flange_from_tool_tip;  ///< Pointing tool, if stated.
   std::vector<SphereTouch> touches;
 };
@@ -142,6 +144,16 @@ struct HalfSphereSweepOptions {
   double radius_mm = 0;       ///< Nominal sphere radius (> 0); 0: the touches' sphere_radius_mm.
   bool free_radius = false;   ///< Fit each sphere's radius instead of fixing it to radius_mm.
   double touch_sigma_mm = 0;  ///< Per-axis 1-sigma of a touch (> 0); 0: stated_sigma_mm.
+  /// +- tolerance of each sphere's true radius about the nominal one, mm; < 0: the touches
+  /// file's sphere_radius_tolerance_mm (none stated: 0). With the radius fixed, a sphere whose
+  /// radius is off by dr moves its fitted centre towards the seen cap, c += (sum u u^T)^-1
+  /// sum u dr (the fit's normal equations, u the unit directions to its points), and its touched
+  /// centre (touch - r up) by dr up; the two cancel only for a cap seen along `up`. Each
+  /// sphere's dr is taken uniform within the tolerance (1 sigma = tol / sqrt 3) and independent
+  /// of the others; the calibration's response to each (the rigid fit redone at +-1 sigma) is
+  /// added to its covariance (radius_covariance). Not used with free_radius (the radius is
+  /// fitted).
+  double radius_tolerance_mm = -1;
   /// Direction against gravity in handling_base (HalfSphereCalibrationOptions).
   Eigen::Vector3d up_in_handling_base = Eigen::Vector3d::UnitZ();
   /// Appended to the failure when no sphere is found, e.g. the cloud reader's unit hint
@@ -173,8 +185,12 @@ struct HalfSphereSweepResult {
   /// The calibration (when calibrated); its warnings include the matched spheres' fit warnings,
   /// as "sphere N: ...".
   HalfSphereCalibrationResult calibration;
-  double radius_mm = 0;       ///< Radius used (option or touches file).
-  double touch_sigma_mm = 0;  ///< Touch sigma used (option or touches file).
+  double radius_mm = 0;            ///< Radius used (option or touches file).
+  double touch_sigma_mm = 0;       ///< Touch sigma used (option or touches file).
+  double radius_tolerance_mm = 0;  ///< Radius tolerance used (option or touches file; 0: none).
+  /// The radius tolerance's share of calibration.covariance (HalfSphereSweepOptions::
+  /// radius_tolerance_mm; zero without one or with free radii).
+  Matrix6d radius_covariance = Matrix6d::Zero();
   Eigen::Vector3d up_in_handling_base = Eigen::Vector3d::UnitZ();  ///< Normalized.
   /// With options.point_displacements: column k is the left perturbation [rotvec (rad);
   /// translation (mm)] of handling_base_from_sweep at the sensor's mode k (+1 sigma); 0 columns

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "core/json_io.hpp"
+#include "core/pose_covariance.hpp"
 
 namespace lasercell::calib {
 namespace {
@@ -40,7 +41,8 @@ nlohmann::json SphereJson(const HalfSphereResidual& s, const SphereFitResult& f)
 void AddResultTable(report::HtmlReport& rep, const HalfSphereSweepResult& run,
                     const std::string& sweep_frame) {
   const HalfSphereCalibrationResult& r = run.calibration;
-  const Eigen::Vector3d rs = r.fit.RotationSigmaDeg(), ts = r.fit.TranslationSigmaMm();
+  const Eigen::Vector3d rs = RotationSigmaDeg(r.covariance), ts = TranslationSigmaMm(r.covariance);
+  const Eigen::Vector3d radius_ts = TranslationSigmaMm(run.radius_covariance);
   const Eigen::Vector3d& up = run.up_in_handling_base;
   rep.AddKeyValues({
       {"handling_base_from_" + sweep_frame, PoseToFileNotation(r.handling_base_from_sweep)},
@@ -50,6 +52,11 @@ void AddResultTable(report::HtmlReport& rep, const HalfSphereSweepResult& run,
       {"residual rms (mm)", Num(r.fit.rms_mm)},
       {"chi2 / dof", Num(r.fit.chi2, "%.3g") + " / " + std::to_string(r.fit.dof)},
       {"touch sigma (mm, per axis)", Num(run.touch_sigma_mm)},
+      {"sphere radius tolerance (mm, +-)",
+       run.radius_tolerance_mm > 0
+           ? Num(run.radius_tolerance_mm) + "; its share of the translation 1-sigma " +
+                 Num(radius_ts.x()) + ", " + Num(radius_ts.y()) + ", " + Num(radius_ts.z())
+           : std::string("none stated")},
       {"up in handling_base",
        Num(up.x(), "%.3f") + ", " + Num(up.y(), "%.3f") + ", " + Num(up.z(), "%.3f")},
       {"correspondence", "rms " + Num(r.match_rms_mm) + " mm; runner-up " +
@@ -103,7 +110,7 @@ nlohmann::json HalfSphereResultJson(const HalfSphereSweepResult& run,
   j["edge"] = {{"parent", "handling_base"}, {"child", inputs.sweep_frame}};
   j["handling_base_from_" + inputs.sweep_frame] = json::Pose(r.handling_base_from_sweep);
   j["pose"] = json::Pose(r.handling_base_from_sweep);
-  j["sigma"] = json::Sigma(r.fit.covariance);
+  j["sigma"] = json::Sigma(r.covariance);
   std::vector<double> cov(r.covariance.data(), r.covariance.data() + 36);
   j["covariance"] = {{"order", "[rotation vector (rad); translation (mm)], left perturbation"},
                      {"values", cov}};
@@ -113,6 +120,8 @@ nlohmann::json HalfSphereResultJson(const HalfSphereSweepResult& run,
   j["match_rms_mm"] = r.match_rms_mm;
   j["runner_up_match_rms_mm"] = r.runner_up_match_rms_mm;
   j["touch_sigma_mm"] = run.touch_sigma_mm;
+  j["radius_tolerance_mm"] = run.radius_tolerance_mm;
+  j["radius_sigma"] = json::Sigma(run.radius_covariance);
   j["up_in_handling_base"] = json::Vector(run.up_in_handling_base);
   j["inputs"] = {{"cell", inputs.cell},
                  {"sweep", inputs.sweep},

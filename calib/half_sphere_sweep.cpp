@@ -1,6 +1,7 @@
 // CalibrateHalfSpheresInSweep: the composition of segmentation (sphere_segmentation.hpp) and
 // calibration (half_sphere_calibration.hpp) that `lasercell calibrate spheres` runs.
 #include <Eigen/Cholesky>
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -79,6 +80,44 @@ Eigen::Matrix<double, 6, Eigen::Dynamic> ModeResponse(const PointCloud& sweep,
   return out;
 }
 
+// The radius tolerance's share of the calibration's covariance (HalfSphereSweepOptions::
+// radius_tolerance_mm): per matched sphere, its true radius `sigma` larger moves the fitted
+// centre by SphereResponse with every point pushed out by sigma along u, and the touched centre
+// by sigma up; the rigid fit is redone at +-1 sigma (central difference), and the spheres'
+// independent responses are squared and summed.
+Matrix6d RadiusCovariance(const PointCloud& sweep, const HalfSphereSweepResult& run,
+                          const std::vector<SphereTouch>& touches,
+                          const HalfSphereCalibrationOptions& options, double sigma) {
+  const std::vector<SweptSphere> swept = SweptSpheresFrom(run.segmentation);
+  const Eigen::Isometry3d base_inverse = run.calibration.handling_base_from_sweep.inverse();
+  const Eigen::Vector3d up = options.up_in_handling_base.normalized();
+  Matrix6d covariance = Matrix6d::Zero();
+  for (const HalfSphereResidual& matched : run.calibration.spheres) {
+    const SegmentedSphere& sphere = run.segmentation.spheres[matched.swept];
+    const auto outward = [&](std::size_t i) {
+      Eigen::Matrix<double, 3, Eigen::Dynamic> dp(3, 1);
+      dp.col(0) = sigma * (sweep.positions[i] - sphere.fit.center).normalized();
+      return dp;
+    };
+    const Eigen::Vector3d shift = SphereResponse(sweep, sphere, 1, outward).col(0).head<3>();
+    Vector6d xi[2];
+    for (int side = 0; side < 2; ++side) {
+      const double sign = side == 0 ? 1.0 : -1.0;
+      std::vector<SweptSphere> moved = swept;
+      moved[matched.swept].center_in_sweep += sign * shift;
+      std::vector<SphereTouch> touched = touches;
+      for (SphereTouch& t : touched) {
+        if (t.sphere == matched.sphere) t.point_in_handling_base += sign * sigma * up;
+      }
+      const HalfSphereCalibrationResult r = CalibrateHalfSpheres(moved, touched, options);
+      xi[side] = RotationVectorTranslation(r.handling_base_from_sweep * base_inverse);
+    }
+    const Vector6d column = 0.5 * (xi[0] - xi[1]);
+    covariance += column * column.transpose();
+  }
+  return covariance;
+}
+
 }  // namespace
 
 HalfSphereSweepResult CalibrateHalfSpheresInSweep(const PointCloud& sweep,
@@ -95,6 +134,14 @@ HalfSphereSweepResult CalibrateHalfSpheresInSweep(const PointCloud& sweep,
   }
   run.touch_sigma_mm =
       options.touch_sigma_mm > 0 ? options.touch_sigma_mm : touches.stated_sigma_mm;
+  if (!std::isfinite(options.radius_tolerance_mm)) {
+    throw OptionError(
+        "HalfSphereSweepOptions.radius_tolerance_mm must be finite (< 0: the "
+        "touches file's)");
+  }
+  run.radius_tolerance_mm = options.radius_tolerance_mm >= 0
+                                ? options.radius_tolerance_mm
+                                : touches.sphere_radius_tolerance_mm.value_or(0.0);
 
   // Segmentation: the spheres in the sweep, radius fixed unless asked otherwise.
   SphereSegmentationOptions seg_options;
@@ -129,6 +176,11 @@ HalfSphereSweepResult CalibrateHalfSpheresInSweep(const PointCloud& sweep,
     for (const auto& w : seg.spheres[s.swept].fit.warnings) {
       run.calibration.warnings.push_back("sphere " + std::to_string(s.sphere) + ": " + w);
     }
+  }
+  if (!options.free_radius && run.radius_tolerance_mm > 0) {
+    run.radius_covariance = RadiusCovariance(sweep, run, touches.touches, calibration,
+                                             run.radius_tolerance_mm / std::sqrt(3.0));
+    run.calibration.covariance += run.radius_covariance;
   }
   if (options.point_displacements) {
     run.mode_response = ModeResponse(sweep, run, touches.touches, calibration, options);

@@ -7,6 +7,7 @@
 //   handling_flange_from_tool_tip: {translation_mm: [..], rotation_wxyz: [..]}   (optional)
 //   stated_sigma_mm: 0.05                                                        (optional)
 //   sphere_radius_mm: 25                                                         (optional)
+//   sphere_radius_tolerance_mm: 0.05    # +- about sphere_radius_mm              (optional)
 //   touches:
 //     - {sphere: 0, point_in_handling_base: [x, y, z], joints_rad: [..] or null}
 // Read through yaml::Fields: unknown fields are errors with the line (a `*_m` or `*_deg` field
@@ -16,6 +17,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 #include "calib/half_sphere_calibration.hpp"
@@ -77,7 +79,7 @@ SphereTouches ParseTouchesYaml(const std::string& text, const std::string& name)
   }
   yaml::Fields top(root, "", name, yaml::ErrorKind::kFile);
   top.Known({"format", "version", "robot", "frame", "handling_flange_from_tool_tip",
-             "stated_sigma_mm", "sphere_radius_mm", "touches"});
+             "stated_sigma_mm", "sphere_radius_mm", "sphere_radius_tolerance_mm", "touches"});
   top.Done();
   top.RequireFormat("lasercell.touches", 1);
   SphereTouches t;
@@ -90,6 +92,16 @@ SphereTouches ParseTouchesYaml(const std::string& text, const std::string& name)
   }
   double radius = 0;
   if (top.ReadMillimetres("sphere_radius_mm", &radius, 1.0)) t.sphere_radius_mm = radius;
+  double tolerance = 0;
+  if (top.Read("sphere_radius_tolerance_mm", &tolerance)) {
+    if (!(tolerance >= 0 && tolerance <= 0.1 * t.sphere_radius_mm.value_or(1e9) &&
+          std::isfinite(tolerance))) {
+      top.Fail("sphere_radius_tolerance_mm",
+               "must be >= 0 mm and at most a tenth of sphere_radius_mm (got " +
+                   std::to_string(tolerance) + ")");
+    }
+    t.sphere_radius_tolerance_mm = tolerance;
+  }
   Eigen::Isometry3d tool;
   if (top.ReadPose("handling_flange_from_tool_tip", &tool)) t.handling_flange_from_tool_tip = tool;
   if (!top.Has("touches")) {

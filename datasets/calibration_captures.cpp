@@ -241,7 +241,12 @@ std::string TouchesRecordYaml(const SimConfig& config, const std::vector<Touch>&
     << "robot: handling_robot\nframe: handling_base\n"
     << "handling_flange_from_tool_tip: " << PoseToFileNotation(PointingTool(config.touches))
     << "\nstated_sigma_mm: " << Num(config.touches.sigma_mm)
-    << "\nsphere_radius_mm: " << Num(config.spheres.radius_mm) << "\ntouches:\n";
+    << "\nsphere_radius_mm: " << Num(config.spheres.radius_mm) << "\n";
+  // The spheres' grade: what their maker states, not the radii drawn within it.
+  if (config.sphere_radius_tolerance_mm > 0) {
+    o << "sphere_radius_tolerance_mm: " << Num(config.sphere_radius_tolerance_mm) << "\n";
+  }
+  o << "touches:\n";
   for (const Touch& t : touches) {
     o << "  - sphere: " << t.sphere
       << "\n    point_in_handling_base: " << Vec(t.measured_in_handling_base)

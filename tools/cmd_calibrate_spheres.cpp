@@ -1,7 +1,7 @@
 // `lasercell calibrate spheres --cell CELL.yaml (--sweep SWEEP.ply | --profiles SPHERES.lcp
 //  --camera CAM.cameramodel --velocity-mm-s VX,VY,VZ [--t0-ns T0] [--laser NAME])
 //  --touches touches.yaml [--radius-mm R] [--free-radius] [--sweep-frame NAME] [--touch-sigma-mm S]
-//  [--up X,Y,Z]
+//  [--radius-tolerance-mm T] [--up X,Y,Z]
 //  [--report FILE.html] [--json FILE.json]`
 //
 // Half-sphere calibration (Skotheim et al. 2012, calibration step 3): segments the half spheres
@@ -138,6 +138,10 @@ void AddCalibrateSpheresCommand(CLI::App& calibrate) {
                   "linear sweep)");
   cmd->add_option("--touch-sigma-mm", a->options.touch_sigma_mm,
                   "Per-axis 1-sigma of a touch (default: the file's stated_sigma_mm)");
+  cmd->add_option("--radius-tolerance-mm", a->options.radius_tolerance_mm,
+                  "+- tolerance of the spheres' radii about the nominal one, counted in the "
+                  "covariance (default: the file's sphere_radius_tolerance_mm, else none)")
+      ->check(CLI::NonNegativeNumber);
   cmd->add_option("--up", a->up, "Up (against gravity) in handling_base, X,Y,Z (default 0,0,1)")
       ->delimiter(',')
       ->expected(3);

@@ -3,6 +3,7 @@
 // Simulation profile: ideal (DefaultSphereSweep, tests/calib/sphere_sweep_sim.hpp).
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdio>
 #include <string>
 
@@ -119,6 +120,62 @@ TEST(CalibrateHalfSpheresInSweep, ModeResponseFollowsThePointsMovedByEachMode) {
               ::testing::PrintToString(brute.transpose().eval()).c_str());
   EXPECT_GT(brute.tail<3>().norm(), 0.01);  // the mode moves the placement measurably
   EXPECT_LT((run.mode_response.col(2) - brute).norm(), 0.05 * brute.norm());
+}
+
+// The radius tolerance's term against spheres that really are bigger: each sphere's inlier
+// points pushed out by 0.05 mm along their fit's radial direction (a sphere 0.05 mm larger
+// there) and its touch raised by as much, recalibrated; the squared pose changes, summed over
+// the spheres and scaled to 1 sigma of the tolerance, are the term.
+TEST(CalibrateHalfSpheresInSweep, RadiusToleranceCountsSpheresThatAreBiggerThanStated) {
+  const testing::SimulatedSphereSweep& sim = testing::DefaultSphereSweep();
+  SphereTouches touches = TouchesOf(sim);
+  const HalfSphereSweepResult plain = CalibrateHalfSpheresInSweep(sim.cloud, touches, {});
+  ASSERT_TRUE(plain.calibrated) << plain.failure;
+  EXPECT_EQ(plain.radius_tolerance_mm, 0.0);  // none stated
+  EXPECT_TRUE(plain.radius_covariance.isZero());
+  touches.sphere_radius_tolerance_mm = 0.05;
+  const HalfSphereSweepResult run = CalibrateHalfSpheresInSweep(sim.cloud, touches, {});
+  ASSERT_TRUE(run.calibrated) << run.failure;
+  EXPECT_EQ(run.radius_tolerance_mm, 0.05);
+  EXPECT_TRUE(run.calibration.covariance.isApprox(
+      plain.calibration.covariance + run.radius_covariance, 1e-12));
+
+  const double step = 0.05, sigma = 0.05 / std::sqrt(3.0);
+  const Eigen::Isometry3d base_inverse = plain.calibration.handling_base_from_sweep.inverse();
+  Matrix6d expected = Matrix6d::Zero();
+  for (const HalfSphereResidual& matched : plain.calibration.spheres) {
+    const SegmentedSphere& s = plain.segmentation.spheres[matched.swept];
+    PointCloud bigger = sim.cloud;
+    for (std::size_t j = 0; j < s.indices.size(); ++j) {
+      Eigen::Vector3d& p = bigger.positions[s.indices[j]];
+      p += step * (p - s.fit.center).normalized();
+    }
+    SphereTouches raised = TouchesOf(sim);
+    for (SphereTouch& t : raised.touches) {
+      if (t.sphere == matched.sphere) t.point_in_handling_base.z() += step;
+    }
+    const HalfSphereSweepResult moved = CalibrateHalfSpheresInSweep(bigger, raised, {});
+    ASSERT_TRUE(moved.calibrated) << moved.failure;
+    const Vector6d xi =
+        RotationVectorTranslation(moved.calibration.handling_base_from_sweep * base_inverse) *
+        (sigma / step);
+    expected += xi * xi.transpose();
+  }
+  // Within 10 %: the term is first order, the recalibration re-segments and refits (on this
+  // sweep the largest difference, along z, was 5.4 %).
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_NEAR(std::sqrt(run.radius_covariance(k, k)), std::sqrt(expected(k, k)),
+                0.1 * std::sqrt(expected(k, k)) + 1e-7)
+        << "coordinate " << k;
+  }
+  EXPECT_GT(run.radius_covariance.diagonal().tail<3>().maxCoeff(), 1e-6);  // not nothing
+
+  HalfSphereSweepOptions options;
+  options.radius_tolerance_mm = 0.0;  // the option overrides the file
+  EXPECT_TRUE(CalibrateHalfSpheresInSweep(sim.cloud, touches, options).radius_covariance.isZero());
+  options.free_radius = true;  // fitted radii: nothing to add
+  options.radius_tolerance_mm = -1;
+  EXPECT_TRUE(CalibrateHalfSpheresInSweep(sim.cloud, touches, options).radius_covariance.isZero());
 }
 
 TEST(CalibrateHalfSpheresInSweep, NoSphereInTheSweepIsReportedNotThrown) {
