@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "datasets/form_deviation.hpp"
 #include "localize/cad_import.hpp"
 
 namespace lasercell::datasets {
@@ -290,7 +291,7 @@ localize::GraspFrame GraspFrameOf(const PartGrasp& g, const std::string& where) 
 
 }  // namespace
 
-localize::PartDefinition SeatPartDefinition(const ChairSeat& seat) {
+localize::PartDefinition SeatPartDefinition(const ChairSeat& seat, const ChairSeat* rendered) {
   localize::PartDefinition part;
   part.name = "seat";
   part.model = "seat.stl";
@@ -299,6 +300,10 @@ localize::PartDefinition SeatPartDefinition(const ChairSeat& seat) {
   // The gripper engages the boss: its position is read from the boss and the shell within
   // 2.5 boss radii (80 mm), where a warp of the moulded shell has not yet built up.
   part.grasps.back().refine_radius_mm = 2.5 * seat.boss_radius_mm;
+  if (rendered != nullptr) {
+    const double rms = MeasureMeshDeviation(rendered->part.mesh, seat.part.mesh).rms_mm;
+    if (rms > 1e-6) part.form_deviation.rms_mm = std::ceil(rms * 100.0) / 100.0;
+  }
   return part;
 }
 

@@ -134,8 +134,13 @@ CadChairPart MakeArmrest(const ArmrestOptions& options = {});
 PartGrasp SeatHoleGrasp(const ChairSeat& seat);
 
 /// The seat's part file (localize/part.hpp): model "seat.stl" in mm beside the part file, grasp
-/// "hole" (SeatHoleGrasp); no stable poses (the seat scenes tilt it by up to 25 deg).
-localize::PartDefinition SeatPartDefinition(const ChairSeat& seat);
+/// "hole" (SeatHoleGrasp); no stable poses (the seat scenes tilt it by up to 25 deg). `seat` is
+/// the CAD; when the part the sensor sees (`rendered`) differs from it, the file states the
+/// form deviation an inspection of it against the CAD would report: the RMS distance of its
+/// mesh's vertices from the CAD surface (MeasureMeshDeviation), rounded up to 0.01 mm, and the
+/// default correlation length (the simulator does not measure one).
+localize::PartDefinition SeatPartDefinition(const ChairSeat& seat,
+                                            const ChairSeat* rendered = nullptr);
 
 /// A CAD part's part file: model "<name>.step" beside the part file (no units: the STEP file
 /// carries them), its grasps, and the up axis of each rest orientation as a stable pose (the

@@ -369,7 +369,8 @@ void WriteCommonTruth(const SimConfig& config, const CellTruth& truth,
   out.Write("truth/sim_config.yaml", SimConfigToYaml(config));
   if (config.write_meshes) {
     out.WriteMesh("seat", truth.seat_cad.part.mesh);
-    out.Write("models/seat.part.yaml", localize::PartFileYaml(SeatPartDefinition(truth.seat_cad)));
+    out.Write("models/seat.part.yaml",
+              localize::PartFileYaml(SeatPartDefinition(truth.seat_cad, &truth.seat)));
     out.WriteMesh("pallet", MakePallet().mesh);
     out.WriteMesh("sphere_targets", SphereTargetsMesh(truth));
   }

@@ -244,7 +244,7 @@ SimulationReport SimulatePallets(const SimConfig& config_in, int scenes, const s
   for (const PalletPart& part : parts) {
     out.WriteMesh(part.name, part.name == "seat" ? truth.seat_cad.part.mesh : part.geometry.mesh);
   }
-  out.WritePart(SeatPartDefinition(truth.seat_cad));
+  out.WritePart(SeatPartDefinition(truth.seat_cad, &truth.seat));
   out.WriteMesh("pallet", MakePallet().mesh);
   report.files = out.files();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -7,6 +7,7 @@
 
 #include "calib/camera_model.hpp"
 #include "core/error.hpp"
+#include "core/format.hpp"
 #include "core/json_io.hpp"
 #include "core/provenance.hpp"
 #include "registration/localization_json.hpp"
@@ -282,6 +283,13 @@ JobResult JobRunner::Run(const triangulation::ProfileSet& profiles,
   std::vector<PartRequest> requests;
   for (std::size_t i = 0; i < job_.parts.size(); ++i) {
     requests.push_back({&(*models_)[i], job_.parts[i].instances});
+    const FormDeviation& form = job_.parts[i].part.form_deviation;
+    if (form.rms_mm > 0.0) {
+      result.notes.push_back(
+          "part '" + job_.parts[i].part.name + "': its form deviation from the " + "model (" +
+          FormatFixed(form.rms_mm, 2) + " mm RMS over " + FormatFixed(form.correlation_mm, 0) +
+          " mm) is in the pose covariances");
+    }
   }
   result.parts =
       LocalizeParts(result.sweep.cloud, LinesOfSight(result.sweep), requests, parts_options);

@@ -352,6 +352,10 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
     lo.orient_normals = false;  // oriented along each point's own line of sight above
     lo.viewpoint = registration::Viewpoint::AlongDirection(view_direction);
     lo.verification.constraints = ConstraintsFor(model.part, options.support);
+    if (model.part.form_deviation.rms_mm > 0.0) {  // the part file's inspection wins
+      lo.icp.model_error_sigma_mm = model.part.form_deviation.rms_mm;
+      lo.icp.model_error_length_mm = model.part.form_deviation.correlation_mm;
+    }
     for (int k = 0; k < request.instances; ++k) {
       const auto search_start = Clock::now();
       if (remaining.size() < 10) {

@@ -60,11 +60,29 @@ void ReadCad(yaml::Fields& r, CadImportOptions* cad) {
   c.Done();
 }
 
+void ReadFormDeviation(yaml::Fields& r, FormDeviation* out) {
+  if (!r.Has("form_deviation")) {
+    r.Known("form_deviation");
+    return;
+  }
+  yaml::Fields f = r.Sub("form_deviation");
+  f.ReadRequired("rms_mm", &out->rms_mm);
+  f.Read("correlation_mm", &out->correlation_mm);
+  if (!(out->rms_mm >= 0.0 && out->rms_mm <= 100.0)) {
+    f.Fail("rms_mm", "must be in [0, 100] mm (the RMS of the part's surface against its model)");
+  }
+  if (!(out->correlation_mm > 0.0 && out->correlation_mm <= 1e4)) {
+    f.Fail("correlation_mm", "must be in (0, 10000] mm");
+  }
+  f.Done();
+}
+
 PartDefinition FromFields(yaml::Fields r, const std::string& path) {
   PartDefinition part;
   part.file = path;
   r.RequireFormat(kPartFormat, kPartFormatVersion, "is this a lasercell part file?");
-  r.Known({"name", "model", "units", "grasps", "stable_poses", "symmetry", "cad", "model_options"});
+  r.Known({"name", "model", "units", "grasps", "stable_poses", "symmetry", "cad", "model_options",
+           "form_deviation"});
   r.Done();  // a misspelt key is reported before the problems it causes
   r.ReadRequired("name", &part.name);
   if (!IsSnakeCase(part.name)) {
@@ -119,6 +137,7 @@ PartDefinition FromFields(yaml::Fields r, const std::string& path) {
   }
   ReadSymmetry(r, &part.symmetry);
   ReadCad(r, &part.cad);
+  ReadFormDeviation(r, &part.form_deviation);
   yaml::Fields m = r.Sub("model_options");
   registration::ReadPpfModelOptionFields(m, &part.model_options);
   part.Check();
@@ -219,6 +238,12 @@ void PartDefinition::Check() const {
   if (symmetry.kind == PartSymmetry::Kind::kDiscrete && symmetry.order < 2) {
     throw InputError(where + ": symmetry.order must be >= 2 for a discrete symmetry");
   }
+  if (!(form_deviation.rms_mm >= 0.0 && form_deviation.rms_mm <= 100.0)) {
+    throw InputError(where + ": form_deviation.rms_mm must be in [0, 100] mm");
+  }
+  if (!(form_deviation.correlation_mm > 0.0 && form_deviation.correlation_mm <= 1e4)) {
+    throw InputError(where + ": form_deviation.correlation_mm must be in (0, 10000] mm");
+  }
   try {
     cad.Check();
     model_options.Check();
@@ -269,6 +294,10 @@ std::string PartFileYaml(const PartDefinition& part) {
       out += "symmetry: {kind: discrete, axis_in_part: " + VectorYaml(part.symmetry.axis_in_part) +
              ", order: " + std::to_string(part.symmetry.order) + "}\n";
       break;
+  }
+  if (part.form_deviation.rms_mm > 0.0) {
+    out += "form_deviation: {rms_mm: " + FormatDouble(part.form_deviation.rms_mm) +
+           ", correlation_mm: " + FormatDouble(part.form_deviation.correlation_mm) + "}\n";
   }
   out += "cad:\n  sampling_step_mm: " + FormatDouble(part.cad.sampling_step_mm) +
          "\n  linear_deflection_mm: " + FormatDouble(part.cad.linear_deflection_mm) +

@@ -58,6 +58,20 @@ struct PartSymmetry {
   int order = 0;  ///< kDiscrete: poses repeat every 360/order degrees (>= 2).
 };
 
+/// How the real part departs from its model along the surface normal, as an inspection of the
+/// part against its CAD reports it (a moulded or cast part warps; a mesh's facets cut chords).
+/// The localizer does not correct it: it widens the pose covariance by it
+/// (registration::IcpOptions::model_error_sigma_mm, file comment of registration/icp.hpp).
+/// Part file key `form_deviation: {rms_mm, correlation_mm}`.
+struct FormDeviation {
+  /// RMS distance of the part's surface from the model, mm; 0 (default) = the model is exact.
+  /// In [0, 100].
+  double rms_mm = 0.0;
+  /// Length over which the deviation keeps its sign, mm (about the size of one bump of the
+  /// inspection's deviation map). In (0, 10000].
+  double correlation_mm = 20.0;
+};
+
 /// Everything a part file says, with its model path resolved.
 struct PartDefinition {
   std::string name;        ///< Lower snake case.
@@ -71,12 +85,14 @@ struct PartDefinition {
   PartSymmetry symmetry;
   CadImportOptions cad;                         ///< Sampling and tessellation of CAD and meshes.
   registration::PpfModelOptions model_options;  ///< The PPF model's build options.
+  FormDeviation form_deviation;                 ///< The part against its model.
 
   /// The grasp of this name; InputError naming the part and the known grasps when absent.
   const GraspFrame& Grasp(const std::string& grasp_name) const;
   /// Throws InputError naming `file` and the field for a bad name, duplicate grasp names, a
   /// non-unit stable axis or symmetry axis, a discrete order < 2, an unknown unit, a model with
-  /// units given for CAD (the file's own rule) or missing for a mesh, and bad options.
+  /// units given for CAD (the file's own rule) or missing for a mesh, a form deviation out of
+  /// range, and bad options.
   void Check() const;
 };
 

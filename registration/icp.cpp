@@ -249,16 +249,6 @@ double InfluenceSlope(RobustKernel kernel, double r, double sigma) {
   return 1.0;
 }
 
-// Sums of the sandwich estimator (file comment of icp.hpp) about the matched centroid c.
-struct Sandwich {
-  Matrix6d a = Matrix6d::Zero();  // sum J^T psi'(r) J: the estimator's Hessian
-  Matrix6d b = Matrix6d::Zero();  // sum J^T psi psi^T J over independent residuals (no blocks)
-  double weighted_sq = 0.0;       // sum w r^2
-  std::size_t residuals = 0;      // scalar residuals m
-  // With blocks: per group its gradient sum g = sum J^T psi and its share of a, A_g.
-  std::map<std::uint64_t, std::pair<Vector6d, Matrix6d>> groups;  // ordered: no hash order
-};
-
 // The group of source point `x`: its cube of side `block` (covariance_block_mm), packed into
 // one key (21 bits per axis, cube indices offset to stay positive for |x| < 1e6 blocks).
 std::uint64_t BlockKey(const Eigen::Vector3d& x, double block) {
@@ -267,6 +257,28 @@ std::uint64_t BlockKey(const Eigen::Vector3d& x, double block) {
     return static_cast<std::uint64_t>(std::clamp<std::int64_t>(k, 0, (1 << 21) - 1));
   };
   return (axis(x.x()) << 42) | (axis(x.y()) << 21) | axis(x.z());
+}
+
+// Sums of the sandwich estimator (file comment of icp.hpp) about the matched centroid c.
+struct Sandwich {
+  Matrix6d a = Matrix6d::Zero();  // sum J^T psi'(r) J: the estimator's Hessian
+  Matrix6d b = Matrix6d::Zero();  // sum J^T psi psi^T J over independent residuals (no blocks)
+  double weighted_sq = 0.0;       // sum w r^2
+  std::size_t residuals = 0;      // scalar residuals m
+  // With blocks: per group its gradient sum g = sum J^T psi and its share of a, A_g.
+  std::map<std::uint64_t, std::pair<Vector6d, Matrix6d>> groups;  // ordered: no hash order
+  // Declared model error: per cube its pose sensitivity s_g (icp.hpp file comment).
+  std::map<std::uint64_t, Vector6d> model_groups;
+};
+
+// Adds source point i's sensitivity to an offset of the model surface along its normal.
+void AddModelError(const IcpProblem& p, std::size_t i, const Vector6d& s_i, Sandwich* s) {
+  if (p.options.model_error_sigma_mm <= 0.0) return;
+  auto& g =
+      s->model_groups
+          .try_emplace(BlockKey(p.source[i], p.options.model_error_length_mm), Vector6d::Zero())
+          .first->second;
+  g += s_i;
 }
 
 // Adds one source point's Hessian share `a_i` and gradient `g_i` = J^T psi.
@@ -300,6 +312,7 @@ Sandwich AccumulateSandwich(const IcpProblem& p, double sigma, const Eigen::Vect
       Vector6d j;
       j << a.cross(nq), nq;
       AddResidual(p, i, slope * j * j.transpose(), (w * m.residual) * j, &s);
+      AddModelError(p, i, slope * j, &s);
       s.weighted_sq += w * m.residual * m.residual;
       s.residuals += 1;
     } else {
@@ -311,6 +324,9 @@ Sandwich AccumulateSandwich(const IcpProblem& p, double sigma, const Eigen::Vect
       Eigen::Matrix3d d_psi = w * Eigen::Matrix3d::Identity();
       if (e.squaredNorm() > 0.0) d_psi += (slope - w) * e * e.transpose() / e.squaredNorm();
       AddResidual(p, i, j.transpose() * d_psi * j, j.transpose() * (w * e), &s);
+      if (!p.target_normals.empty()) {
+        AddModelError(p, i, j.transpose() * (d_psi * p.target_normals[m.target]), &s);
+      }
       s.weighted_sq += w * e.squaredNorm();
       s.residuals += 3;
     }
@@ -369,8 +385,11 @@ void EstimateCovariance(const IcpProblem& p, IcpResult& result) {
   // A^+ B A^+, B with the small-sample factor m / (m - 6) (HC1, MacKinnon & White 1985) for
   // independent residuals or the jackknife over groups; directions A does not determine get
   // only the placeholder variance.
-  const Matrix6d b = blocks ? JackknifeScatter(s, v * inverse.asDiagonal() * v.transpose())
-                            : Matrix6d(s.b * (static_cast<double>(s.residuals) / dof));
+  Matrix6d b = blocks ? JackknifeScatter(s, v * inverse.asDiagonal() * v.transpose())
+                      : Matrix6d(s.b * (static_cast<double>(s.residuals) / dof));
+  const double sigma_f = p.options.model_error_sigma_mm;
+  for (const auto& [key, s_g] : s.model_groups)
+    b.noalias() += sigma_f * sigma_f * s_g * s_g.transpose();
   Matrix6d middle = inverse.asDiagonal() * (v.transpose() * b * v) * inverse.asDiagonal();
   for (int k = 0; k < 6; ++k) {
     if (inverse(k) == 0.0) middle(k, k) = kIcpUnobservableVariance;
@@ -407,6 +426,11 @@ void IcpOptions::Check() const {
     throw OptionError("IcpOptions.max_normal_angle_rad = " + std::to_string(max_normal_angle_rad) +
                       ": must be in [0, pi/2] rad (0 = no normal test)");
   }
+  if (!(model_error_sigma_mm >= 0.0) || !std::isfinite(model_error_sigma_mm)) {
+    throw OptionError("IcpOptions.model_error_sigma_mm = " + std::to_string(model_error_sigma_mm) +
+                      ": must be >= 0 mm (0 = the model is exact)");
+  }
+  positive(model_error_length_mm, "model_error_length_mm");
   if (!(covariance_block_mm >= 0.0) || !std::isfinite(covariance_block_mm)) {
     throw OptionError("IcpOptions.covariance_block_mm = " + std::to_string(covariance_block_mm) +
                       ": must be >= 0 mm (0 = every residual independent)");

@@ -43,6 +43,16 @@
 // largest) get the variance kIcpUnobservableVariance instead of an inverse, and
 // covariance_valid is false; so do fits with m <= 6 scalar residuals. The matrix stays finite.
 // IcpResult::residual_sigma_mm reports s above (the pooled residual scale) for information.
+// A declared model error (IcpOptions::model_error_sigma_mm > 0): the part is not its CAD (form
+// tolerance, warp, a tessellated model's chords), an error the residuals cannot show where the
+// fit absorbs it. It is modelled as an offset delta_g of the target surface along its normal,
+// the same within each cube g of side model_error_length_mm, independent between cubes, of
+// standard deviation sigma_f. The estimating equation sum_i J_i^T psi(r_i) = 0 moves by
+// -sum_{i in g} J_i^T psi'(r_i) (dr_i / d delta_g) delta_g, so the pose moves by
+// A^-1 sum_g s_g delta_g with s_g = sum_{i in g} psi'(r_i) J_i^T (point-to-plane) and
+// J_i^T dpsi_i n_q (point-to-point), and the covariance gains
+//   A^+ (sigma_f^2 sum_g s_g s_g^T) A^+
+// (first order; added to the sandwich above, which keeps the residuals' own scatter).
 
 #include <Eigen/Geometry>
 #include <cstddef>
@@ -101,6 +111,14 @@ struct IcpOptions {
   /// reported covariance hold the hole's error better but the worst errors larger
   /// (BENCHMARKS.md, "The hole's sideways position").
   double max_normal_angle_rad = 0.0;
+  /// Declared standard deviation of the target (model) surface against the real part along its
+  /// normal, mm (a form tolerance t spread uniformly: t / sqrt(3)); it adds the model-error term
+  /// of the file comment to the covariance (not to the fit). 0 (default) = the model is exact.
+  /// >= 0; point-to-point needs target normals for it.
+  double model_error_sigma_mm = 0.0;
+  /// Side of the cubes (source frame) over which the model error is one offset, mm: about the
+  /// length over which the part's deviation from its CAD keeps its sign. > 0.
+  double model_error_length_mm = 20.0;
   int threads = 1;  ///< 0 = all cores, 1 = calling thread.
   /// Throws OptionError naming the field when a value is out of range.
   void Check() const;

@@ -200,6 +200,8 @@ void ReadIcp(yaml::Fields& r, LocalizeOptions* o) {
   s.Read("min_correspondences", &i.min_correspondences);
   s.Read("covariance_block_mm", &i.covariance_block_mm);
   s.Read("max_normal_angle_rad", &i.max_normal_angle_rad);
+  s.Read("model_error_sigma_mm", &i.model_error_sigma_mm);
+  s.Read("model_error_length_mm", &i.model_error_length_mm);
   s.Done();
   r.Read("icp_max_distance_relative", &o->icp_max_distance_relative);
   r.Read("icp_covariance_block_relative", &o->icp_covariance_block_relative);

@@ -52,7 +52,8 @@ constexpr const char* kPart =
     "  max_tilt_deg: 10\n"
     "symmetry: {kind: discrete, axis_in_part: [0, 0, 1], order: 2}\n"
     "cad: {sampling_step_mm: 2}\n"
-    "model_options: {sampling_step_relative: 0.05}\n";
+    "model_options: {sampling_step_relative: 0.05}\n"
+    "form_deviation: {rms_mm: 0.17, correlation_mm: 35}\n";
 
 TEST(PartFile, EveryFieldIsReadAndWrittenBackTheSame) {
   const PartDefinition part = ParsePartFile(kPart, "/parts/block.part.yaml");
@@ -69,6 +70,8 @@ TEST(PartFile, EveryFieldIsReadAndWrittenBackTheSame) {
   EXPECT_EQ(part.symmetry.order, 2);
   EXPECT_EQ(part.cad.sampling_step_mm, 2.0);
   EXPECT_EQ(part.model_options.sampling_step_relative, 0.05);
+  EXPECT_EQ(part.form_deviation.rms_mm, 0.17);
+  EXPECT_EQ(part.form_deviation.correlation_mm, 35.0);
   EXPECT_NE(ErrorOf([&] { part.Grasp("side"); }).find("has no grasp 'side' (it has: top)"),
             std::string::npos);
 
@@ -82,6 +85,20 @@ TEST(PartFile, EveryFieldIsReadAndWrittenBackTheSame) {
   EXPECT_EQ(back.max_tilt_rad, part.max_tilt_rad);
   EXPECT_EQ(back.model_options.sampling_step_relative, 0.05);
   EXPECT_EQ(back.grasps[0].refine_radius_mm, 25.5);
+  EXPECT_EQ(back.form_deviation.rms_mm, 0.17);
+  EXPECT_EQ(back.form_deviation.correlation_mm, 35.0);
+}
+
+// Without the key the model is taken as exact, and nothing is written back for it; with only
+// rms_mm the correlation length is its default.
+TEST(PartFile, FormDeviationIsOptionalAndDefaultsToAnExactModel) {
+  const std::string head = "format: lasercell.part\nversion: 1\nname: p\nmodel: a.stl\nunits: mm\n";
+  const PartDefinition exact = ParsePartFile(head, "p.yaml");
+  EXPECT_EQ(exact.form_deviation.rms_mm, 0.0);
+  EXPECT_EQ(PartFileYaml(exact).find("form_deviation"), std::string::npos);
+  const PartDefinition warped = ParsePartFile(head + "form_deviation: {rms_mm: 0.3}\n", "p.yaml");
+  EXPECT_EQ(warped.form_deviation.rms_mm, 0.3);
+  EXPECT_EQ(warped.form_deviation.correlation_mm, FormDeviation{}.correlation_mm);
 }
 
 TEST(PartFile, BadFieldsNameTheFileAndTheField) {
@@ -121,6 +138,19 @@ TEST(PartFile, BadFieldsNameTheFileAndTheField) {
             std::string::npos);
   EXPECT_NE(error(head + "model: a.stl\nunits: mm\ncad: {sampling_step_mm: -1}\n")
                 .find("sampling_step_mm"),
+            std::string::npos);
+  EXPECT_NE(error(head + "model: a.stl\nunits: mm\nform_deviation: {rms_mm: -0.1}\n")
+                .find("field 'form_deviation.rms_mm' must be in [0, 100] mm"),
+            std::string::npos);
+  EXPECT_NE(error(head + "model: a.stl\nunits: mm\nform_deviation: {rms_mm: 0.1, "
+                         "correlation_mm: 0}\n")
+                .find("correlation_mm' must be in (0, 10000] mm"),
+            std::string::npos);
+  EXPECT_NE(
+      error(head + "model: a.stl\nunits: mm\nform_deviation: {correlation_mm: 5}\n").find("rms_mm"),
+      std::string::npos);
+  EXPECT_NE(error(head + "model: a.stl\nunits: mm\nform_deviation: {rms_mm: 0.1, sigma: 1}\n")
+                .find("sigma"),
             std::string::npos);
 }
 

@@ -93,6 +93,7 @@ struct Coverage {
 struct PatchError {
   double side_mm = 0.0;  // 0: none
   double sigma_mm = 0.0;
+  bool along_normal = false;  // the part is not its model: the offset is along the surface normal
 };
 
 void AddPatchError(const PatchError& patch, const Eigen::Vector3d& toward_sensor,
@@ -108,7 +109,8 @@ void AddPatchError(const PatchError& patch, const Eigen::Vector3d& toward_sensor
                                      std::lround(cell.z())};
     auto [it, inserted] = offsets.try_emplace(key, 0.0);
     if (inserted) it->second = offset(rng);
-    p += it->second * toward_sensor;
+    const std::size_t i = static_cast<std::size_t>(&p - cloud->positions.data());
+    p += it->second * (patch.along_normal ? cloud->normals[i] : toward_sensor);
   }
 }
 
@@ -166,6 +168,20 @@ void ExpectGaussianCoverage(const Coverage& c, const std::string& what) {
   }
 }
 
+// The band of the tests whose errors are shared by patches that the estimator's cubes do not
+// match: mean coverage 58 % to `max_mean`, 45-91 % (+-5 binomial sigmas of 100 draws) per
+// coordinate.
+void ExpectWideCoverage(const Coverage& c, double max_mean) {
+  EXPECT_EQ(c.valid, c.draws) << c.Describe();
+  if (!lasercell::test::StatisticsAsserted()) return;
+  EXPECT_GE(c.mean, 0.58) << c.Describe();
+  EXPECT_LE(c.mean, max_mean) << c.Describe();
+  for (int k = 0; k < 6; ++k) {
+    EXPECT_GE(c.within_1sigma[k], 0.45) << "coordinate " << k << ": " << c.Describe();
+    EXPECT_LE(c.within_1sigma[k], 0.91) << "coordinate " << k << ": " << c.Describe();
+  }
+}
+
 // Default options (Tukey, MAD scale floored at 0.25 mm, so the inliers' weights are ~1). The
 // noise along the line of sight projects onto the surface normals with cos(incidence): the top
 // face's residuals are ~2.5x the sides'. The plain s^2 (J^T W J)^-1 with one pooled s^2 then
@@ -216,14 +232,48 @@ TEST(IcpCovarianceTest, ErrorsSharedByPatchesNeedTheBlockCovariance) {
   blocks.covariance_block_mm = 24.0;
   const Coverage grouped = MeasureCoverage(blocks, 0.03, draws, 1500, 605, patch);
   RecordProperty("coverage_patches_blocks", grouped.Describe());
-  EXPECT_EQ(grouped.valid, grouped.draws) << grouped.Describe();
-  if (!lasercell::test::StatisticsAsserted()) return;
-  EXPECT_GE(grouped.mean, 0.58) << grouped.Describe();
-  EXPECT_LE(grouped.mean, 0.76) << grouped.Describe();
-  for (int k = 0; k < 6; ++k) {
-    EXPECT_GE(grouped.within_1sigma[k], 0.45) << "coordinate " << k << ": " << grouped.Describe();
-    EXPECT_LE(grouped.within_1sigma[k], 0.91) << "coordinate " << k << ": " << grouped.Describe();
+  ExpectWideCoverage(grouped, 0.76);
+}
+
+// A part that is not its model: every draw is another part, its surface off the model along the
+// normal by one Gaussian offset per 10 mm patch (0.1 mm RMS, the grid shifted every draw), seen
+// with 0.03 mm of noise. The residuals hide most of it (the fit follows the part's patches
+// where they agree), so the independent estimate reports sigmas several times too small. The
+// declared model error (model_error_sigma_mm = the patches' RMS, model_error_length_mm = their
+// size; its cubes are not the patches, which move every draw) must bring the coverage into the
+// band of the block test above, which has the same kind of misfit between grid and patches.
+// Measured over seeds 611-613: exact model 0.27 mean coverage (RMS error/sigma 2.7-4.1);
+// declared 0.69-0.70 (RMS error/sigma 0.83-1.08 per coordinate).
+TEST(IcpCovarianceTest, DeclaredModelErrorCoversAPartThatIsNotItsModel) {
+  const PatchError patch{10.0, 0.1, true};
+  const int draws = lasercell::test::Draws(100);
+  const Coverage exact = MeasureCoverage(IcpOptions{}, 0.03, draws, 1500, 611, patch);
+  RecordProperty("coverage_model_error_ignored", exact.Describe());
+  IcpOptions declared;
+  declared.model_error_sigma_mm = 0.1;
+  declared.model_error_length_mm = 10.0;
+  const Coverage c = MeasureCoverage(declared, 0.03, draws, 1500, 611, patch);
+  RecordProperty("coverage_model_error_declared", c.Describe());
+  if (lasercell::test::StatisticsAsserted()) {
+    EXPECT_LT(exact.mean, 0.5) << "the part's deviation should defeat the exact-model estimate: "
+                               << exact.Describe();
   }
+  ExpectWideCoverage(c, 0.80);
+}
+
+TEST(IcpCovarianceTest, ModelErrorMustBeFiniteAndNonNegativeOverAPositiveLength) {
+  IcpOptions options;
+  options.model_error_sigma_mm = -0.1;
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("model_error_sigma_mm")));
+  options.model_error_sigma_mm = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(options.Check(), OptionError);
+  options.model_error_sigma_mm = 0.1;
+  options.model_error_length_mm = 0.0;
+  EXPECT_THAT([&] { options.Check(); },
+              ::testing::ThrowsMessage<OptionError>(HasSubstr("model_error_length_mm")));
+  options.model_error_length_mm = 20.0;
+  EXPECT_NO_THROW(options.Check());
 }
 
 TEST(IcpCovarianceTest, BlockSizeMustBeFiniteAndNonNegative) {
