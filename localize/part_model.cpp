@@ -150,6 +150,16 @@ std::string PartModelSummary(const PartModel& m) {
   for (const GraspFrame& g : m.part.grasps) {
     out += "grasp " + g.name + ": part_from_grasp " + PoseToFileNotation(g.part_from_grasp) + "\n";
   }
+  const FormDeviation& form = m.part.form_deviation;
+  if (form.rms_mm > 0.0) {
+    std::snprintf(buf, sizeof buf,
+                  "form deviation from the model: %.3f mm RMS over %.0f mm (in the pose "
+                  "covariance)\n",
+                  form.rms_mm, form.correlation_mm);
+    out += buf;
+  } else {
+    out += "form deviation from the model: none stated (the model is taken as exact)\n";
+  }
   std::snprintf(buf, sizeof buf, "%s in %.1f ms; cache %s%s%s\n",
                 m.from_cache ? "loaded from the cache" : "built", m.load_ms,
                 m.cache_file.empty() ? "off" : m.cache_file.c_str(),

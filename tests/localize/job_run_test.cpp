@@ -391,6 +391,8 @@ TEST_F(SeatJob, TheCommandLineRunsTheJobAndAnswersWhereThePartIs) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("grasp hole: part_from_grasp"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("loaded from the cache"), std::string::npos) << r.out;
+  // The ideal simulation renders the CAD itself: its part file states no deviation.
+  EXPECT_NE(r.out.find("form deviation from the model: none stated"), std::string::npos) << r.out;
   r = test::RunCli("model build " + Sim() + "/models/seat.part.yaml --cache-dir " +
                    dir_->File("fresh_cache"));
   ASSERT_EQ(r.exit_code, 0) << r.err;

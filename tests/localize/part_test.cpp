@@ -207,6 +207,9 @@ TEST(PartModel, MeshPartsAreScaledToMmBuiltOnceAndThenLoadedFromTheCache) {
   EXPECT_TRUE(cached.from_cache);
   EXPECT_EQ(cached.ppf.Serialize(), built.ppf.Serialize());
   EXPECT_NE(PartModelSummary(cached).find("loaded from the cache"), std::string::npos);
+  EXPECT_NE(PartModelSummary(cached).find("form deviation from the model: 0.170 mm RMS over 35 mm"),
+            std::string::npos)
+      << PartModelSummary(cached);
   // Another option is another model, under another name.
   PartDefinition coarser = part;
   coarser.model_options.sampling_step_relative = 0.08;
