@@ -286,7 +286,7 @@ JobResult JobRunner::Run(const triangulation::ProfileSet& profiles,
     const FormDeviation& form = job_.parts[i].part.form_deviation;
     if (form.rms_mm > 0.0) {
       result.notes.push_back(
-          "part '" + job_.parts[i].part.name + "': its form deviation from the " + "model (" +
+          "part '" + job_.parts[i].part.name + "': its form deviation from the model (" +
           FormatFixed(form.rms_mm, 2) + " mm RMS over " + FormatFixed(form.correlation_mm, 0) +
           " mm) is in the pose covariances");
     }

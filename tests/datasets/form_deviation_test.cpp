@@ -27,7 +27,8 @@ TEST(ClosestPointOnTriangle, IsTheNearestPointOfTheTriangle) {
     const Eigen::Vector3d a = random_point(), b = random_point(), c = random_point();
     const Eigen::Vector3d p = 2.0 * random_point();
     const Eigen::Vector3d q = ClosestPointOnTriangle(p, a, b, c);
-    // q lies on the triangle: its barycentric coordinates are within [0, 1].
+    // q lies in the triangle's plane; the bounds below pin its distance from p to that of the
+    // triangle's nearest sample, so a point outside the triangle nearer to p would fail them.
     const Eigen::Vector3d n = (b - a).cross(c - a);
     EXPECT_NEAR(n.normalized().dot(q - a), 0.0, 1e-9);
     double best = 1e300;
