@@ -102,15 +102,9 @@ Eigen::Isometry3d EulerPose(const std::array<double, 6>& v, EulerConvention conv
   // Both conventions are R = Rz * Ry * Rx (rotations about the fixed base axes, x first);
   // Fanuc lists the angles x-first (w p r), KUKA z-first (A B C).
   const bool fanuc = convention == EulerConvention::kFanucXyzwpr;
-  const double deg = EIGEN_PI / 180.0;
-  const double rx = (fanuc ? v[3] : v[5]) * deg;
-  const double rz = (fanuc ? v[5] : v[3]) * deg;
-  const double ry = v[4] * deg;
+  const Eigen::Vector3d xyz_deg(fanuc ? v[3] : v[5], v[4], fanuc ? v[5] : v[3]);
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = (Eigen::AngleAxisd(rz, Eigen::Vector3d::UnitZ()) *
-                   Eigen::AngleAxisd(ry, Eigen::Vector3d::UnitY()) *
-                   Eigen::AngleAxisd(rx, Eigen::Vector3d::UnitX()))
-                      .toRotationMatrix();
+  pose.linear() = RotationFromFixedXyzDeg(xyz_deg);
   pose.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
   return pose;
 }

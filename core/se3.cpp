@@ -252,4 +252,27 @@ Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& src,
   return t;
 }
 
+Eigen::Matrix3d RotationFromFixedXyzDeg(const Eigen::Vector3d& xyz_deg) {
+  const Eigen::Vector3d r = xyz_deg * (EIGEN_PI / 180.0);
+  return (Eigen::AngleAxisd(r.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(r.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(r.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Vector3d FixedXyzDegFromRotation(const Eigen::Matrix3d& rotation) {
+  // R = Rz(c) Ry(b) Rx(a): R(2,0) = -sin b, R(0,0) = cos b cos c, R(1,0) = cos b sin c,
+  // R(2,1) = cos b sin a, R(2,2) = cos b cos a. atan2 keeps b exact near +-90 degrees.
+  const double cb = std::hypot(rotation(0, 0), rotation(1, 0));
+  const double b = std::atan2(-rotation(2, 0), cb);
+  double a = 0.0, c;
+  if (cb < 1e-12) {
+    c = std::atan2(-rotation(0, 1), rotation(1, 1));  // gimbal lock: a = 0 carries none
+  } else {
+    a = std::atan2(rotation(2, 1), rotation(2, 2));
+    c = std::atan2(rotation(1, 0), rotation(0, 0));
+  }
+  return Eigen::Vector3d(a, b, c) * (180.0 / EIGEN_PI);
+}
+
 }  // namespace lasercell

@@ -70,6 +70,13 @@ Eigen::Isometry3d HornRigidTransform(const std::vector<Eigen::Vector3d>& p_in_so
 /// Makes the rotation part orthonormal (nearest rotation by SVD). Used after arithmetic.
 Eigen::Isometry3d Orthonormalized(const Eigen::Isometry3d& pose);
 
+/// R = Rz(c) * Ry(b) * Rx(a) for xyz_deg = (a, b, c) in degrees: rotations about the fixed
+/// base axes, x first (Fanuc's w p r, KUKA's C B A, the robot protocol's rx ry rz).
+Eigen::Matrix3d RotationFromFixedXyzDeg(const Eigen::Vector3d& xyz_deg);
+/// The angles (a, b, c) in degrees with R = Rz(c) * Ry(b) * Rx(a), b in [-90, 90], a and c in
+/// (-180, 180]; at b = +-90 (gimbal lock) a = 0.
+Eigen::Vector3d FixedXyzDegFromRotation(const Eigen::Matrix3d& rotation);
+
 /// Skew-symmetric matrix [v]x so that [v]x w = v x w.
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v);
 

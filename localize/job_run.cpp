@@ -244,6 +244,9 @@ std::optional<JobResult> JobRunner::RunNext(triangulation::ProfileSource& source
   const double profiles_ms = MsSince(start);
   if (options_.progress) options_.progress("profiles", 1.0);
   JobResult result = Run(*profiles, source.Describe());
+  if (const std::string loss = source.LastSweepLoss(); !loss.empty()) {
+    result.notes.push_back("the sweep is incomplete: " + loss);
+  }
   result.timings.profiles_ms = profiles_ms;
   result.timings.total_ms += profiles_ms;
   return result;

@@ -18,6 +18,11 @@ void AddCalibrationBenchCommand(CLI::App& bench);
 /// Registers `bench table1` under `bench` (bench_table1.cpp).
 void AddTable1BenchCommand(CLI::App& bench);
 
+/// Registers `bench stream` under `bench` (bench_stream.cpp).
+void AddStreamBenchCommand(CLI::App& bench);
+/// Registers `bench serve` under `bench` (bench_serve.cpp).
+void AddServeBenchCommand(CLI::App& bench);
+
 /// Arguments of `lasercell bench robustness`.
 struct RobustnessBenchArgs {
   int placements = 200;  ///< Random model poses per noise level.

@@ -155,6 +155,8 @@ void AddBenchCommands(CLI::App& app) {
   AddBenchPeaksCommand(*bench);
   AddCalibrationBenchCommand(*bench);
   AddTable1BenchCommand(*bench);
+  AddStreamBenchCommand(*bench);
+  AddServeBenchCommand(*bench);
 }
 
 }  // namespace lasercell::tools

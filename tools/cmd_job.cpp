@@ -12,12 +12,15 @@
 #include "localize/job_report.hpp"
 #include "localize/job_run.hpp"
 #include "tools/commands.hpp"
+#include "triangulation/udp_stream.hpp"
 
 namespace lasercell::tools {
 namespace {
 
 struct JobArgs {
-  std::string job, out, report, cell_out;
+  std::string job, out, report, cell_out, bind = "0.0.0.0";
+  int udp_port = -1;
+  double timeout_s = 10.0;
   int threads = -1;
   bool quiet = false;
 };
@@ -27,6 +30,17 @@ void RunJobCommand(const JobArgs& args) {
   localize::JobRunOptions options;
   options.threads = args.threads;
   options.load_meshes = !args.report.empty();
+  if (args.udp_port >= 0) {
+    if (args.udp_port > 65535) throw OptionError("--udp must be a port in 0..65535");
+    if (!(args.timeout_s > 0.0)) throw OptionError("--timeout-s must be > 0");
+    triangulation::UdpSourceOptions udp;
+    udp.bind_address = args.bind;
+    udp.port = static_cast<std::uint16_t>(args.udp_port);
+    udp.idle_timeout_ms = args.timeout_s * 1000.0;
+    options.source = std::make_shared<triangulation::UdpProfileSource>(udp);
+    if (!args.quiet) std::printf("listening on %s\n", options.source->Describe().c_str());
+    std::fflush(stdout);
+  }
   const localize::JobResult result = localize::RunJob(job, options);
   json::WriteFile(args.out, localize::JobResultJson(result));
   if (!args.report.empty()) {
@@ -71,6 +85,13 @@ void AddJobCommands(CLI::App& app) {
                   "Also write a copy of the job's cell with the found parts as frames");
   run->add_option("--threads", args->threads, "Worker threads (0 = all cores; default: the job's)")
       ->check(CLI::NonNegativeNumber);
+  run->add_option("--udp", args->udp_port,
+                  "Take the sweep from this UDP port (a live sensor, or `lasercell stream "
+                  "send`) instead of the job's profile file");
+  run->add_option("--bind", args->bind, "Listen address for --udp")->capture_default_str();
+  run->add_option("--timeout-s", args->timeout_s,
+                  "With --udp: give up after this long without a datagram")
+      ->capture_default_str();
   run->add_flag("--quiet", args->quiet, "Print nothing on success");
   run->callback([args] { RunJobCommand(*args); });
 }

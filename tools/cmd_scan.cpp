@@ -143,6 +143,7 @@ void AddScanCommands(CLI::App& app) {
       ->check(CLI::NonNegativeNumber);
   tri->add_flag("--quiet", args->quiet, "No summary line");
   tri->callback([args] { RunTriangulate(*args); });
+  AddScanRecordCommand(*scan);
 }
 
 }  // namespace lasercell::tools

@@ -13,7 +13,11 @@ void AddModelCommands(CLI::App& app);         ///< model info, model build
 void AddSimulateCommands(CLI::App& app);      ///< simulate cell, simulate seat
 /// calibrate spheres (under the `calibrate` parent created in main.cpp)
 void AddCalibrateSpheresCommand(CLI::App& calibrate);
-void AddScanCommands(CLI::App& app);  ///< scan triangulate
+void AddScanCommands(CLI::App& app);  ///< scan triangulate, scan record
+/// scan record (cmd_stream.cpp), under the `scan` parent given.
+void AddScanRecordCommand(CLI::App& scan);
+void AddStreamCommands(CLI::App& app);  ///< stream send
+void AddServeCommands(CLI::App& app);   ///< serve, robot-client
 /// calibrate joints, calibrate handeye-laser (under the `calibrate` parent given).
 void AddCalibrateJointsCommands(CLI::App& calibrate);
 /// calibrate handeye (cmd_calibrate_handeye.cpp); `calibrate` is the parent subcommand.

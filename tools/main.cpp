@@ -23,6 +23,8 @@ int main(int argc, char** argv) {
   lasercell::tools::AddModelCommands(app);
   lasercell::tools::AddSimulateCommands(app);
   lasercell::tools::AddScanCommands(app);
+  lasercell::tools::AddStreamCommands(app);
+  lasercell::tools::AddServeCommands(app);
   CLI::App* calibrate = app.add_subcommand(
       "calibrate", "Calibrate the cell: camera, laser, spheres, hand-eye, joints");
   calibrate->require_subcommand(1);

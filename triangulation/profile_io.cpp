@@ -1,11 +1,11 @@
 #include "triangulation/profile_io.hpp"
 
-#include <bit>
 #include <cmath>
 #include <cstring>
 #include <limits>
 
 #include "core/error.hpp"
+#include "core/io/byte_order.hpp"
 #include "core/io/file_util.hpp"
 
 namespace lasercell::triangulation {
@@ -17,29 +17,8 @@ constexpr std::uint64_t kMaxStringBytes = 1u << 24;
 constexpr std::uint32_t kMaxColumns = 1u << 20;
 constexpr std::uint32_t kMaxJoints = 64;
 
-// Little-endian stores and loads through memcpy (alignment-free), byte-swapped on big-endian
-// hosts, so files are identical on every machine.
-template <typename T>
-void Put(std::string* out, T value) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, &value, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big) {
-    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
-  }
-  out->append(reinterpret_cast<const char*>(b), sizeof(T));
-}
-
-template <typename T>
-T Get(const char* p) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, p, sizeof(T));
-  if constexpr (std::endian::native == std::endian::big) {
-    for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(b[i], b[sizeof(T) - 1 - i]);
-  }
-  T value;
-  std::memcpy(&value, b, sizeof(T));
-  return value;
-}
+using io::GetLe;
+using io::PutLe;
 
 std::uint64_t PaddedHeaderBytes(const ProfileHeader& header) {
   const std::uint64_t raw =
@@ -48,6 +27,8 @@ std::uint64_t PaddedHeaderBytes(const ProfileHeader& header) {
 }
 
 std::string ProfileName(std::size_t index) { return "profile " + std::to_string(index); }
+
+}  // namespace
 
 void CheckProfile(const ProfileHeader& header, const Profile& profile, const std::string& what) {
   const auto columns = static_cast<std::size_t>(header.columns);
@@ -76,8 +57,6 @@ void CheckProfile(const ProfileHeader& header, const Profile& profile, const std
     }
   }
 }
-
-}  // namespace
 
 void ProfileHeader::Check(const std::string& what) const {
   if (image_width == 0 || image_height == 0) {
@@ -127,18 +106,18 @@ std::string EncodeProfileHeader(const ProfileHeader& header, std::uint64_t profi
   std::string out;
   out.reserve(header_bytes);
   out.append(kProfileMagic);
-  Put<std::uint32_t>(&out, kProfileFormatVersion);
-  Put<std::uint32_t>(&out, static_cast<std::uint32_t>(header_bytes));
-  Put<std::uint32_t>(&out, header.image_width);
-  Put<std::uint32_t>(&out, header.image_height);
-  Put<std::uint32_t>(&out, header.first_column);
-  Put<std::uint32_t>(&out, header.columns);
-  Put<std::uint32_t>(&out, header.joint_count);
-  Put<std::uint32_t>(&out, 0u);
-  Put<std::uint64_t>(&out, profile_count);
-  Put<std::uint32_t>(&out, static_cast<std::uint32_t>(header.robot.size()));
+  PutLe<std::uint32_t>(&out, kProfileFormatVersion);
+  PutLe<std::uint32_t>(&out, static_cast<std::uint32_t>(header_bytes));
+  PutLe<std::uint32_t>(&out, header.image_width);
+  PutLe<std::uint32_t>(&out, header.image_height);
+  PutLe<std::uint32_t>(&out, header.first_column);
+  PutLe<std::uint32_t>(&out, header.columns);
+  PutLe<std::uint32_t>(&out, header.joint_count);
+  PutLe<std::uint32_t>(&out, 0u);
+  PutLe<std::uint64_t>(&out, profile_count);
+  PutLe<std::uint32_t>(&out, static_cast<std::uint32_t>(header.robot.size()));
   out.append(header.robot);
-  Put<std::uint32_t>(&out, static_cast<std::uint32_t>(header.metadata.size()));
+  PutLe<std::uint32_t>(&out, static_cast<std::uint32_t>(header.metadata.size()));
   out.append(header.metadata);
   out.resize(header_bytes, '\0');
   return out;
@@ -146,12 +125,12 @@ std::string EncodeProfileHeader(const ProfileHeader& header, std::uint64_t profi
 
 namespace {
 void AppendRecordUnchecked(const Profile& profile, std::string* out) {
-  Put<std::uint64_t>(out, profile.sequence);
-  Put<std::int64_t>(out, profile.timestamp_ns);
-  for (double q : profile.joints_rad) Put<double>(out, q);
-  for (float v : profile.row_px) Put<float>(out, v);
-  for (float v : profile.intensity) Put<float>(out, v);
-  for (float v : profile.width_px) Put<float>(out, v);
+  PutLe<std::uint64_t>(out, profile.sequence);
+  PutLe<std::int64_t>(out, profile.timestamp_ns);
+  for (double q : profile.joints_rad) PutLe<double>(out, q);
+  for (float v : profile.row_px) PutLe<float>(out, v);
+  for (float v : profile.intensity) PutLe<float>(out, v);
+  for (float v : profile.width_px) PutLe<float>(out, v);
 }
 }  // namespace
 
@@ -184,22 +163,22 @@ ProfileSet DecodeProfiles(std::string_view bytes, const std::string& name) {
                std::to_string(kFixedHeaderBytes + 8));
   }
   const char* p = bytes.data();
-  const auto version = Get<std::uint32_t>(p + 8);
+  const auto version = GetLe<std::uint32_t>(p + 8);
   if (version != kProfileFormatVersion) {
     throw fail("unknown profile format version " + std::to_string(version) +
                " (this build reads version " + std::to_string(kProfileFormatVersion) +
                "); update lasercell");
   }
-  const auto header_bytes = Get<std::uint32_t>(p + 12);
+  const auto header_bytes = GetLe<std::uint32_t>(p + 12);
   ProfileSet set;
   ProfileHeader& h = set.header;
-  h.image_width = Get<std::uint32_t>(p + 16);
-  h.image_height = Get<std::uint32_t>(p + 20);
-  h.first_column = Get<std::uint32_t>(p + 24);
-  h.columns = Get<std::uint32_t>(p + 28);
-  h.joint_count = Get<std::uint32_t>(p + 32);
-  const auto flags = Get<std::uint32_t>(p + 36);
-  const auto profile_count = Get<std::uint64_t>(p + 40);
+  h.image_width = GetLe<std::uint32_t>(p + 16);
+  h.image_height = GetLe<std::uint32_t>(p + 20);
+  h.first_column = GetLe<std::uint32_t>(p + 24);
+  h.columns = GetLe<std::uint32_t>(p + 28);
+  h.joint_count = GetLe<std::uint32_t>(p + 32);
+  const auto flags = GetLe<std::uint32_t>(p + 36);
+  const auto profile_count = GetLe<std::uint64_t>(p + 40);
   if (flags != 0) {
     throw fail("unknown header flags " + std::to_string(flags) +
                " (version 1 defines none); the file was written by a newer writer");
@@ -210,7 +189,7 @@ ProfileSet DecodeProfiles(std::string_view bytes, const std::string& name) {
     if (offset + 4 > bytes.size()) {
       throw fail(std::string("truncated header: missing the length of ") + field);
     }
-    const std::uint64_t len = Get<std::uint32_t>(p + offset);
+    const std::uint64_t len = GetLe<std::uint32_t>(p + offset);
     offset += 4;
     if (len > kMaxStringBytes || offset + len > bytes.size()) {
       throw fail(std::string("truncated header: ") + field + " declares " + std::to_string(len) +
@@ -249,18 +228,18 @@ ProfileSet DecodeProfiles(std::string_view bytes, const std::string& name) {
   set.profiles.resize(profile_count);
   const char* q = p + header_bytes;
   for (Profile& prof : set.profiles) {
-    prof.sequence = Get<std::uint64_t>(q);
-    prof.timestamp_ns = Get<std::int64_t>(q + 8);
+    prof.sequence = GetLe<std::uint64_t>(q);
+    prof.timestamp_ns = GetLe<std::int64_t>(q + 8);
     q += 16;
     prof.joints_rad.resize(h.joint_count);
     for (double& v : prof.joints_rad) {
-      v = Get<double>(q);
+      v = GetLe<double>(q);
       q += 8;
     }
     for (auto* vec : {&prof.row_px, &prof.intensity, &prof.width_px}) {
       vec->resize(h.columns);
       for (float& v : *vec) {
-        v = Get<float>(q);
+        v = GetLe<float>(q);
         q += 4;
       }
     }

@@ -84,6 +84,10 @@ struct ProfileSet {
   std::vector<Profile> profiles;
 };
 
+/// Throws InputError starting with `what` when a profile does not match the header: vector
+/// lengths, an infinite row, a non-finite intensity or width.
+void CheckProfile(const ProfileHeader& header, const Profile& profile, const std::string& what);
+
 /// Bytes of one record for a header (16 + 8 * joint_count + 12 * columns).
 std::uint64_t ProfileRecordBytes(const ProfileHeader& header);
 

@@ -21,6 +21,9 @@ class ProfileSource {
   virtual std::optional<ProfileSet> NextSweep() = 0;
   /// What the source reads, for messages and result files, e.g. "file seat_000.lcp".
   virtual std::string Describe() const = 0;
+  /// What the last sweep lost on its way, in one line ("" when nothing was lost); a job keeps
+  /// it among its result's notes.
+  virtual std::string LastSweepLoss() const { return ""; }
 };
 
 /// One .lcp file (profile_io.hpp) as one sweep.

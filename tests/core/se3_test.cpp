@@ -348,3 +348,32 @@ TEST(Se3Test, PoseChecksNameTheProblem) {
 
 }  // namespace
 }  // namespace lasercell
+
+namespace lasercell {
+namespace {
+
+TEST(FixedXyzAngles, RoundTripAndMatchTheRobotConvention) {
+  // R = Rz(c) Ry(b) Rx(a): a 90 degree c turns x into y.
+  const Eigen::Matrix3d z90 = RotationFromFixedXyzDeg({0, 0, 90});
+  EXPECT_TRUE((z90 * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-12));
+  // x is applied first: Rx(90) then Rz(90) maps y to z, then z stays z.
+  const Eigen::Matrix3d xz = RotationFromFixedXyzDeg({90, 0, 90});
+  EXPECT_TRUE((xz * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitZ(), 1e-12));
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> angle(-179.0, 179.0), tilt(-89.0, 89.0);
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector3d abc(angle(rng), tilt(rng), angle(rng));
+    const Eigen::Vector3d back = FixedXyzDegFromRotation(RotationFromFixedXyzDeg(abc));
+    EXPECT_TRUE(back.isApprox(abc, 1e-9)) << abc.transpose() << " -> " << back.transpose();
+  }
+  // Gimbal lock: the angles differ but the rotation is the same.
+  for (const double b : {90.0, -90.0}) {
+    const Eigen::Matrix3d r = RotationFromFixedXyzDeg({30, b, -50});
+    const Eigen::Vector3d back = FixedXyzDegFromRotation(r);
+    EXPECT_EQ(back.x(), 0.0);
+    EXPECT_TRUE(RotationFromFixedXyzDeg(back).isApprox(r, 1e-9)) << back.transpose();
+  }
+}
+
+}  // namespace
+}  // namespace lasercell

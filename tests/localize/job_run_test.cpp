@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <string>
+#include <thread>
 
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
@@ -19,8 +20,12 @@
 #include "datasets/simulate.hpp"
 #include "datasets/simulate_records.hpp"
 #include "localize/job_report.hpp"
+#include "localize/pose_server.hpp"
+#include "localize/robot_client.hpp"
 #include "tests/cli_util.hpp"
+#include "tests/net_util.hpp"
 #include "tests/sanitizer_scale.hpp"
+#include "triangulation/udp_stream.hpp"
 
 namespace lasercell::localize {
 namespace {
@@ -308,6 +313,120 @@ TEST_F(SeatJob, TheSecondRunLoadsTheModelFromTheCacheAndGivesTheSamePose) {
   ASSERT_EQ(second.parts.instances.size(), 1u);
   EXPECT_TRUE(first.parts.instances[0].target_from_part.isApprox(
       second.parts.instances[0].target_from_part, 1e-12));
+}
+
+// The stream is a sweep source of the job: the seat's profiles sent over loopback UDP give the
+// file's pose exactly when nothing is lost; with seeded loss the job still finds the seat and
+// its result says which profiles the sweep lacks.
+TEST_F(SeatJob, ASweepStreamedOverUdpGivesTheFilesPoseAndNotesWhatItLost) {
+  const Job job = ReadJobFile(WriteJob("seat_000"));
+  JobRunOptions options;
+  options.threads = 1;
+  const JobResult from_file = RunJob(job, options);
+  ASSERT_EQ(from_file.parts.instances.size(), 1u);
+  const triangulation::ProfileSet profiles =
+      triangulation::ReadProfiles(Sim() + "/profiles/seat_000.lcp");
+  for (const double loss : {0.0, 0.02}) {
+    triangulation::UdpSourceOptions udp;
+    udp.bind_address = "127.0.0.1";
+    udp.idle_timeout_ms = 5000;
+    auto source = std::make_shared<triangulation::UdpProfileSource>(udp);
+    std::thread sender([&] {
+      triangulation::UdpSender to("127.0.0.1:" + std::to_string(source->port()));
+      triangulation::SendOptions send;
+      send.impairments.loss = loss;
+      send.impairments.seed = 8;
+      triangulation::SendSweep(to, profiles, send);
+    });
+    options.source = source;
+    const JobResult streamed = RunJob(job, options);
+    sender.join();
+    ASSERT_EQ(streamed.parts.instances.size(), 1u) << loss;
+    EXPECT_EQ(streamed.source, source->Describe());
+    const Eigen::Isometry3d a = from_file.parts.instances[0].target_from_part;
+    const Eigen::Isometry3d b = streamed.parts.instances[0].target_from_part;
+    const bool noted =
+        std::any_of(streamed.notes.begin(), streamed.notes.end(),
+                    [](const std::string& n) { return n.find("the sweep is incomplete") == 0; });
+    if (loss == 0.0) {
+      EXPECT_TRUE(a.isApprox(b, 1e-12));
+      EXPECT_FALSE(noted);
+    } else {
+      ASSERT_LT(source->last_account()->delivered, profiles.profiles.size());
+      EXPECT_TRUE(noted);
+      // A few lost profiles of ~350 leave the seat where it was, well within the 1.5 mm the
+      // file job is held to.
+      EXPECT_LT((a.translation() - b.translation()).norm(), 0.5);
+    }
+  }
+}
+
+// A pick cycle: the robot's LOOK runs the job on the seat's sweep and is answered with the
+// hole's grasp pose in handling_base; NEXT says there is no other.
+TEST_F(SeatJob, TheRobotsLookIsAnsweredWithTheHoleGrasp) {
+  const Job job = ReadJobFile(WriteJob("seat_001"));
+  JobRunOptions options;
+  options.threads = 1;
+  JobRunner runner(job, options);
+  PoseServerOptions server_options;
+  server_options.bind_address = "127.0.0.1";
+  PoseServer server(JobLookHandler(runner), server_options);
+  std::atomic<bool> stop{false};
+  std::thread serving([&] { server.Serve(stop); });
+  RobotClient robot("127.0.0.1:" + std::to_string(server.port()), false);
+  RobotRequest look;
+  look.command = RobotCommand::kLook;
+  look.request_id = 3;
+  const RobotReply reply = robot.Request(look, 60000);
+  RobotRequest next;
+  next.command = RobotCommand::kNext;
+  const RobotReply none = robot.Request(next);
+  stop = true;
+  serving.join();
+  ASSERT_EQ(reply.status, ReplyStatus::kOk);
+  EXPECT_EQ(reply.request_id, 3);
+  EXPECT_EQ(reply.part_index, 0);
+  EXPECT_EQ(reply.instance, 1);
+  EXPECT_EQ(reply.instances_left, 0);
+  const Eigen::Isometry3d hole_truth = truth_->Transform("handling_base", "seat_001") *
+                                       job.parts[0].part.Grasp("hole").part_from_grasp.ToIsometry();
+  // The frame carries um and millidegrees; the job's own bound (1.5 mm) holds through it.
+  EXPECT_LT((reply.target_from_grasp.translation() - hole_truth.translation()).norm(), 1.5);
+  EXPECT_GT(reply.position_sigma_mm, 0.0);
+  EXPECT_GT(reply.latency_ms, 0.0);
+  EXPECT_EQ(none.status, ReplyStatus::kNoMore);
+  EXPECT_EQ(server.counters().looks, 1u);
+}
+
+// `lasercell serve` and `lasercell robot-client` as processes: the server runs until the client
+// has its answers (killed then; --duration-s bounds it anyway), bad input exits 2.
+TEST_F(SeatJob, ServeAndRobotClientOnTheCommandLine) {
+  const std::string job = WriteJob("seat_000");
+  const std::string port = std::to_string(test::FreeLoopbackPort(SOCK_STREAM));
+  const std::string cli = LASERCELL_CLI, log = dir_->File("serve.log");
+  const test::CommandResult run =
+      test::RunCommand(cli + " serve " + job + " --port " + port +
+                       " --bind 127.0.0.1 --threads 1 --duration-s 60 > " + log +
+                       " 2>&1 & server=$!; for i in $(seq 200); do grep -q serving " + log +
+                       " && break; sleep 0.05; done; " + cli + " robot-client 127.0.0.1:" + port +
+                       " ping look next --ascii; echo client exit $?; kill $server; wait $server");
+  EXPECT_NE(run.out.find("client exit 0"), std::string::npos) << run.out << test::Slurp(log);
+  EXPECT_NE(run.out.find("ping: alive"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("look: ok part 0 seat instance 1"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("next: no_more"), std::string::npos) << run.out;
+  const std::string served = test::Slurp(log);
+  EXPECT_NE(served.find("LOOK from 127.0.0.1"), std::string::npos) << served;
+  EXPECT_NE(served.find("stopped: 1 connections"), std::string::npos) << served;
+  for (const auto& [args, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"serve " + job + " --port " + port + " --bind nowhere", "IPv4"},
+           {"serve " + dir_->File("none.job.yaml") + " --port " + port, "none.job.yaml"},
+           {"robot-client 127.0.0.1:" + port + " look", "cannot connect"},
+           {"robot-client 127.0.0.1:" + port + " jump", "unknown robot command"},
+           {"robot-client 127.0.0.1 look", "HOST:PORT"}}) {
+    const test::CommandResult r = test::RunCli(args);
+    EXPECT_EQ(r.exit_code, 2) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(expected), std::string::npos) << args << "\n" << r.err;
+  }
 }
 
 TEST_F(SeatJob, TwoRequestedInstancesOfOneSeatReportItOnceAndSayWhyNotTwice) {
