@@ -229,7 +229,7 @@ void PoseServer::Handle(Client& client, const RobotRequest& request) {
           outcome.message);
       if (client.grasps.empty()) {
         reply.status = outcome.status == ReplyStatus::kOk ? ReplyStatus::kNoPart : outcome.status;
-        reply.latency_ms = (NowNs() - client.sweep_taken_ns) * 1e-6;
+        if (client.sweep_taken_ns > 0) reply.latency_ms = (NowNs() - client.sweep_taken_ns) * 1e-6;
         return Reply(client, reply);
       }
       [[fallthrough]];

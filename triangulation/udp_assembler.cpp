@@ -208,10 +208,15 @@ SweepAssembler::Sweep* SweepAssembler::FindOrOpen(const Datagram& d, std::int64_
   for (auto& s : open_) {
     if (s->sensor_id == d.sensor_id && s->sweep_id == d.sweep_id) return s.get();
   }
-  const auto key = std::make_pair(d.sensor_id, d.sweep_id);
-  if (std::find(closed_.begin(), closed_.end(), key) != closed_.end()) {
-    ++counters_.stale;
-    return nullptr;
+  // A datagram of a sweep that ended is stale for 2 x sweep_timeout_ms after the sweep's last
+  // datagram (stragglers, duplicates of END); later, the same number starts a new sweep.
+  const std::int64_t stale_ns = 2 * MsToNs(options_.sweep_timeout_ms);
+  for (const ClosedSweep& c : closed_) {
+    if (c.sensor_id == d.sensor_id && c.sweep_id == d.sweep_id &&
+        now_ns - c.last_activity_ns < stale_ns) {
+      ++counters_.stale;
+      return nullptr;
+    }
   }
   if (open_.size() >= options_.max_open_sweeps) {
     // Room for the new sweep: the least recently active one ends (its account says so).
@@ -423,7 +428,7 @@ AssembledSweep SweepAssembler::Close(std::size_t index, SweepEnd end) {
   for (auto& [seq, prof] : sweep.complete) out.set.profiles.push_back(std::move(prof));
   acc.delivered = out.set.profiles.size();
   out.account = std::move(acc);
-  closed_.emplace_back(sweep.sensor_id, sweep.sweep_id);
+  closed_.push_back({sweep.sensor_id, sweep.sweep_id, sweep.last_activity_ns});
   if (closed_.size() > kRememberClosed) closed_.pop_front();
   open_.erase(open_.begin() + static_cast<std::ptrdiff_t>(index));
   ++counters_.sweeps_finished;

@@ -12,6 +12,8 @@
 //    delivered are duplicates; of a profile given up, late; both are dropped and counted.
 //  - A sweep ends when its END arrived and every profile it announces is complete, or
 //    `end_grace_ms` after its END, or when no datagram of it arrived for `sweep_timeout_ms`.
+//  - Datagrams of a sweep that ended are stale (counted, dropped) for 2 x sweep_timeout_ms after
+//    its last datagram; after that a sender may use the same sweep number again.
 //  - Each finished sweep comes with its loss account: missing sequence ranges (nothing
 //    arrived), incomplete profiles (some fragments arrived), duplicates, late fragments.
 
@@ -155,7 +157,11 @@ class SweepAssembler {
   StreamCounters counters_;
   std::vector<std::unique_ptr<Sweep>> open_;
   std::deque<AssembledSweep> ready_;  // closed to make room, not yet taken
-  std::deque<std::pair<std::uint32_t, std::uint32_t>> closed_;  // (sensor, sweep) recently ended
+  struct ClosedSweep {
+    std::uint32_t sensor_id, sweep_id;
+    std::int64_t last_activity_ns;
+  };
+  std::deque<ClosedSweep> closed_;  // recently ended
 };
 
 }  // namespace lasercell::triangulation

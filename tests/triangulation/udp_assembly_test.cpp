@@ -254,10 +254,16 @@ TEST(SweepAssembly, ASenderThatStopsMidSweepEndsItByTimeout) {
   EXPECT_EQ(sweep->account.sent_profiles, -1);
   EXPECT_EQ(sweep->account.delivered + sweep->account.incomplete.size(), 5u);
   ExpectDeliveredIdentical(sent, sweep->set);
-  // What still arrives of the ended sweep is stale, not a new sweep.
+  // What still arrives of the ended sweep is stale, not a new sweep...
   assembler.Feed(d.datagrams.back(), 501 * kMs);
   EXPECT_EQ(assembler.counters().stale, 1u);
   EXPECT_EQ(assembler.open_sweeps(), 0u);
+  // ... until twice the timeout after its last datagram: then the number starts a new sweep
+  // (a sender restarted at the same sweep number).
+  assembler.Feed(d.datagrams.front(), 999 * kMs);
+  EXPECT_EQ(assembler.counters().stale, 2u);
+  assembler.Feed(d.datagrams.front(), 1000 * kMs);
+  EXPECT_EQ(assembler.open_sweeps(), 1u);
 }
 
 TEST(SweepAssembly, MemoryStaysWithinTheReorderWindowUnderFloods) {
