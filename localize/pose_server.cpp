@@ -15,16 +15,11 @@
 
 #include "core/error.hpp"
 #include "core/net_address.hpp"
+#include "core/steady_time.hpp"
 
 namespace lasercell::localize {
 
 namespace {
-
-std::int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 constexpr std::size_t kReadChunk = 4096;
 constexpr std::size_t kMaxReadPerTurn = 64 * 1024;  // a flooding client yields to the others
@@ -82,7 +77,7 @@ LookHandler JobLookHandler(JobRunner& runner,
     if (!from) from = std::make_shared<triangulation::FileProfileSource>(runner.job().profiles);
     try {
       std::optional<triangulation::ProfileSet> sweep = from->NextSweep();
-      out.sweep_taken_ns = NowNs();
+      out.sweep_taken_ns = SteadyNowNs();
       if (!sweep) {
         out.status = ReplyStatus::kNoSweep;
         out.message = from->Describe() + " delivered no sweep";
@@ -90,7 +85,6 @@ LookHandler JobLookHandler(JobRunner& runner,
       }
       const JobResult result = runner.Run(*sweep, from->Describe());
       out.message = result.Summary();
-      out.job_ms = result.timings.run_ms;
       const std::vector<JobPart>& parts = runner.job().parts;
       for (const PartInstance& inst : result.parts.instances) {
         if (!inst.graspable) continue;
@@ -175,7 +169,7 @@ void PoseServer::Accept() {
     auto client = std::make_unique<Client>();
     client->fd = fd;
     client->peer = peer;
-    client->last_activity_ns = NowNs();
+    client->last_activity_ns = SteadyNowNs();
     clients_.push_back(std::move(client));
     ++counters_.connections;
     Log("connected " + peer);
@@ -229,7 +223,8 @@ void PoseServer::Handle(Client& client, const RobotRequest& request) {
           outcome.message);
       if (client.grasps.empty()) {
         reply.status = outcome.status == ReplyStatus::kOk ? ReplyStatus::kNoPart : outcome.status;
-        if (client.sweep_taken_ns > 0) reply.latency_ms = (NowNs() - client.sweep_taken_ns) * 1e-6;
+        if (client.sweep_taken_ns > 0)
+          reply.latency_ms = (SteadyNowNs() - client.sweep_taken_ns) * 1e-6;
         return Reply(client, reply);
       }
       [[fallthrough]];
@@ -242,7 +237,7 @@ void PoseServer::Handle(Client& client, const RobotRequest& request) {
       reply = client.grasps[client.next++];
       reply.request_id = request.request_id;
       reply.instances_left = static_cast<std::int32_t>(client.grasps.size() - client.next);
-      reply.latency_ms = (NowNs() - client.sweep_taken_ns) * 1e-6;
+      reply.latency_ms = (SteadyNowNs() - client.sweep_taken_ns) * 1e-6;
       return Reply(client, reply);
   }
 }
@@ -330,7 +325,7 @@ void PoseServer::Poll(int timeout_ms) {
   }
   // Wake in time for the nearest frame timeout.
   const std::int64_t frame_ns = static_cast<std::int64_t>(options_.frame_timeout_ms * 1e6);
-  std::int64_t now = NowNs();
+  std::int64_t now = SteadyNowNs();
   for (const auto& c : clients_) {
     if (c->in.empty()) continue;
     const std::int64_t left_ms = (c->frame_started_ns + frame_ns - now) / 1000000 + 1;
@@ -340,7 +335,7 @@ void PoseServer::Poll(int timeout_ms) {
     throw InputError(std::string("pose server: poll failed: ") + std::strerror(errno));
   }
   if (fds[0].revents & POLLIN) Accept();
-  now = NowNs();
+  now = SteadyNowNs();
   // Clients accepted just now are not in fds; only the first fds.size() - 1 are polled.
   for (std::size_t i = 1; i < fds.size(); ++i) {
     Client& c = *clients_[i - 1];

@@ -46,8 +46,7 @@ struct LookOutcome {
   /// Graspable grasps in reply order (status, part, part_index, instance, pose, sigma set).
   std::vector<RobotReply> grasps;
   std::int64_t sweep_taken_ns = 0;  ///< Steady clock when the source delivered the sweep.
-  double job_ms = 0.0;  ///< The job's own time on the sweep (triangulation + localization).
-  std::string message;  ///< For the server's log.
+  std::string message;              ///< For the server's log.
 };
 
 /// Runs a LOOK: takes a sweep, localizes, returns the grasps.

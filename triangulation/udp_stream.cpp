@@ -16,6 +16,7 @@
 
 #include "core/error.hpp"
 #include "core/net_address.hpp"
+#include "core/steady_time.hpp"
 
 namespace lasercell::triangulation {
 
@@ -24,12 +25,6 @@ namespace {
 constexpr std::size_t kBatch = 64;              // datagrams per recvmmsg / sendmmsg
 constexpr std::size_t kDatagramBuffer = 65536;  // larger than any UDP/IPv4 payload
 constexpr int kStopPollMs = 50;                 // how often a waiting receiver checks Stop()
-
-std::int64_t NowNs() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 std::string SystemError(const std::string& what) { return what + ": " + std::strerror(errno); }
 
@@ -115,7 +110,7 @@ void UdpProfileSource::ReceiveBatch() {
     }
     const int n = recvmmsg(fd_, b.headers.data(), kBatch, MSG_DONTWAIT, nullptr);
     if (n <= 0) return;  // EAGAIN: drained
-    const std::int64_t now = NowNs();
+    const std::int64_t now = SteadyNowNs();
     for (int i = 0; i < n; ++i) {
       msghdr& h = b.headers[i].msg_hdr;
       for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(&h, c)) {
@@ -135,10 +130,10 @@ void UdpProfileSource::ReceiveBatch() {
 }
 
 std::optional<AssembledSweep> UdpProfileSource::NextAssembledSweep() {
-  std::int64_t last_datagram = NowNs();
+  std::int64_t last_datagram = SteadyNowNs();
   const auto idle_ns = static_cast<std::int64_t>(options_.idle_timeout_ms * 1e6);
   while (!stop_) {
-    std::int64_t now = NowNs();
+    std::int64_t now = SteadyNowNs();
     if (auto sweep = assembler_.TakeFinished(now)) {
       last_ = sweep->account;
       return sweep;
@@ -154,7 +149,7 @@ std::optional<AssembledSweep> UdpProfileSource::NextAssembledSweep() {
     const int ready = poll(&p, 1, static_cast<int>((wait_ns + 999999) / 1000000));
     if (ready > 0) {
       ReceiveBatch();
-      last_datagram = NowNs();
+      last_datagram = SteadyNowNs();
     } else if (ready < 0 && errno != EINTR) {
       throw InputError(SystemError("receiving on " + Describe()));
     }

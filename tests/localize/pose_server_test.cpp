@@ -15,6 +15,7 @@
 #include "core/error.hpp"
 #include "core/io/byte_order.hpp"
 #include "core/se3.hpp"
+#include "core/steady_time.hpp"
 #include "localize/robot_client.hpp"
 
 namespace lasercell::localize {
@@ -115,9 +116,7 @@ class PoseServerTest : public ::testing::Test {
         [this](const RobotRequest& request) {
           ++looks_;
           LookOutcome out;
-          out.sweep_taken_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                   std::chrono::steady_clock::now().time_since_epoch())
-                                   .count();
+          out.sweep_taken_ns = SteadyNowNs();
           flange_seen_ = request.base_from_flange.has_value();
           if (empty_) {
             out.status = ReplyStatus::kNoPart;
