@@ -21,6 +21,10 @@ set(LASERCELL_OPENCV_CALIB_LIBS opencv_core opencv_imgproc opencv_calib3d opencv
 # OpenCASCADE 7.6: STEP/IGES part models (localize/cad_import, localize/cad_export) only; its
 # headers stay out of localize's public headers.
 find_package(OpenCASCADE REQUIRED)
+# Aravis 0.8: GigE Vision line-scan streams (triangulation/gige_source); its GLib headers stay out of
+# triangulation's public headers.
+find_package(PkgConfig REQUIRED)
+pkg_check_modules(ARAVIS REQUIRED IMPORTED_TARGET aravis-0.8)
 set(LASERCELL_OCCT_LIBS
   TKSTEP TKIGES TKXSBase      # STEP and IGES readers/writers, data-exchange settings
   TKMesh                      # tessellation (BRepMesh)

@@ -12,6 +12,7 @@
 #include "localize/job_report.hpp"
 #include "localize/job_run.hpp"
 #include "tools/commands.hpp"
+#include "triangulation/gige_source.hpp"
 #include "triangulation/udp_stream.hpp"
 
 namespace lasercell::tools {
@@ -20,6 +21,7 @@ namespace {
 struct JobArgs {
   std::string job, out, report, cell_out, bind = "0.0.0.0";
   int udp_port = -1;
+  triangulation::GigeSourceOptions gige;
   double timeout_s = 10.0;
   int threads = -1;
   bool quiet = false;
@@ -38,7 +40,16 @@ void RunJobCommand(const JobArgs& args) {
     udp.port = static_cast<std::uint16_t>(args.udp_port);
     udp.idle_timeout_ms = args.timeout_s * 1000.0;
     options.source = std::make_shared<triangulation::UdpProfileSource>(udp);
-    if (!args.quiet) std::printf("listening on %s\n", options.source->Describe().c_str());
+  }
+  if (!args.gige.device.empty()) {
+    if (options.source) throw OptionError("give at most one of --udp and --gige");
+    if (!(args.timeout_s > 0.0)) throw OptionError("--timeout-s must be > 0");
+    triangulation::GigeSourceOptions gige = args.gige;
+    gige.idle_timeout_ms = args.timeout_s * 1000.0;
+    options.source = std::make_shared<triangulation::GigeProfileSource>(gige);
+  }
+  if (options.source && !args.quiet) {
+    std::printf("listening on %s\n", options.source->Describe().c_str());
     std::fflush(stdout);
   }
   const localize::JobResult result = localize::RunJob(job, options);
@@ -89,8 +100,9 @@ void AddJobCommands(CLI::App& app) {
                   "Take the sweep from this UDP port (a live sensor, or `lasercell stream "
                   "send`) instead of the job's profile file");
   run->add_option("--bind", args->bind, "Listen address for --udp")->capture_default_str();
+  AddGigeOptions(run, &args->gige);
   run->add_option("--timeout-s", args->timeout_s,
-                  "With --udp: give up after this long without a datagram")
+                  "With --udp or --gige: give up after this long without a datagram or buffer")
       ->capture_default_str();
   run->add_flag("--quiet", args->quiet, "Print nothing on success");
   run->callback([args] { RunJobCommand(*args); });

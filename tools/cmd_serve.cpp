@@ -1,7 +1,8 @@
-// `lasercell serve JOB.yaml --port P [--udp PORT]`: the pose server for the handling robot
-// (localize/pose_server.hpp); each LOOK runs the job on the next sweep of a UDP stream, or on
-// the job's profile file read again. Stops on SIGINT/SIGTERM or after --duration-s.
-// `lasercell robot-client HOST:PORT look|next|ping ...`: the robot's side, for tests and by hand.
+// `lasercell serve JOB.yaml --port P [--udp PORT | --gige DEVICE]`: the pose server for the
+// handling robot (localize/pose_server.hpp); each LOOK runs the job on the next sweep of a UDP or
+// GigE Vision stream, or on the job's profile file read again. Stops on SIGINT/SIGTERM or after
+// --duration-s. `lasercell robot-client HOST:PORT look|next|ping ...`: the robot's side, for tests
+// and by hand.
 #include <CLI/CLI.hpp>
 #include <atomic>
 #include <chrono>
@@ -19,6 +20,7 @@
 #include "localize/pose_server.hpp"
 #include "localize/robot_client.hpp"
 #include "tools/commands.hpp"
+#include "triangulation/gige_source.hpp"
 #include "triangulation/udp_stream.hpp"
 
 namespace lasercell::tools {
@@ -33,6 +35,7 @@ struct ServeArgs {
   localize::PoseServerOptions server;
   int udp_port = -1;
   std::string udp_bind = "0.0.0.0";
+  triangulation::GigeSourceOptions gige;
   double sweep_wait_s = 10.0;
   double duration_s = 0.0;
   int threads = -1;
@@ -53,6 +56,12 @@ void RunServe(const ServeArgs& args) {
     udp.port = static_cast<std::uint16_t>(args.udp_port);
     udp.idle_timeout_ms = args.sweep_wait_s * 1000.0;
     source = std::make_shared<triangulation::UdpProfileSource>(udp);
+  }
+  if (!args.gige.device.empty()) {
+    if (source) throw OptionError("give at most one of --udp and --gige");
+    triangulation::GigeSourceOptions gige = args.gige;
+    gige.idle_timeout_ms = args.sweep_wait_s * 1000.0;
+    source = std::make_shared<triangulation::GigeProfileSource>(gige);
   }
   localize::PoseServer server(localize::JobLookHandler(runner, source), args.server);
   server.SetLog([](const std::string& line) {
@@ -138,9 +147,10 @@ void AddServeCommands(CLI::App& app) {
                     "Take each LOOK's sweep from this UDP port (default: the job's profile "
                     "file, read again for every LOOK)");
   serve->add_option("--udp-bind", s->udp_bind, "Listen address for --udp")->capture_default_str();
+  AddGigeOptions(serve, &s->gige);
   serve
       ->add_option("--sweep-wait-s", s->sweep_wait_s,
-                   "How long a LOOK waits for a sweep on --udp before answering no_sweep")
+                   "How long a LOOK waits for a sweep on --udp or --gige before answering no_sweep")
       ->capture_default_str();
   serve->add_option("--max-clients", s->server.max_clients, "Connections served at once")
       ->capture_default_str();

@@ -2,7 +2,8 @@
 //   `lasercell stream send FILE.lcp --to HOST:PORT [--rate HZ] [--loss P --reorder P
 //    --duplicate P --seed N]` replays a profile file as a sensor would, through seeded
 //    impairments for tests;
-//   `lasercell scan record --udp PORT --out FILE.lcp` writes the next sweep that arrives, and
+//   `lasercell scan record --udp PORT | --gige DEVICE --out FILE.lcp` writes the next sweep that
+//    arrives over UDP or from a GigE Vision line profiler (triangulation/gige_source.hpp), and
 //    its loss account.
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -12,6 +13,7 @@
 #include "core/error.hpp"
 #include "core/json_io.hpp"
 #include "tools/commands.hpp"
+#include "triangulation/gige_source.hpp"
 #include "triangulation/profile_io.hpp"
 #include "triangulation/udp_stream.hpp"
 
@@ -49,13 +51,56 @@ void RunSend(SendArgs& args) {
 
 struct RecordArgs {
   std::string out, account_json;
+  int udp_port = -1;
   triangulation::UdpSourceOptions options;
+  triangulation::GigeSourceOptions gige;
   double timeout_s = 10.0;
   bool quiet = false;
 };
 
+// Writes the recorded sweep, and its account (lasercell.stream_received) with `account`'s
+// source-specific fields, then prints the summaries.
+void WriteRecorded(const RecordArgs& args, const triangulation::ProfileSet& set,
+                   const std::string& source, nlohmann::json account, const std::string& summary,
+                   const std::string& counters) {
+  triangulation::WriteProfiles(args.out, set);
+  account["format"] = "lasercell.stream_received";
+  account["version"] = 1;
+  account["source"] = source;
+  json::WriteFile(args.account_json, account);
+  if (!args.quiet) {
+    std::printf("%s\n%s\nwrote %s\n", summary.c_str(), counters.c_str(), args.out.c_str());
+  }
+}
+
+void RunRecordGige(RecordArgs& args) {
+  args.gige.idle_timeout_ms = args.timeout_s * 1000.0;
+  triangulation::GigeProfileSource source(args.gige);
+  if (!args.quiet) std::printf("receiving from %s\n", source.Describe().c_str());
+  std::fflush(stdout);
+  auto sweep = source.NextLineScanSweep();
+  if (!sweep) {
+    throw InputError("no buffer arrived from " + source.Describe() + " within " +
+                     std::to_string(args.timeout_s) + " s; is the sensor triggered?");
+  }
+  const triangulation::GigeStreamCounters counters = source.counters();
+  WriteRecorded(args, sweep->set, source.Describe(),
+                {{"line_scan", triangulation::LineScanAccountJson(sweep->account)},
+                 {"gige_counters", triangulation::GigeStreamCountersJson(counters)}},
+                sweep->account.Summary(), counters.Summary());
+}
+
 void RunRecord(RecordArgs& args) {
   if (!(args.timeout_s > 0.0)) throw OptionError("--timeout-s must be > 0");
+  if ((args.udp_port >= 0) == !args.gige.device.empty()) {
+    throw OptionError("give exactly one of --udp PORT and --gige DEVICE");
+  }
+  if (!args.gige.device.empty()) {
+    RunRecordGige(args);
+    return;
+  }
+  if (args.udp_port > 65535) throw OptionError("--udp must be a port in 0..65535");
+  args.options.port = static_cast<std::uint16_t>(args.udp_port);
   args.options.idle_timeout_ms = args.timeout_s * 1000.0;
   triangulation::UdpProfileSource source(args.options);
   if (!args.quiet) std::printf("listening on %s\n", source.Describe().c_str());
@@ -66,17 +111,10 @@ void RunRecord(RecordArgs& args) {
                      std::to_string(args.timeout_s) +
                      " s; check the sender's destination port and the firewall");
   }
-  triangulation::WriteProfiles(args.out, sweep->set);
-  json::WriteFile(args.account_json,
-                  {{"format", "lasercell.stream_received"},
-                   {"version", 1},
-                   {"source", source.Describe()},
-                   {"sweep", triangulation::SweepAccountJson(sweep->account)},
-                   {"counters", triangulation::StreamCountersJson(source.counters())}});
-  if (!args.quiet) {
-    std::printf("%s\n%s\nwrote %s\n", sweep->account.Summary().c_str(),
-                source.counters().Summary().c_str(), args.out.c_str());
-  }
+  WriteRecorded(args, sweep->set, source.Describe(),
+                {{"sweep", triangulation::SweepAccountJson(sweep->account)},
+                 {"counters", triangulation::StreamCountersJson(source.counters())}},
+                sweep->account.Summary(), source.counters().Summary());
 }
 
 }  // namespace
@@ -116,16 +154,21 @@ void AddStreamCommands(CLI::App& app) {
 
 void AddScanRecordCommand(CLI::App& scan) {
   CLI::App* record = scan.add_subcommand(
-      "record", "Receive the next sweep of profiles over UDP and write it (.lcp)");
+      "record",
+      "Receive the next sweep of profiles over UDP or from a GigE Vision sensor and write it "
+      "(.lcp)");
   auto r = std::make_shared<RecordArgs>();
-  record->add_option("--udp", r->options.port, "UDP port to listen on")->required();
+  record->add_option("--udp", r->udp_port, "UDP port to listen on");
+  AddGigeOptions(record, &r->gige);
   record->add_option("--out", r->out, "Profile file to write (.lcp)")->required();
   record->add_option("--bind", r->options.bind_address, "Listen address")->capture_default_str();
   record
       ->add_option("--sensor-id", r->options.assembly.sensor_id,
                    "Only this sensor's datagrams (-1: any)")
       ->capture_default_str();
-  record->add_option("--timeout-s", r->timeout_s, "Give up after this long without a datagram")
+  record
+      ->add_option("--timeout-s", r->timeout_s,
+                   "Give up after this long without a datagram or buffer")
       ->capture_default_str();
   record->add_option("--account-json", r->account_json,
                      "Write the sweep's loss account and the stream counters "

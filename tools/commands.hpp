@@ -3,6 +3,8 @@
 // during app.parse() and throw lasercell errors on bad input.
 #include <CLI/CLI.hpp>
 
+#include "triangulation/gige_source.hpp"
+
 namespace lasercell::tools {
 void AddCloudCommands(CLI::App& app);         ///< cloud info, cloud convert
 void AddFramesCommands(CLI::App& app);        ///< frames show, frames get
@@ -17,7 +19,10 @@ void AddScanCommands(CLI::App& app);  ///< scan triangulate, scan record
 /// scan record (cmd_stream.cpp), under the `scan` parent given.
 void AddScanRecordCommand(CLI::App& scan);
 void AddStreamCommands(CLI::App& app);  ///< stream send
-void AddServeCommands(CLI::App& app);   ///< serve, robot-client
+/// The options of a GigE Vision line-profiler source (--gige DEVICE, --line-rate, ...), shared by
+/// scan record, job run and serve.
+void AddGigeOptions(CLI::App* app, triangulation::GigeSourceOptions* options);
+void AddServeCommands(CLI::App& app);  ///< serve, robot-client
 /// calibrate joints, calibrate handeye-laser (under the `calibrate` parent given).
 void AddCalibrateJointsCommands(CLI::App& calibrate);
 /// calibrate handeye (cmd_calibrate_handeye.cpp); `calibrate` is the parent subcommand.

@@ -109,21 +109,26 @@ std::uint64_t SweepAccount::MissingCount() const {
   return n;
 }
 
+std::string SequenceRangesText(const std::vector<SequenceRange>& ranges, std::size_t shown) {
+  std::string s;
+  for (std::size_t i = 0; i < ranges.size() && i < shown; ++i) {
+    if (i > 0) s += ", ";
+    s += std::to_string(ranges[i].first);
+    if (ranges[i].last != ranges[i].first) {
+      s += '-';
+      s += std::to_string(ranges[i].last);
+    }
+  }
+  if (ranges.size() > shown) s += ", ...";
+  return s;
+}
+
 std::string SweepAccount::Summary() const {
   std::string s = "sweep " + std::to_string(sweep_id) + " of sensor " + std::to_string(sensor_id) +
                   ": " + std::to_string(delivered) + " profiles";
   if (sent_profiles >= 0) s += " of " + std::to_string(sent_profiles) + " sent";
   s += ", " + std::to_string(MissingCount()) + " missing";
-  if (!missing.empty()) {
-    s += " (";
-    for (std::size_t i = 0; i < missing.size() && i < 4; ++i) {
-      if (i > 0) s += ", ";
-      s += std::to_string(missing[i].first);
-      if (missing[i].last != missing[i].first) s += "-" + std::to_string(missing[i].last);
-    }
-    if (missing.size() > 4) s += ", ...";
-    s += ")";
-  }
+  if (!missing.empty()) s += " (" + SequenceRangesText(missing) + ")";
   s += ", " + std::to_string(incomplete.size()) + " incomplete, " +
        std::to_string(duplicate_fragments) + " duplicate and " + std::to_string(late_fragments) +
        " late fragments";

@@ -65,6 +65,8 @@ struct SequenceRange {
   std::uint64_t last = 0;
   bool operator==(const SequenceRange&) const = default;
 };
+/// "17, 40-42, ..." (at most `shown` ranges, then "...").
+std::string SequenceRangesText(const std::vector<SequenceRange>& ranges, std::size_t shown = 4);
 
 /// What one sweep lost, and why it ended.
 struct SweepAccount {
