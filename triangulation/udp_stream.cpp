@@ -2,6 +2,7 @@
 
 #include <arpa/inet.h>
 #include <netinet/in.h>
+#include <netinet/udp.h>
 #include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -292,23 +293,74 @@ UdpSender::~UdpSender() {
   if (fd_ >= 0) close(fd_);
 }
 
+namespace {
+
+// UDP GSO limits: segments per send and bytes per send (one IPv4 datagram's worth).
+constexpr std::size_t kMaxGsoSegments = 64;
+constexpr std::size_t kMaxGsoBytes = 65000;
+
+// Runs [first, first + count) of datagrams that one GSO send may carry: equal sizes, and at most
+// one shorter datagram at the end (the kernel cuts the payload into gso_size pieces).
+std::vector<std::pair<std::size_t, std::size_t>> GsoRuns(const std::vector<const std::string*>& d,
+                                                         bool gso) {
+  std::vector<std::pair<std::size_t, std::size_t>> runs;
+  for (std::size_t i = 0; i < d.size();) {
+    const std::size_t size = d[i]->size();
+    std::size_t n = 1;
+    std::size_t bytes = size;
+    while (gso && i + n < d.size() && n < kMaxGsoSegments &&
+           bytes + d[i + n]->size() <= kMaxGsoBytes && d[i + n]->size() <= size) {
+      bytes += d[i + n]->size();
+      ++n;
+      if (d[i + n - 1]->size() < size) break;  // a shorter one ends the run
+    }
+    runs.emplace_back(i, n);
+    i += n;
+  }
+  return runs;
+}
+
+}  // namespace
+
+// Consecutive datagrams of one size go out as one send with UDP_SEGMENT (Linux >= 4.18): the
+// kernel splits it into the same datagrams, so a replay at a sensor's rate costs one system call
+// per run instead of one per datagram. A kernel without it gets one datagram per message.
 void UdpSender::Send(const std::vector<const std::string*>& datagrams) {
-  std::vector<mmsghdr> headers(datagrams.size());
+  const auto runs = GsoRuns(datagrams, gso_);
+  std::vector<mmsghdr> headers(runs.size());
   std::vector<iovec> iovs(datagrams.size());
+  constexpr std::size_t kControl = CMSG_SPACE(sizeof(std::uint16_t));
+  std::vector<char> control(runs.size() * kControl, 0);
   for (std::size_t i = 0; i < datagrams.size(); ++i) {
     iovs[i] = {const_cast<char*>(datagrams[i]->data()), datagrams[i]->size()};
-    headers[i] = mmsghdr{};
-    headers[i].msg_hdr.msg_iov = &iovs[i];
-    headers[i].msg_hdr.msg_iovlen = 1;
+  }
+  for (std::size_t r = 0; r < runs.size(); ++r) {
+    const auto [first, count] = runs[r];
+    headers[r] = mmsghdr{};
+    headers[r].msg_hdr.msg_iov = &iovs[first];
+    headers[r].msg_hdr.msg_iovlen = count;
+    if (count < 2) continue;
+    headers[r].msg_hdr.msg_control = &control[r * kControl];
+    headers[r].msg_hdr.msg_controllen = kControl;
+    cmsghdr* c = CMSG_FIRSTHDR(&headers[r].msg_hdr);
+    c->cmsg_level = IPPROTO_UDP;
+    c->cmsg_type = UDP_SEGMENT;
+    c->cmsg_len = CMSG_LEN(sizeof(std::uint16_t));
+    const auto segment = static_cast<std::uint16_t>(datagrams[first]->size());
+    std::memcpy(CMSG_DATA(c), &segment, sizeof segment);
   }
   std::size_t done = 0;
-  while (done < datagrams.size()) {
+  while (done < runs.size()) {
     const int n =
-        sendmmsg(fd_, headers.data() + done, static_cast<unsigned>(datagrams.size() - done), 0);
+        sendmmsg(fd_, headers.data() + done, static_cast<unsigned>(runs.size() - done), 0);
     if (n > 0) {
       done += static_cast<std::size_t>(n);
     } else if (errno == ECONNREFUSED) {
       ++done;  // nobody listens (yet): UDP does not wait for a receiver
+    } else if (gso_ && (errno == EINVAL || errno == EIO || errno == ENOPROTOOPT)) {
+      gso_ = false;  // the kernel or the route has no UDP GSO: one datagram per message
+      Send({datagrams.begin() + static_cast<std::ptrdiff_t>(runs[done].first), datagrams.end()});
+      return;
     } else if (errno != EINTR && errno != ENOBUFS) {
       throw FileError("udp " + address_, std::string("send failed: ") + std::strerror(errno));
     }

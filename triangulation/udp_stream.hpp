@@ -136,13 +136,16 @@ class UdpSender {
   ~UdpSender();
   UdpSender(const UdpSender&) = delete;
   UdpSender& operator=(const UdpSender&) = delete;
-  /// Sends datagrams (batched); throws FileError naming the address on a socket error.
+  /// Sends datagrams in order (batched; runs of equal-sized datagrams as one UDP GSO send where
+  /// the kernel offers it, each still its own datagram on the wire); throws FileError naming
+  /// the address on a socket error.
   void Send(const std::vector<const std::string*>& datagrams);
   const std::string& address() const { return address_; }
 
  private:
   int fd_ = -1;
   std::string address_;
+  bool gso_ = true;  // UDP_SEGMENT batching, until the kernel refuses it
 };
 
 /// Sends encoded datagrams in `order` (ImpairDatagrams), paced so that profile k leaves k /
