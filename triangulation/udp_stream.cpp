@@ -116,10 +116,14 @@ void UdpProfileSource::ReceiveBatch() {
       msghdr& h = b.headers[i].msg_hdr;
       for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr; c = CMSG_NXTHDR(&h, c)) {
         if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SO_RXQ_OVFL) {
+          // The socket's drop count when this datagram was queued; queued in order, so it
+          // only grows (a wrap of the 32-bit count is the one decrease).
           std::uint32_t dropped;
           std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
-          assembler_.AddKernelDropped(dropped - kernel_dropped_seen_);
-          kernel_dropped_seen_ = dropped;
+          if (dropped != kernel_dropped_seen_) {
+            assembler_.AddKernelDropped(static_cast<std::uint32_t>(dropped - kernel_dropped_seen_));
+            kernel_dropped_seen_ = dropped;
+          }
         }
       }
       assembler_.Feed(

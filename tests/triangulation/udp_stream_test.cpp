@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <thread>
 
 #include "core/error.hpp"
@@ -102,6 +103,45 @@ TEST(UdpProfileStream, ImpairedSendingIsAccountedExactlyOnTheWire) {
     EXPECT_EQ(got, want) << p.sequence;
   }
   EXPECT_EQ(source.counters().kernel_dropped, 0u);
+}
+
+// A receiver that does not read while a burst arrives: the OS drops what its small buffer cannot
+// hold, the counters say how many, and the account shows the lost profiles.
+TEST(UdpProfileStream, DatagramsTheOsDroppedAreCounted) {
+  UdpSourceOptions options = Loopback();
+  options.receive_buffer_bytes = 65536;
+  UdpProfileSource source(options);
+  const ProfileSet burst = MakeSweep(200, 0);
+  std::size_t sent = 0;
+  {
+    UdpSender udp("127.0.0.1:" + std::to_string(source.port()));
+    sent = SendSweep(udp, burst, {}).datagrams_sent;  // as fast as possible, nobody reading
+  }
+  // A second sweep after the burst, read as it comes: its datagrams carry the drop count.
+  std::size_t sent_late = 0;
+  std::thread late([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    UdpSender udp("127.0.0.1:" + std::to_string(source.port()));
+    SendOptions paced;
+    paced.rate_hz = 2000;
+    paced.datagram.sweep_id = 1;
+    sent_late = SendSweep(udp, MakeSweep(5, 1000), paced).datagrams_sent;
+  });
+  std::vector<AssembledSweep> got;
+  while (got.size() < 2) {
+    auto sweep = source.NextAssembledSweep();  // ends after 3 s of silence at the latest
+    if (!sweep) break;
+    got.push_back(std::move(*sweep));
+  }
+  late.join();
+  const StreamCounters& c = source.counters();
+  EXPECT_GT(c.kernel_dropped, 0u);
+  EXPECT_LE(c.datagrams + c.kernel_dropped, sent + sent_late);
+  ASSERT_EQ(got.size(), 2u);
+  const SweepAccount& burst_account =
+      got[0].account.sweep_id == 0 ? got[0].account : got[1].account;
+  EXPECT_EQ(burst_account.sweep_id, 0u);
+  EXPECT_LT(burst_account.delivered, 200u);
 }
 
 TEST(UdpProfileStream, SilenceEndsTheWaitAndStopInterruptsIt) {
