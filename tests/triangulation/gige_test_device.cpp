@@ -50,7 +50,7 @@ constexpr std::uint16_t kStatusBadAlignment = 0x8005;
 constexpr std::size_t kDiscoveryBytes = 0xf8;
 constexpr std::size_t kReadMemMaxBytes = 536;
 
-// Bootstrap registers and the fake camera's own (src/arvfakecamera.h).
+// GigE Vision bootstrap registers; the fake camera's own come from <arvfakecamera.h>.
 constexpr std::uint32_t kRegGvcpCapability = 0x0934;
 constexpr std::uint32_t kCapWriteMemory = 1u << 1;
 constexpr std::uint32_t kCapPacketResend = 1u << 2;
@@ -59,10 +59,10 @@ constexpr std::uint32_t kRegStreamPort = 0x0d00;
 constexpr std::uint32_t kRegPacketSize = 0x0d04;
 constexpr std::uint32_t kPacketSizeFireTest = 1u << 31;
 constexpr std::uint32_t kRegStreamAddress = 0x0d18;
-constexpr std::uint32_t kRegWidth = 0x100;
-constexpr std::uint32_t kRegHeight = 0x104;
-constexpr std::uint32_t kRegAcquisition = 0x124;
-constexpr std::uint32_t kRegPixelFormat = 0x128;
+constexpr std::uint32_t kRegWidth = ARV_FAKE_CAMERA_REGISTER_WIDTH;
+constexpr std::uint32_t kRegHeight = ARV_FAKE_CAMERA_REGISTER_HEIGHT;
+constexpr std::uint32_t kRegAcquisition = ARV_FAKE_CAMERA_REGISTER_ACQUISITION;
+constexpr std::uint32_t kRegPixelFormat = ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT;
 
 // GVSP, standard (16-bit block, 24-bit packet) ids.
 constexpr std::uint32_t kIpUdpBytes = 20 + 8;

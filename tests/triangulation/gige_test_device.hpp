@@ -11,10 +11,12 @@
 #include <string>
 #include <vector>
 
+#include "triangulation/line_scan.hpp"
+
 namespace lasercell::testing {
 
-inline constexpr std::uint32_t kPixelMono16 = 0x01100007;
-inline constexpr std::uint32_t kPixelCoord3dC16 = 0x011000B8;
+inline constexpr std::uint32_t kPixelMono16 = triangulation::kPixelFormatMono16;
+inline constexpr std::uint32_t kPixelCoord3dC16 = triangulation::kPixelFormatCoord3dC16;
 
 /// One buffer of the stream.
 struct GigeTestFrame {
