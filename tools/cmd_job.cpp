@@ -12,8 +12,6 @@
 #include "localize/job_report.hpp"
 #include "localize/job_run.hpp"
 #include "tools/commands.hpp"
-#include "triangulation/gige_source.hpp"
-#include "triangulation/udp_stream.hpp"
 
 namespace lasercell::tools {
 namespace {
@@ -32,22 +30,8 @@ void RunJobCommand(const JobArgs& args) {
   localize::JobRunOptions options;
   options.threads = args.threads;
   options.load_meshes = !args.report.empty();
-  if (args.udp_port >= 0) {
-    if (args.udp_port > 65535) throw OptionError("--udp must be a port in 0..65535");
-    if (!(args.timeout_s > 0.0)) throw OptionError("--timeout-s must be > 0");
-    triangulation::UdpSourceOptions udp;
-    udp.bind_address = args.bind;
-    udp.port = static_cast<std::uint16_t>(args.udp_port);
-    udp.idle_timeout_ms = args.timeout_s * 1000.0;
-    options.source = std::make_shared<triangulation::UdpProfileSource>(udp);
-  }
-  if (!args.gige.device.empty()) {
-    if (options.source) throw OptionError("give at most one of --udp and --gige");
-    if (!(args.timeout_s > 0.0)) throw OptionError("--timeout-s must be > 0");
-    triangulation::GigeSourceOptions gige = args.gige;
-    gige.idle_timeout_ms = args.timeout_s * 1000.0;
-    options.source = std::make_shared<triangulation::GigeProfileSource>(gige);
-  }
+  options.source =
+      MakeLiveSource(args.udp_port, args.bind, args.gige, args.timeout_s, "--timeout-s");
   if (options.source && !args.quiet) {
     std::printf("listening on %s\n", options.source->Describe().c_str());
     std::fflush(stdout);

@@ -20,8 +20,6 @@
 #include "localize/pose_server.hpp"
 #include "localize/robot_client.hpp"
 #include "tools/commands.hpp"
-#include "triangulation/gige_source.hpp"
-#include "triangulation/udp_stream.hpp"
 
 namespace lasercell::tools {
 namespace {
@@ -48,21 +46,8 @@ void RunServe(const ServeArgs& args) {
   localize::JobRunOptions run;
   run.threads = args.threads;
   localize::JobRunner runner(job, run);
-  std::shared_ptr<triangulation::ProfileSource> source;
-  if (args.udp_port >= 0) {
-    if (args.udp_port > 65535) throw OptionError("--udp must be a port in 0..65535");
-    triangulation::UdpSourceOptions udp;
-    udp.bind_address = args.udp_bind;
-    udp.port = static_cast<std::uint16_t>(args.udp_port);
-    udp.idle_timeout_ms = args.sweep_wait_s * 1000.0;
-    source = std::make_shared<triangulation::UdpProfileSource>(udp);
-  }
-  if (!args.gige.device.empty()) {
-    if (source) throw OptionError("give at most one of --udp and --gige");
-    triangulation::GigeSourceOptions gige = args.gige;
-    gige.idle_timeout_ms = args.sweep_wait_s * 1000.0;
-    source = std::make_shared<triangulation::GigeProfileSource>(gige);
-  }
+  const std::shared_ptr<triangulation::ProfileSource> source =
+      MakeLiveSource(args.udp_port, args.udp_bind, args.gige, args.sweep_wait_s, "--sweep-wait-s");
   localize::PoseServer server(localize::JobLookHandler(runner, source), args.server);
   server.SetLog([](const std::string& line) {
     std::printf("%s\n", line.c_str());

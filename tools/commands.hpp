@@ -2,6 +2,8 @@
 // Subcommand registration. Each Add*Commands adds its subcommands with callbacks that run
 // during app.parse() and throw lasercell errors on bad input.
 #include <CLI/CLI.hpp>
+#include <memory>
+#include <string>
 
 #include "triangulation/gige_source.hpp"
 
@@ -22,6 +24,12 @@ void AddStreamCommands(CLI::App& app);  ///< stream send
 /// The options of a GigE Vision line-profiler source (--gige DEVICE, --line-rate, ...), shared by
 /// scan record, job run and serve.
 void AddGigeOptions(CLI::App* app, triangulation::GigeSourceOptions* options);
+/// The sweep source of `job run` and `serve`: UDP when udp_port >= 0, the GigE device when
+/// gige.device is set, nullptr for neither (the job's file); NextSweep waits up to wait_s.
+/// Throws OptionError naming the flag for both, a bad port or wait.
+std::shared_ptr<triangulation::ProfileSource> MakeLiveSource(
+    int udp_port, const std::string& udp_bind, const triangulation::GigeSourceOptions& gige,
+    double wait_s, const std::string& wait_flag);
 void AddServeCommands(CLI::App& app);  ///< serve, robot-client
 /// calibrate joints, calibrate handeye-laser (under the `calibrate` parent given).
 void AddCalibrateJointsCommands(CLI::App& calibrate);

@@ -125,6 +125,7 @@ struct GigeProfileSource::Device {
   bool acquiring = false;
   ProfileHeader header;
   std::uint32_t lines = 0;
+  std::string vendor, model, serial;  // read once: each is a GVCP round trip
   std::string description;
 
   ~Device() {
@@ -156,11 +157,12 @@ void GigeProfileSource::Device::Open(const GigeSourceOptions& o, LineScanOptions
   // works for every user and on loopback.
   arv_gv_device_set_stream_options(ARV_GV_DEVICE(device),
                                    ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+  vendor = Text(arv_camera_get_vendor_name(camera, nullptr));
+  model = Text(arv_camera_get_model_name(camera, nullptr));
+  serial = Text(arv_camera_get_device_serial_number(camera, nullptr));
+  description = "gige " + o.device + " (" + vendor + " " + model + " " + serial + ")";
   Configure(o, what);
   ReadGeometry(o, line_scan, what);
-  description = "gige " + o.device + " (" + Text(arv_camera_get_vendor_name(camera, nullptr)) +
-                " " + Text(arv_camera_get_model_name(camera, nullptr)) + " " +
-                Text(arv_camera_get_device_serial_number(camera, nullptr)) + ")";
   StartStream(o, what);
 }
 
@@ -219,12 +221,9 @@ void GigeProfileSource::Device::ReadGeometry(const GigeSourceOptions& o, LineSca
   const ArvPixelFormat format = arv_camera_get_pixel_format(camera, &error);
   ThrowIfError(error, what + ": reading PixelFormat");
   const std::string format_name = PixelFormatName(format);
-  header.metadata = "source: gige\ndevice: \"" + o.device + "\"\nvendor: \"" +
-                    Text(arv_camera_get_vendor_name(camera, nullptr)) + "\"\nmodel: \"" +
-                    Text(arv_camera_get_model_name(camera, nullptr)) + "\"\nserial: \"" +
-                    Text(arv_camera_get_device_serial_number(camera, nullptr)) +
-                    "\"\npixel_format: \"" + format_name +
-                    "\"\nlines_per_buffer: " + std::to_string(lines) +
+  header.metadata = "source: gige\ndevice: \"" + o.device + "\"\nvendor: \"" + vendor +
+                    "\"\nmodel: \"" + model + "\"\nserial: \"" + serial + "\"\npixel_format: \"" +
+                    format_name + "\"\nlines_per_buffer: " + std::to_string(lines) +
                     "\nrow_scale_px: " + FormatDouble(line_scan->row_scale_px) +
                     "\nrow_offset_px: " + FormatDouble(line_scan->row_offset_px) +
                     "\nline_rate_hz: " + FormatDouble(line_scan->line_rate_hz) + "\n";
@@ -340,7 +339,6 @@ std::optional<LineScanSweep> GigeProfileSource::NextLineScanSweep() {
   while (!stop_) {
     const std::int64_t now = SteadyNowNs();
     if (assembler_->open() && now - last_activity >= gap_ns) {
-      last_ = std::nullopt;
       LineScanSweep sweep = *assembler_->Finish(LineScanEnd::kGap);
       last_ = sweep.account;
       return sweep;

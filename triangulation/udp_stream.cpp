@@ -120,10 +120,8 @@ void UdpProfileSource::ReceiveBatch() {
           // only grows (a wrap of the 32-bit count is the one decrease).
           std::uint32_t dropped;
           std::memcpy(&dropped, CMSG_DATA(c), sizeof dropped);
-          if (dropped != kernel_dropped_seen_) {
-            assembler_.AddKernelDropped(static_cast<std::uint32_t>(dropped - kernel_dropped_seen_));
-            kernel_dropped_seen_ = dropped;
-          }
+          assembler_.AddKernelDropped(dropped - kernel_dropped_seen_);  // modulo 2^32
+          kernel_dropped_seen_ = dropped;
         }
       }
       assembler_.Feed(

@@ -21,11 +21,13 @@
 #include <thread>
 #include <utility>
 
+#include "core/io/byte_order.hpp"
+
 namespace lasercell::testing {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using Bytes = std::vector<std::uint8_t>;
+using Bytes = std::string;  // built with core/io/byte_order.hpp
 
 constexpr std::uint16_t kGvcpPort = 3956;
 constexpr int kPollMs = 20;
@@ -77,25 +79,6 @@ constexpr std::uint16_t kPayloadImage = 0x0001;
 constexpr std::uint16_t kPayloadImageExtendedChunk = 0x4001;
 constexpr std::uint32_t kImageChunkId = 1;
 
-void PutU16(Bytes& out, std::uint16_t v) {
-  out.push_back(static_cast<std::uint8_t>(v >> 8));
-  out.push_back(static_cast<std::uint8_t>(v));
-}
-void PutU32(Bytes& out, std::uint32_t v) {
-  PutU16(out, static_cast<std::uint16_t>(v >> 16));
-  PutU16(out, static_cast<std::uint16_t>(v));
-}
-void PutU64(Bytes& out, std::uint64_t v) {
-  PutU32(out, static_cast<std::uint32_t>(v >> 32));
-  PutU32(out, static_cast<std::uint32_t>(v));
-}
-std::uint16_t GetU16(const std::uint8_t* p) {
-  return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
-}
-std::uint32_t GetU32(const std::uint8_t* p) {
-  return (std::uint32_t{GetU16(p)} << 16) | GetU16(p + 2);
-}
-
 // [0, 1) from the top 53 bits: std::uniform_real_distribution differs between standard
 // libraries, this does not.
 double Uniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) * 0x1.0p-53; }
@@ -103,9 +86,9 @@ double Uniform(std::mt19937_64& rng) { return static_cast<double>(rng() >> 11) *
 Bytes GvspHeader(std::uint16_t status, std::uint16_t block_id, std::uint8_t content_type,
                  std::uint32_t packet_id) {
   Bytes out;
-  PutU16(out, status);
-  PutU16(out, block_id);
-  PutU32(out, (std::uint32_t{content_type} << 24) | (packet_id & 0xffffff));
+  io::PutBe<std::uint16_t>(&out, status);
+  io::PutBe<std::uint16_t>(&out, block_id);
+  io::PutBe<std::uint32_t>(&out, (std::uint32_t{content_type} << 24) | (packet_id & 0xffffff));
   return out;
 }
 
@@ -176,16 +159,15 @@ Bytes BuildPayload(const GigeTestDeviceOptions& o, const GigeTestFrame& frame) {
   Bytes out;
   out.reserve(frame.pixels.size() * 2 + 16 + frame.line_timestamps_ns.size() * 8);
   for (const std::uint16_t px : frame.pixels) {
-    out.push_back(static_cast<std::uint8_t>(px));
-    out.push_back(static_cast<std::uint8_t>(px >> 8));
+    io::PutLe<std::uint16_t>(&out, px);
   }
   if (o.line_timestamp_chunk_id != 0) {
     const auto image_bytes = static_cast<std::uint32_t>(out.size());
-    PutU32(out, kImageChunkId);
-    PutU32(out, image_bytes);
-    for (const std::uint64_t t : frame.line_timestamps_ns) PutU64(out, t);
-    PutU32(out, o.line_timestamp_chunk_id);
-    PutU32(out, 8 * o.height);
+    io::PutBe<std::uint32_t>(&out, kImageChunkId);
+    io::PutBe<std::uint32_t>(&out, image_bytes);
+    for (const std::uint64_t t : frame.line_timestamps_ns) io::PutBe<std::uint64_t>(&out, t);
+    io::PutBe<std::uint32_t>(&out, o.line_timestamp_chunk_id);
+    io::PutBe<std::uint32_t>(&out, 8 * o.height);
   }
   return out;
 }
@@ -199,11 +181,12 @@ std::vector<Bytes> BuildPackets(const GigeTestDeviceOptions& o, const Bytes& pay
       o.line_timestamp_chunk_id != 0 ? kPayloadImageExtendedChunk : kPayloadImage;
   std::vector<Bytes> packets;
   Bytes leader = GvspHeader(0, block_id, kContentLeader, 0);
-  PutU16(leader, 0);
-  PutU16(leader, payload_type);
-  PutU64(leader, timestamp);
-  for (const std::uint32_t v : {o.pixel_format, o.width, o.height, 0u, 0u}) PutU32(leader, v);
-  PutU32(leader, 0);  // x and y padding
+  io::PutBe<std::uint16_t>(&leader, 0);
+  io::PutBe<std::uint16_t>(&leader, payload_type);
+  io::PutBe<std::uint64_t>(&leader, timestamp);
+  for (const std::uint32_t v : {o.pixel_format, o.width, o.height, 0u, 0u})
+    io::PutBe<std::uint32_t>(&leader, v);
+  io::PutBe<std::uint32_t>(&leader, 0);  // x and y padding
   packets.push_back(std::move(leader));
   const std::size_t block = packet_size - kIpUdpBytes - kGvspHeaderBytes;
   for (std::size_t offset = 0; offset < payload.size(); offset += block) {
@@ -215,9 +198,9 @@ std::vector<Bytes> BuildPackets(const GigeTestDeviceOptions& o, const Bytes& pay
   }
   Bytes trailer =
       GvspHeader(0, block_id, kContentTrailer, static_cast<std::uint32_t>(packets.size()));
-  PutU16(trailer, 0);
-  PutU16(trailer, payload_type);
-  PutU32(trailer, o.height);  // size_y
+  io::PutBe<std::uint16_t>(&trailer, 0);
+  io::PutBe<std::uint16_t>(&trailer, payload_type);
+  io::PutBe<std::uint32_t>(&trailer, o.height);  // size_y
   packets.push_back(std::move(trailer));
   return packets;
 }
@@ -262,7 +245,7 @@ struct GvcpCommand {
   std::uint8_t flags = 0;
   std::uint16_t command = 0;
   std::uint16_t request_id = 0;
-  const std::uint8_t* data = nullptr;
+  const char* data = nullptr;
   std::size_t size = 0;
 };
 
@@ -308,7 +291,7 @@ struct GigeTestDevice::Impl {
   int StreamStep();
   void SendFrame(std::size_t k, const sockaddr_in& to, std::uint32_t packet_size);
   void ReceiveGvcp();
-  void HandleGvcp(const std::uint8_t* bytes, std::size_t size, const sockaddr_in& from);
+  void HandleGvcp(const char* bytes, std::size_t size, const sockaddr_in& from);
   GvcpReply ReadRegisters(const GvcpCommand& cmd);
   GvcpReply WriteRegisters(const GvcpCommand& cmd);
   GvcpReply ReadMemory(const GvcpCommand& cmd);
@@ -463,7 +446,7 @@ void GigeTestDevice::Impl::SendFrame(std::size_t k, const sockaddr_in& to,
 }
 
 void GigeTestDevice::Impl::ReceiveGvcp() {
-  std::uint8_t buffer[2048];
+  char buffer[2048];
   for (int n = 0; n < 64; ++n) {
     sockaddr_in from{};
     socklen_t from_size = sizeof from;
@@ -474,15 +457,15 @@ void GigeTestDevice::Impl::ReceiveGvcp() {
   }
 }
 
-void GigeTestDevice::Impl::HandleGvcp(const std::uint8_t* bytes, std::size_t size,
+void GigeTestDevice::Impl::HandleGvcp(const char* bytes, std::size_t size,
                                       const sockaddr_in& from) {
-  if (size < kGvcpHeaderBytes || bytes[0] != kGvcpCommandKey) return;
+  if (size < kGvcpHeaderBytes || static_cast<std::uint8_t>(bytes[0]) != kGvcpCommandKey) return;
   GvcpCommand cmd;
-  cmd.flags = bytes[1];
-  cmd.command = GetU16(bytes + 2);
-  cmd.request_id = GetU16(bytes + 6);
+  cmd.flags = static_cast<std::uint8_t>(bytes[1]);
+  cmd.command = io::GetBe<std::uint16_t>(bytes + 2);
+  cmd.request_id = io::GetBe<std::uint16_t>(bytes + 6);
   cmd.data = bytes + kGvcpHeaderBytes;
-  cmd.size = std::min<std::size_t>(GetU16(bytes + 4), size - kGvcpHeaderBytes);
+  cmd.size = std::min<std::size_t>(io::GetBe<std::uint16_t>(bytes + 4), size - kGvcpHeaderBytes);
   GvcpReply reply;
   switch (cmd.command) {
     case kPacketResendCmd:  // never acknowledged
@@ -510,10 +493,10 @@ void GigeTestDevice::Impl::HandleGvcp(const std::uint8_t* bytes, std::size_t siz
   // Aravis sets ACK_REQUIRED on discovery, reads and writes; the standard allows leaving it off.
   if ((cmd.flags & kGvcpFlagAckRequired) == 0) return;
   Bytes ack;
-  PutU16(ack, reply.status);
-  PutU16(ack, static_cast<std::uint16_t>(cmd.command + 1));
-  PutU16(ack, static_cast<std::uint16_t>(reply.data.size()));
-  PutU16(ack, cmd.request_id);
+  io::PutBe<std::uint16_t>(&ack, reply.status);
+  io::PutBe<std::uint16_t>(&ack, static_cast<std::uint16_t>(cmd.command + 1));
+  io::PutBe<std::uint16_t>(&ack, static_cast<std::uint16_t>(reply.data.size()));
+  io::PutBe<std::uint16_t>(&ack, cmd.request_id);
   ack.insert(ack.end(), reply.data.begin(), reply.data.end());
   SendTo(gvcp_fd.get(), ack, from);
 }
@@ -525,7 +508,7 @@ GvcpReply GigeTestDevice::Impl::ReadRegisters(const GvcpCommand& cmd) {
     return reply;
   }
   for (std::size_t i = 0; i < cmd.size; i += 4) {
-    const std::uint32_t address = GetU32(cmd.data + i);
+    const std::uint32_t address = io::GetBe<std::uint32_t>(cmd.data + i);
     if (address % 4 != 0) {
       reply.status = kStatusBadAlignment;
       break;
@@ -534,7 +517,7 @@ GvcpReply GigeTestDevice::Impl::ReadRegisters(const GvcpCommand& cmd) {
       reply.status = kStatusInvalidAddress;
       break;
     }
-    PutU32(reply.data, Register(address));
+    io::PutBe<std::uint32_t>(&reply.data, Register(address));
   }
   return reply;
 }
@@ -547,11 +530,12 @@ GvcpReply GigeTestDevice::Impl::WriteRegisters(const GvcpCommand& cmd) {
   }
   std::uint16_t written = 0;
   for (std::size_t i = 0; i < cmd.size && reply.status == 0; i += 8) {
-    reply.status = WriteRegister(GetU32(cmd.data + i), GetU32(cmd.data + i + 4));
+    reply.status = WriteRegister(io::GetBe<std::uint32_t>(cmd.data + i),
+                                 io::GetBe<std::uint32_t>(cmd.data + i + 4));
     if (reply.status == 0) ++written;
   }
-  PutU16(reply.data, 0);
-  PutU16(reply.data, written);
+  io::PutBe<std::uint16_t>(&reply.data, 0);
+  io::PutBe<std::uint16_t>(&reply.data, written);
   return reply;
 }
 
@@ -561,8 +545,8 @@ GvcpReply GigeTestDevice::Impl::ReadMemory(const GvcpCommand& cmd) {
     reply.status = kStatusInvalidParameter;
     return reply;
   }
-  const std::uint32_t address = GetU32(cmd.data);
-  const std::uint16_t count = GetU16(cmd.data + 6);
+  const std::uint32_t address = io::GetBe<std::uint32_t>(cmd.data);
+  const std::uint16_t count = io::GetBe<std::uint16_t>(cmd.data + 6);
   if (count == 0 || count > kReadMemMaxBytes) {
     reply.status = kStatusInvalidParameter;
   } else if (address % 4 != 0 || count % 4 != 0) {
@@ -570,7 +554,7 @@ GvcpReply GigeTestDevice::Impl::ReadMemory(const GvcpCommand& cmd) {
   } else if (!Readable(address, count)) {
     reply.status = kStatusInvalidAddress;
   } else {
-    PutU32(reply.data, address);
+    io::PutBe<std::uint32_t>(&reply.data, address);
     const Bytes data = ReadBytes(address, count);
     reply.data.insert(reply.data.end(), data.begin(), data.end());
   }
@@ -584,20 +568,20 @@ GvcpReply GigeTestDevice::Impl::WriteMemory(const GvcpCommand& cmd) {
     reply.status = kStatusInvalidParameter;
     return reply;
   }
-  const std::uint32_t address = GetU32(cmd.data);
+  const std::uint32_t address = io::GetBe<std::uint32_t>(cmd.data);
   const std::size_t count = cmd.size - 4;
   std::uint16_t written = 0;
   if (address % 4 != 0 || count % 4 != 0) {
     reply.status = kStatusBadAlignment;
   } else {
     for (std::size_t i = 0; i < count && reply.status == 0; i += 4) {
-      reply.status =
-          WriteRegister(address + static_cast<std::uint32_t>(i), GetU32(cmd.data + 4 + i));
+      reply.status = WriteRegister(address + static_cast<std::uint32_t>(i),
+                                   io::GetBe<std::uint32_t>(cmd.data + 4 + i));
       if (reply.status == 0) written = static_cast<std::uint16_t>(written + 4);
     }
   }
-  PutU16(reply.data, 0);
-  PutU16(reply.data, written);
+  io::PutBe<std::uint16_t>(&reply.data, 0);
+  io::PutBe<std::uint16_t>(&reply.data, written);
   return reply;
 }
 
@@ -625,9 +609,9 @@ void GigeTestDevice::Impl::HandleResend(const GvcpCommand& cmd) {
     ++report.resend_requests;
   }
   if ((cmd.flags & kGvcpFlagExtendedIds) != 0 || cmd.size < 12) return;
-  const auto block_id = static_cast<std::uint16_t>(GetU32(cmd.data) & 0xffff);
-  const std::uint32_t first = GetU32(cmd.data + 4) & 0xffffff;
-  const std::uint32_t last = GetU32(cmd.data + 8) & 0xffffff;
+  const auto block_id = static_cast<std::uint16_t>(io::GetBe<std::uint32_t>(cmd.data) & 0xffff);
+  const std::uint32_t first = io::GetBe<std::uint32_t>(cmd.data + 4) & 0xffffff;
+  const std::uint32_t last = io::GetBe<std::uint32_t>(cmd.data + 8) & 0xffffff;
   const auto it = std::find_if(retained.rbegin(), retained.rend(),
                                [&](const RetainedFrame& f) { return f.block_id == block_id; });
   sockaddr_in to{};
@@ -640,12 +624,12 @@ void GigeTestDevice::Impl::HandleResend(const GvcpCommand& cmd) {
     Bytes packet = packets[id];
     if (Uniform(refusal_rng) < options.resend_refusal) {
       packet.resize(kGvspHeaderBytes);  // same block, content type and packet id
-      packet[0] = static_cast<std::uint8_t>(kGvspPacketUnavailable >> 8);
-      packet[1] = static_cast<std::uint8_t>(kGvspPacketUnavailable);
+      packet[0] = static_cast<char>(kGvspPacketUnavailable >> 8);
+      packet[1] = static_cast<char>(kGvspPacketUnavailable);
       refused.push_back(id);
     } else {
-      packet[0] = static_cast<std::uint8_t>(options.resend_status >> 8);
-      packet[1] = static_cast<std::uint8_t>(options.resend_status);
+      packet[0] = static_cast<char>(options.resend_status >> 8);
+      packet[1] = static_cast<char>(options.resend_status);
       resent.push_back(id);
     }
     SendTo(stream_fd.get(), packet, to);

@@ -1,9 +1,12 @@
-// The command-line options of a GigE Vision line-profiler source (triangulation/gige_source.hpp),
-// shared by `scan record`, `job run` and `serve`.
+// Live sweep sources on the command line: the options of a GigE Vision line-profiler source
+// (triangulation/gige_source.hpp), shared by `scan record`, `job run` and `serve`, and the UDP or
+// GigE source `job run` and `serve` take their sweeps from.
 #include <CLI/CLI.hpp>
 
+#include "core/error.hpp"
 #include "tools/commands.hpp"
 #include "triangulation/gige_source.hpp"
+#include "triangulation/udp_stream.hpp"
 
 namespace lasercell::tools {
 
@@ -34,6 +37,26 @@ void AddGigeOptions(CLI::App* app, triangulation::GigeSourceOptions* o) {
   app->add_option("--sweep-gap-ms", o->sweep_gap_ms,
                   "With --gige: a sweep ends when no buffer arrives for this long")
       ->capture_default_str();
+}
+
+std::shared_ptr<triangulation::ProfileSource> MakeLiveSource(
+    int udp_port, const std::string& udp_bind, const triangulation::GigeSourceOptions& gige,
+    double wait_s, const std::string& wait_flag) {
+  const bool udp = udp_port >= 0;
+  if (!udp && gige.device.empty()) return nullptr;
+  if (udp && !gige.device.empty()) throw OptionError("give at most one of --udp and --gige");
+  if (!(wait_s > 0.0)) throw OptionError(wait_flag + " must be > 0");
+  if (udp) {
+    if (udp_port > 65535) throw OptionError("--udp must be a port in 0..65535");
+    triangulation::UdpSourceOptions o;
+    o.bind_address = udp_bind;
+    o.port = static_cast<std::uint16_t>(udp_port);
+    o.idle_timeout_ms = wait_s * 1000.0;
+    return std::make_shared<triangulation::UdpProfileSource>(o);
+  }
+  triangulation::GigeSourceOptions o = gige;
+  o.idle_timeout_ms = wait_s * 1000.0;
+  return std::make_shared<triangulation::GigeProfileSource>(o);
 }
 
 }  // namespace lasercell::tools
