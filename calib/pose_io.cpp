@@ -366,6 +366,15 @@ std::string RobotPosesYaml(const RobotPoses& poses) {
   return o.str();
 }
 
+namespace {
+// True when nothing but white space is left on the line (trailing text is an error, not
+// ignored: "board 3 2 25 x" is not a board line).
+bool AtLineEnd(std::istringstream& ls) {
+  ls >> std::ws;
+  return ls.eof();
+}
+}  // namespace
+
 ChessboardDetections ParseChessboardDetections(const std::string& text, const std::string& name) {
   std::istringstream in(text);
   std::string line;
@@ -391,7 +400,8 @@ ChessboardDetections ParseChessboardDetections(const std::string& text, const st
     if (key == "board") {
       int cols = 0, rows = 0;
       double square_mm = 0;
-      if (!(ls >> cols >> rows >> square_mm) || cols < 2 || rows < 2 || !(square_mm > 0)) {
+      if (!(ls >> cols >> rows >> square_mm) || !AtLineEnd(ls) || cols < 2 || rows < 2 ||
+          !(square_mm > 0)) {
         throw FileError(name, where + ": expected 'board COLS ROWS SQUARE_MM'");
       }
       d.board = BoardSpec::Chessboard(cols, rows, square_mm);
@@ -399,14 +409,15 @@ ChessboardDetections ParseChessboardDetections(const std::string& text, const st
       continue;
     }
     if (key == "image_size") {
-      if (!(ls >> d.width_px >> d.height_px) || d.width_px < 1 || d.height_px < 1) {
+      if (!(ls >> d.width_px >> d.height_px) || !AtLineEnd(ls) || d.width_px < 1 ||
+          d.height_px < 1) {
         throw FileError(name, where + ": expected 'image_size WIDTH HEIGHT'");
       }
       continue;
     }
     int index = 0;
     double u = 0, v = 0;
-    if (!(ls >> index >> u >> v) || !std::isfinite(u) || !std::isfinite(v)) {
+    if (!(ls >> index >> u >> v) || !AtLineEnd(ls) || !std::isfinite(u) || !std::isfinite(v)) {
       throw FileError(name, where + ": expected 'IMAGE CORNER_INDEX U_PX V_PX'");
     }
     if (!board_seen) throw FileError(name, where + ": corner before the 'board' line");
@@ -421,7 +432,18 @@ ChessboardDetections ParseChessboardDetections(const std::string& text, const st
     d.corners_px.back().emplace_back(u, v);
   }
   if (!header) throw FileError(name, "empty file");
+  if (d.width_px == 0) throw FileError(name, "no 'image_size WIDTH HEIGHT' line");
   for (std::size_t i = 0; i < d.images.size(); ++i) {
+    for (std::size_t k = 0; k < d.corners_px[i].size(); ++k) {
+      // Pixel centres run from 0 to size - 1; a corner is at most half a pixel beyond them.
+      const Eigen::Vector2d& c = d.corners_px[i][k];
+      if (c.x() < -0.5 || c.y() < -0.5 || c.x() > d.width_px - 0.5 || c.y() > d.height_px - 0.5) {
+        throw FileError(name, d.images[i] + ": corner " + std::to_string(k) + " (" +
+                                  FormatDouble(c.x()) + ", " + FormatDouble(c.y()) +
+                                  ") px lies outside the " + std::to_string(d.width_px) + " x " +
+                                  std::to_string(d.height_px) + " image");
+      }
+    }
     if (d.corners_px[i].size() != static_cast<std::size_t>(d.board.NumCorners())) {
       throw FileError(name, d.images[i] + ": " + std::to_string(d.corners_px[i].size()) +
                                 " corners, expected " + std::to_string(d.board.NumCorners()));

@@ -4,7 +4,7 @@ function(lasercell_set_options target)
   if(LASERCELL_WERROR)
     target_compile_options(${target} PRIVATE -Werror)
   endif()
-  if(LASERCELL_SANITIZE)
+  if(LASERCELL_SANITIZE AND CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
     # GCC 12 reports -Wmaybe-uninitialized inside libstdc++'s std::regex / std::function when
     # ASan instruments them (a known false positive of that pairing); the normal build keeps it.
     target_compile_options(${target} PRIVATE -Wno-maybe-uninitialized)
@@ -19,13 +19,29 @@ if(LASERCELL_SANITIZE)
   # as calls, so the tests do not get slower than at -O1 (measured: same 18 CPU-min for the
   # whole suite). Keeps the CI's cold build + tests near its 30-minute budget; the tests run the
   # same code paths.
-  add_compile_options(-O1 -finline-small-functions -finline-functions)
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "GNU")
+    add_compile_options(-O1 -finline-small-functions -finline-functions)
+  else()
+    add_compile_options(-O1)
+  endif()
   # Under ASan, Eigen stops trusting glibc's 16-byte malloc alignment (__SANITIZE_ADDRESS__) and
   # switches to its offset-pointer aligned malloc, while Debian's libceres (not instrumented)
   # uses plain malloc/free: Eigen objects crossing that boundary (GradientChecker results,
   # Covariance blocks) are then freed with the wrong function. Keep the two in agreement.
   add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)
   add_link_options(-fsanitize=address,undefined)
+endif()
+
+# libFuzzer (tests/fuzz): clang's coverage instrumentation in every library, so the fuzz
+# executables (linked with -fsanitize=fuzzer) see the parsers' branches. Only with the sanitizers:
+# a fuzzer without ASan/UBSan misses the memory errors it is there to find.
+if(LASERCELL_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang" OR NOT LASERCELL_SANITIZE)
+    message(FATAL_ERROR "LASERCELL_FUZZ needs clang and LASERCELL_SANITIZE=ON: configure with "
+                        "CC=clang CXX=clang++ -DLASERCELL_SANITIZE=ON -DLASERCELL_FUZZ=ON")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link)
+  add_link_options(-fsanitize=fuzzer-no-link)
 endif()
 
 # One library per module folder: lasercell_<name>, alias lasercell::<name>.

@@ -44,12 +44,19 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "core/io/raw_record.hpp"
+#include "core/isolated_call.hpp"
 #include "localize/internal/occt_session.hpp"
 
 namespace lasercell::localize {
 
 void CadImportOptions::Check() const {
+  if (!(timeout_s > 0) || !std::isfinite(timeout_s)) {
+    throw OptionError("CadImportOptions.timeout_s must be positive and finite (s), got " +
+                      std::to_string(timeout_s));
+  }
   if (!(sampling_step_mm > 0) || !std::isfinite(sampling_step_mm)) {
     throw OptionError("CadImportOptions.sampling_step_mm must be positive and finite (mm), got " +
                       std::to_string(sampling_step_mm));
@@ -454,19 +461,48 @@ CadModel BuildModel(const TopoDS_Shape& shape, const CadImportOptions& options,
   return model;
 }
 
-}  // namespace
+// A CadModel as bytes, to come back from the child process ReadCadModel reads in (both ends
+// are the same program on the same machine).
+std::string ModelToBytes(const CadModel& m) {
+  io::RawWriter out;
+  out.PutArray(m.mesh.vertices.positions);
+  out.PutArray(m.mesh.vertices.normals);
+  out.PutArray(m.mesh.faces);
+  out.PutArray(m.samples.positions);
+  out.PutArray(m.samples.normals);
+  out.PutString(m.format);
+  out.PutString(m.source_unit);
+  for (const double v : {m.scale_to_mm, m.surface_area_mm2}) out.Put(v);
+  for (const std::size_t v : {m.solids, m.shells, m.faces}) out.Put(v);
+  return std::move(out.bytes());
+}
 
-CadModel ReadCadModel(const std::string& path, const CadImportOptions& options) {
-  options.Check();
-  const CadFormat format = FormatOf(path);
+CadModel ModelFromBytes(const std::string& bytes) {
+  io::RawReader in(bytes, [](const std::string& problem) {
+    throw InternalError("CAD model from the reader process: " + problem);
+  });
+  CadModel m;
+  m.mesh.vertices.positions = in.GetArray<Eigen::Vector3d>("mesh positions");
+  m.mesh.vertices.normals = in.GetArray<Eigen::Vector3d>("mesh normals");
+  m.mesh.faces = in.GetArray<Eigen::Vector3i>("faces");
+  m.samples.positions = in.GetArray<Eigen::Vector3d>("sample positions");
+  m.samples.normals = in.GetArray<Eigen::Vector3d>("sample normals");
+  m.format = in.GetString("format");
+  m.source_unit = in.GetString("source unit");
+  m.scale_to_mm = in.Get<double>("scale");
+  m.surface_area_mm2 = in.Get<double>("area");
+  m.solids = in.Get<std::size_t>("solids");
+  m.shells = in.Get<std::size_t>("shells");
+  m.faces = in.Get<std::size_t>("face count");
+  if (!in.AtEnd()) in.Fail("bytes after the model");
+  return m;
+}
+
+CadModel ReadCadModelHere(const std::string& path, const CadImportOptions& options,
+                          CadFormat format) {
   const char* format_name = format == CadFormat::kStep ? "STEP" : "IGES";
-  CheckReadable(path, format_name);
   try {
-    LoadedShape loaded;
-    {
-      const internal::OcctSession session;
-      loaded = format == CadFormat::kStep ? LoadStep(path) : LoadIges(path);
-    }
+    LoadedShape loaded = format == CadFormat::kStep ? LoadStep(path) : LoadIges(path);
     if (loaded.shape.IsNull()) {
       throw InputError(path +
                        ": holds no surfaces (nothing could be translated): export the "
@@ -482,6 +518,50 @@ CadModel ReadCadModel(const std::string& path, const CadImportOptions& options) 
                      internal::DescribeFailure(failure) +
                      "); repair the part in the CAD system or export it again");
   }
+}
+
+}  // namespace
+
+// OpenCASCADE's translators trust the entity references of the file: a damaged file (a shell
+// naming a face that is not there) makes them dereference null inside libTKIGES/libTKSTEP. The
+// whole read runs in a child process (core/isolated_call.hpp), under the session lock so no
+// other thread is inside OpenCASCADE when it forks; a crash there is this file's error.
+CadModel ReadCadModel(const std::string& path, const CadImportOptions& options) {
+  options.Check();
+  const CadFormat format = FormatOf(path);
+  const char* format_name = format == CadFormat::kStep ? "STEP" : "IGES";
+  CheckReadable(path, format_name);
+  IsolatedOutcome outcome;
+  {
+    const internal::OcctSession session;
+    outcome = RunIsolated([&] { return ModelToBytes(ReadCadModelHere(path, options, format)); },
+                          options.timeout_s);
+  }
+  switch (outcome.kind) {
+    case IsolatedOutcome::Kind::kReturned:
+      return ModelFromBytes(outcome.bytes);
+    case IsolatedOutcome::Kind::kInputError:
+      throw InputError(outcome.message);
+    case IsolatedOutcome::Kind::kOtherError:
+      throw InternalError(path + ": reading this " + format_name +
+                          " file failed: " + outcome.message);
+    case IsolatedOutcome::Kind::kTimedOut:
+      throw InputError(path + ": OpenCASCADE was still reading this " + format_name +
+                       " file after " + FormatDouble(options.timeout_s) +
+                       " s (CadImportOptions.timeout_s) and was stopped; the file is damaged or "
+                       "far larger than a part: export the part again");
+    case IsolatedOutcome::Kind::kCrashed:
+      break;
+  }
+  if (IsFaultSignal(outcome.signal)) {
+    throw InputError(path + ": OpenCASCADE crashed reading this " + format_name + " file (signal " +
+                     std::to_string(outcome.signal) +
+                     "): it is damaged or refers to entities it does not hold; export the part "
+                     "again from the CAD system");
+  }
+  throw InternalError(path + ": the process reading this " + format_name + " file ended " +
+                      (outcome.signal != 0 ? "by signal " + std::to_string(outcome.signal)
+                                           : std::string("without a result")));
 }
 
 }  // namespace lasercell::localize

@@ -28,6 +28,9 @@ struct CadImportOptions {
   double linear_deflection_mm = 0.05;
   /// Tessellation: largest angle between the normals at the ends of a triangle edge, rad (> 0).
   double angular_deflection_rad = 0.3;
+  /// Longest a read may take, s (> 0): OpenCASCADE can loop on a damaged file; the read runs in
+  /// a child process that is killed after this long. Not part of a model's identity.
+  double timeout_s = 600.0;
   /// Throws OptionError naming the field when a value is out of range.
   void Check() const;
 };

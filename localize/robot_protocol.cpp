@@ -37,6 +37,12 @@ Eigen::Isometry3d PoseFromValues(const double* v) {
   return pose;
 }
 
+// A part name in an ASCII reply: at most this many printable, non-space ASCII bytes.
+constexpr std::size_t kMaxAsciiPartName = 48;
+// Largest magnitude of a number in an ASCII reply (mm, ms); the encoder clamps to it.
+constexpr double kMaxAsciiValue = 1e9;
+bool IsNameByte(char c) { return c > ' ' && c <= '~'; }
+
 std::vector<std::string_view> Tokens(std::string_view line) {
   std::vector<std::string_view> out;
   std::size_t i = 0;
@@ -198,16 +204,18 @@ std::string EncodeAsciiReply(const RobotReply& reply) {
     t = reply.target_from_grasp.translation();
     r = FixedXyzDegFromRotation(reply.target_from_grasp.linear());
   }
-  std::string part = reply.part.empty() ? "-" : reply.part.substr(0, 48);
+  std::string part = reply.part.empty() ? "-" : reply.part.substr(0, kMaxAsciiPartName);
   std::replace_if(
-      part.begin(), part.end(), [](char c) { return c == ' ' || c == '\n'; }, '_');
+      part.begin(), part.end(), [](char c) { return !IsNameByte(c); }, '_');
   char buffer[kRobotMaxLineBytes];
   std::snprintf(buffer, sizeof buffer,
                 "%s %d %d %s %d %.3f %.3f %.3f %.3f %.3f %.3f %d %.3f %.3f\n",
                 ReplyStatusName(reply.status), reply.request_id, reply.part_index, part.c_str(),
-                reply.instance, std::clamp(t.x(), -1e9, 1e9), std::clamp(t.y(), -1e9, 1e9),
-                std::clamp(t.z(), -1e9, 1e9), r.x(), r.y(), r.z(), reply.instances_left,
-                std::min(reply.position_sigma_mm, 1e9), std::min(reply.latency_ms, 1e9));
+                reply.instance, std::clamp(t.x(), -kMaxAsciiValue, kMaxAsciiValue),
+                std::clamp(t.y(), -kMaxAsciiValue, kMaxAsciiValue),
+                std::clamp(t.z(), -kMaxAsciiValue, kMaxAsciiValue), r.x(), r.y(), r.z(),
+                reply.instances_left, std::clamp(reply.position_sigma_mm, 0.0, kMaxAsciiValue),
+                std::clamp(reply.latency_ms, 0.0, kMaxAsciiValue));
   return buffer;
 }
 
@@ -224,9 +232,12 @@ std::optional<RobotReply> DecodeBinaryReply(std::string_view frame) {
   reply.request_id = v[3];
   reply.part_index = v[4];
   reply.instance = v[5];
-  double values[6];
-  for (int i = 0; i < 6; ++i) values[i] = v[6 + i] / 1000.0;
-  reply.target_from_grasp = PoseFromValues(values);
+  // Only an ok reply carries a pose (the encoder writes zeros otherwise).
+  if (reply.status == ReplyStatus::kOk) {
+    double values[6];
+    for (int i = 0; i < 6; ++i) values[i] = v[6 + i] / 1000.0;
+    reply.target_from_grasp = PoseFromValues(values);
+  }
   reply.instances_left = v[12];
   reply.position_sigma_mm = v[13] / 1000.0;
   reply.latency_ms = v[14] / 1000.0;
@@ -254,8 +265,18 @@ std::optional<RobotReply> DecodeAsciiReply(std::string_view line) {
   for (int i = 0; i < 6; ++i) {
     if (!ParseDouble(t[5 + i], &values[i])) return std::nullopt;
   }
+  // The ranges the encoder writes (it clamps to them): anything beyond is not a reply.
+  const auto within = [](double v) { return std::abs(v) <= kMaxAsciiValue; };
+  if (!std::all_of(values, values + 6, within) || !(reply.position_sigma_mm >= 0) ||
+      !within(reply.position_sigma_mm) || !(reply.latency_ms >= 0) || !within(reply.latency_ms)) {
+    return std::nullopt;
+  }
+  if (t[3].size() > kMaxAsciiPartName ||
+      !std::all_of(t[3].begin(), t[3].end(), [](char c) { return IsNameByte(c); })) {
+    return std::nullopt;
+  }
   reply.part = t[3] == "-" ? "" : std::string(t[3]);
-  reply.target_from_grasp = PoseFromValues(values);
+  if (reply.status == ReplyStatus::kOk) reply.target_from_grasp = PoseFromValues(values);
   return reply;
 }
 

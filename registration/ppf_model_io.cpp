@@ -12,6 +12,8 @@
 
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
+#include "core/io/raw_record.hpp"
+#include "core/provenance.hpp"
 #include "registration/ppf_model.hpp"
 
 namespace lasercell::registration {
@@ -24,79 +26,13 @@ namespace {
 constexpr char kMagic[8] = {'L', 'C', 'P', 'P', 'F', 'M', 'D', 'L'};
 constexpr std::uint32_t kVersion = 1;
 
-std::uint64_t Fnv1a(std::string_view bytes) {
-  std::uint64_t h = 1469598103934665603ULL;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 1099511628211ULL;
-  }
-  return h;
-}
-
-class Writer {
- public:
-  template <typename T>
-  void Put(const T& value) {
-    out_.append(reinterpret_cast<const char*>(&value), sizeof(T));
-  }
-  template <typename T>
-  void PutArray(const std::vector<T>& values) {
-    Put(static_cast<std::uint64_t>(values.size()));
-    if (!values.empty())
-      out_.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
-  }
-  std::string& bytes() { return out_; }
-
- private:
-  std::string out_;
-};
-
-class Reader {
- public:
-  Reader(std::string_view bytes, const std::string& name) : bytes_(bytes), name_(name) {}
-  template <typename T>
-  T Get(const char* field) {
-    Need(sizeof(T), field);
-    T value;
-    std::memcpy(&value, bytes_.data() + pos_, sizeof(T));
-    pos_ += sizeof(T);
-    return value;
-  }
-  template <typename T>
-  std::vector<T> GetArray(const char* field) {
-    const auto count = Get<std::uint64_t>(field);
-    if (count > (bytes_.size() - pos_) / sizeof(T))
-      Fail(std::string("truncated array '") + field + "'");
-    std::vector<T> values(static_cast<std::size_t>(count));
-    // Element types are plain fixed-layout records (doubles, u32/f32), safe to copy bytewise.
-    if (count > 0)
-      std::memcpy(static_cast<void*>(values.data()), bytes_.data() + pos_,
-                  values.size() * sizeof(T));
-    pos_ += values.size() * sizeof(T);
-    return values;
-  }
-  std::size_t position() const { return pos_; }
-  [[noreturn]] void Fail(const std::string& problem) const {
-    throw InputError(name_ + ": not a valid lasercell PPF model (" + problem +
-                     "); rebuild the model");
-  }
-
- private:
-  void Need(std::size_t n, const char* field) const {
-    if (bytes_.size() - pos_ < n) Fail(std::string("truncated at field '") + field + "'");
-  }
-  std::string_view bytes_;
-  std::string name_;
-  std::size_t pos_ = 0;
-};
-
 }  // namespace
 
 // Friend of PpfModel: the only code that touches its fields from outside ppf_model.cpp.
 class PpfModelCodec {
  public:
   static std::string Encode(const PpfModel& m) {
-    Writer w;
+    io::RawWriter w;
     w.bytes().append(kMagic, sizeof(kMagic));
     w.Put(kVersion);
     w.Put(std::uint32_t{0});
@@ -116,12 +52,15 @@ class PpfModelCodec {
     w.PutArray(m.keys_);
     w.PutArray(m.offsets_);
     w.PutArray(m.entries_);
-    w.Put(Fnv1a(w.bytes()));
+    w.Put(Fnv1a64(w.bytes()));
     return std::move(w.bytes());
   }
 
   static PpfModel Decode(std::string_view bytes, const std::string& name) {
-    Reader r(bytes, name);
+    io::RawReader r(bytes, [&name](const std::string& problem) {
+      throw InputError(name + ": not a valid lasercell PPF model (" + problem +
+                       "); rebuild the model");
+    });
     if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
       r.Fail("bad magic; expected a file written by PpfModel::Save");
     }
@@ -134,7 +73,7 @@ class PpfModelCodec {
     if (bytes.size() < sizeof(std::uint64_t)) r.Fail("truncated");
     std::uint64_t stored_sum;
     std::memcpy(&stored_sum, bytes.data() + bytes.size() - sizeof(stored_sum), sizeof(stored_sum));
-    if (Fnv1a(bytes.substr(0, bytes.size() - sizeof(stored_sum))) != stored_sum)
+    if (Fnv1a64(bytes.substr(0, bytes.size() - sizeof(stored_sum))) != stored_sum)
       r.Fail("checksum mismatch: the file is corrupt or truncated");
     r.Get<std::uint32_t>("reserved");
     PpfModel m;
@@ -168,7 +107,7 @@ class PpfModelCodec {
 
  private:
   // Structural checks so a decoded model can never index out of bounds.
-  static void Validate(const PpfModel& m, std::size_t refinement_size, const Reader& r) {
+  static void Validate(const PpfModel& m, std::size_t refinement_size, const io::RawReader& r) {
     if (!(m.distance_step_mm_ > 0.0) || !(m.angle_step_rad_ > 0.0) || m.distance_bins_ < 1 ||
         m.angle_bins_ < 1 || m.alpha_bins_ < 1 || m.distance_bins_ > (1 << 25) ||
         m.angle_bins_ > 180 || m.points_.size() > 65535) {

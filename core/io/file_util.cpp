@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <glob.h>
+#include <signal.h>
 #include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -78,6 +80,45 @@ MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
   return *this;
 }
 
+namespace {
+
+// The temporary files of `filename` in `dir` whose writer died (SIGKILL, power loss) before it
+// could rename or remove them: "<filename>.tmp-<pid>-XXXXXX" with no process <pid> alive. A
+// live writer's temporary (another process writing the same file) is left alone.
+void RemoveStaleTemporaries(const std::filesystem::path& dir, const std::string& filename) {
+  const std::string prefix = filename + ".tmp-";
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::size_t dash = name.find('-', prefix.size());
+    if (dash == std::string::npos) continue;
+    const std::string pid_text = name.substr(prefix.size(), dash - prefix.size());
+    if (pid_text.empty() || pid_text.find_first_not_of("0123456789") != std::string::npos) continue;
+    const long pid = std::strtol(pid_text.c_str(), nullptr, 10);
+    if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+      std::filesystem::remove(entry.path(), ec);
+    }
+  }
+}
+
+// Makes the rename itself durable: the directory entry is on disk when this returns.
+void SyncDirectory(const std::filesystem::path& dir, const std::string& path) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0 || ::fsync(fd) != 0) {
+    const std::string reason = std::strerror(errno);
+    if (fd >= 0) ::close(fd);
+    throw FileError(path, "written, but its folder could not be synced to disk: " + reason);
+  }
+  ::close(fd);
+}
+
+}  // namespace
+
+// The file is written beside its target, flushed to disk (fsync), renamed over the target (an
+// atomic replace on POSIX file systems) and the folder synced, so after a crash or SIGKILL at any
+// moment the target is either the complete old file or the complete new one. The temporary's
+// name carries the writer's pid; the next write of the same file removes those of dead writers.
 void WriteFileAtomically(const std::string& path, std::string_view bytes) {
   const std::filesystem::path target(path);
   const std::filesystem::path dir =
@@ -86,10 +127,13 @@ void WriteFileAtomically(const std::string& path, std::string_view bytes) {
   if (!std::filesystem::is_directory(dir, ec)) {
     throw FileError(path, "folder '" + dir.string() + "' does not exist; create it first");
   }
-  std::string tmpl = (dir / (target.filename().string() + ".tmp-XXXXXX")).string();
+  RemoveStaleTemporaries(dir, target.filename().string());
+  std::string tmpl =
+      (dir / (target.filename().string() + ".tmp-" + std::to_string(::getpid()) + "-XXXXXX"))
+          .string();
   std::vector<char> name(tmpl.begin(), tmpl.end());
   name.push_back('\0');
-  const int fd = ::mkstemp(name.data());
+  const int fd = ::mkostemp(name.data(), O_CLOEXEC);
   if (fd < 0)
     throw FileError(path, std::string("cannot create a temporary file: ") + std::strerror(errno));
   const std::string tmp_path(name.data());
@@ -119,6 +163,7 @@ void WriteFileAtomically(const std::string& path, std::string_view bytes) {
     ::unlink(tmp_path.c_str());
     throw FileError(path, "cannot rename the temporary file into place: " + reason);
   }
+  SyncDirectory(dir, path);
 }
 
 std::string LowerExtension(const std::string& path) {

@@ -29,8 +29,10 @@ class MappedFile {
   std::size_t size_ = 0;
 };
 
-/// Writes `bytes` to `path` atomically: to `path.tmp-XXXXXX` beside it, flushed, then renamed
-/// over `path`. On failure nothing at `path` changes and FileError is thrown.
+/// Writes `bytes` to `path` atomically: to `path.tmp-<pid>-XXXXXX` beside it, fsynced, renamed
+/// over `path`, and the folder fsynced. Killed at any moment, `path` is the complete old or the
+/// complete new file; a temporary a killed writer left is removed by the next write of `path`.
+/// On failure nothing at `path` changes and FileError is thrown.
 void WriteFileAtomically(const std::string& path, std::string_view bytes);
 
 /// The files matching a shell pattern (glob(3): *, ?, [...]), sorted by name. `what` names the

@@ -376,6 +376,33 @@ TEST(PoseIo, KukaFormIsMetresRowMajor) {
   EXPECT_NEAR(p.base_from_flange[0].linear()(1, 0), 1.0, 1e-12);
 }
 
+// Corner files: a line with anything after its fields, no image_size line, or a corner outside
+// the image is refused with the line or the corner named (before, trailing text was ignored and
+// a missing image size read as 0 x 0).
+TEST(PoseIo, CornerFilesRefuseTrailingTextMissingImageSizeAndCornersOutsideTheImage) {
+  const std::string head = "# lasercell-chessboard-corners v1\nboard 2 2 10\n";
+  const std::string size = "image_size 64 48\n";
+  const std::string corners = "a.png 0 1 1\na.png 1 2 1\na.png 2 1 2\na.png 3 2 2\n";
+  EXPECT_EQ(ParseChessboardDetections(head + size + corners, "c.txt").width_px, 64);
+  const auto message = [](const std::string& text) {
+    try {
+      ParseChessboardDetections(text, "c.txt");
+    } catch (const FileError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("# lasercell-chessboard-corners v1\nboard 2 2 10 x\n" + size + corners)
+                .find("line 2: expected 'board"),
+            std::string::npos);
+  EXPECT_NE(message(head + std::string("image_size 64 48\0junk\n", 22) + corners).find("line 3"),
+            std::string::npos);
+  EXPECT_NE(message(head + corners).find("no 'image_size"), std::string::npos);
+  EXPECT_NE(message(head + size + "a.png 0 1 1\na.png 1 2 1\na.png 2 1 2\na.png 3 64 2\n")
+                .find("corner 3 (64, 2) px lies outside the 64 x 48 image"),
+            std::string::npos);
+}
+
 TEST(PoseIo, NonOrthonormalRotationIsRejected) {
   const std::string text = "1 0 0 0.5 0 1.01 0 0.2 0 0 1 0.9 0 0 0 1\n";
   try {

@@ -518,6 +518,24 @@ TEST(CadImportErrors, ContentThatIsNotStepOrIgesIsAnInputErrorWithTheReaderStatu
   ExpectError<InputError>([&] { ReadCadModel(cut); }, {cut, "not a readable STEP file"});
 }
 
+// OpenCASCADE's IGES translator dereferences a null entity (SIGSEGV inside libTKIGES) on this
+// file: one byte of a directory entry damaged (kept by the fuzz target `cad`; its first byte
+// chose IGES). The read runs in a child process, so the crash is this file's error.
+TEST(CadImportErrors, AFileThatCrashesOpenCascadeIsAnInputErrorNotACrash) {
+  const test::TestDir dir("cad_import");
+  const std::string kept =
+      test::Slurp(std::string(LASERCELL_SOURCE_DIR) +
+                  "/tests/fuzz/regressions/cad/iges-damaged-loop-directory-entry");
+  const std::string iges = dir.File("damaged.igs");
+  test::Spit(iges, kept.substr(1));
+  ExpectError<InputError>([&] { ReadCadModel(iges); },
+                          {iges, "OpenCASCADE crashed", "signal 11", "export the part again"});
+  // The process is intact: the next read works.
+  const std::string good = dir.File("good.igs");
+  WriteCadSolid(good, PlateWithHole(Eigen::Isometry3d::Identity()));
+  EXPECT_GT(ReadCadModel(good).samples.size(), 100u);
+}
+
 TEST(CadImportErrors, FilesWithoutSurfacesAskForASolid) {
   const test::TestDir dir("cad_import");
   const std::string step = dir.File("wire.step");
@@ -560,8 +578,11 @@ TEST(CadImportErrors, OptionsOutOfRangeNameTheField) {
       {with([](auto& o) { o.sampling_step_mm = std::nan(""); }), "sampling_step_mm"},
       {with([](auto& o) { o.linear_deflection_mm = -1; }), "linear_deflection_mm"},
       {with([](auto& o) { o.angular_deflection_rad = 0; }), "angular_deflection_rad"},
+      {with([](auto& o) { o.timeout_s = 0; }), "timeout_s"},
   };
-  for (const auto& [options, field] : cases) {
+  for (const auto& c : cases) {
+    const CadImportOptions& options = c.first;
+    const std::string& field = c.second;
     ExpectError<OptionError>([&] { options.Check(); }, {"CadImportOptions." + field});
     ExpectError<OptionError>([&] { ReadCadModel("any.step", options); }, {field});
   }

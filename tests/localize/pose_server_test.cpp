@@ -82,6 +82,33 @@ TEST(RobotProtocol, FramesAndLinesRoundTrip) {
   }
 }
 
+// The robot side refuses a reply line it could not have been sent: a part name with control
+// bytes, numbers beyond the encoder's range (it clamps to +-1e9), a negative sigma.
+TEST(RobotProtocol, ReplyLinesOutsideWhatTheServerWritesAreRefused) {
+  const std::string good = "ok 7 0 seat 1 812.250 -40.500 93.000 0.000 0.000 0.000 1 0.120 3.500";
+  ASSERT_TRUE(DecodeAsciiReply(good).has_value());
+  std::string nul = good;
+  nul[8] = '\0';
+  EXPECT_FALSE(DecodeAsciiReply(nul).has_value());
+  EXPECT_FALSE(DecodeAsciiReply("ok 7 0 seat 1 1e12 -40.5 93 0 0 0 1 0.12 3.5").has_value());
+  EXPECT_FALSE(DecodeAsciiReply("ok 7 0 seat 1 812 -40.5 93 0 0 0 1 -0.12 3.5").has_value());
+  EXPECT_FALSE(
+      DecodeAsciiReply("ok 7 0 " + std::string(49, 'p') + " 1 1 2 3 0 0 0 1 0.1 3").has_value());
+  // Only an ok reply carries a pose: numbers in another reply's pose fields are not one.
+  const auto no_part = DecodeAsciiReply("no_part 7 0 - 0 812 -40.5 93 10 0 0 0 0 3.5");
+  ASSERT_TRUE(no_part.has_value());
+  EXPECT_TRUE(no_part->target_from_grasp.isApprox(Eigen::Isometry3d::Identity()));
+  // What the encoder writes for any part name decodes again.
+  RobotReply reply;
+  reply.part = std::string(
+      "a\0b\x01"
+      "c",
+      5);
+  const auto back = DecodeAsciiReply(EncodeAsciiReply(reply));
+  ASSERT_TRUE(back.has_value());
+  EXPECT_EQ(back->part, "a_b_c");
+}
+
 TEST(RobotProtocol, MalformedRequestsSayWhy) {
   RobotRequest ping;
   std::string frame = EncodeBinaryRequest(ping);
