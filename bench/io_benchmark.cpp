@@ -35,8 +35,8 @@ const PointCloud& MillionPoints() {
     c.positions.reserve(1000000);
     c.normals.reserve(1000000);
     for (int i = 0; i < 1000000; ++i) {
-      c.positions.emplace_back(coord(rng), coord(rng), coord(rng));
-      c.normals.push_back(Eigen::Vector3d(coord(rng), coord(rng), coord(rng) + 1e3).normalized());
+      c.positions.push_back(Eigen::Vector3d{coord(rng), coord(rng), coord(rng)});
+      c.normals.push_back(Eigen::Vector3d{coord(rng), coord(rng), coord(rng) + 1e3}.normalized());
     }
     return c;
   }();

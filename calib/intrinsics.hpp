@@ -155,7 +155,8 @@ struct IntrinsicsResult {
 
   std::string Summary() const;
   /// Why this calibration must not be used as a measuring camera ("" when it may): no model,
-  /// not converged, focal length unobservable or a lens model that is not invertible.
+  /// not converged, focal length unobservable or a lens model that is not invertible; every
+  /// reason that holds, joined by "; ".
   std::string RejectionReason() const;
 };
 

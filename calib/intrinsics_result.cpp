@@ -34,14 +34,20 @@ std::string IntrinsicsResult::Summary() const {
 
 std::string IntrinsicsResult::RejectionReason() const {
   if (!camera) return "no lens model was solved";
-  if (!converged) return "the solver did not converge: " + termination;
+  // Every reason, not the first: a solve that does not converge on views that leave the focal
+  // length unobservable must say why it could not converge.
+  std::string reasons;
+  const auto add = [&reasons](const std::string& reason) {
+    reasons += (reasons.empty() ? "" : "; ") + reason;
+  };
+  if (!converged) add("the solver did not converge: " + termination);
   if (!focal_observable) {
-    return focal_problem.empty() ? "the focal length is unobservable" : focal_problem;
+    add(focal_problem.empty() ? "the focal length is unobservable" : focal_problem);
   }
   if (!invertible) {
-    return inversion_problem.empty() ? "the lens model is not invertible" : inversion_problem;
+    add(inversion_problem.empty() ? "the lens model is not invertible" : inversion_problem);
   }
-  return "";
+  return reasons;
 }
 
 void AssessLensInversion(IntrinsicsResult* result) {

@@ -360,7 +360,7 @@ std::string RobotPosesYaml(const RobotPoses& poses) {
   for (std::size_t i = 0; i < poses.base_from_flange.size(); ++i) {
     const std::string pose = PoseToFileNotation(poses.base_from_flange[i]);
     o << "  - {";
-    if (!poses.images.empty()) o << "image: " << poses.images[i] << ", ";
+    if (!poses.images.empty()) o << "image: " << yaml::Quoted(poses.images[i]) << ", ";
     o << pose.substr(1) << "\n";
   }
   return o.str();

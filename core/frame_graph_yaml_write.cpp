@@ -17,33 +17,11 @@
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "core/yaml_fields.hpp"
 
 namespace lasercell {
 
 namespace {
-
-std::string Quoted(const std::string& text) {
-  static const char* kHex = "0123456789ABCDEF";
-  std::string out = "\"";
-  for (const char ch : text) {
-    const auto c = static_cast<unsigned char>(ch);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += ch;
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (c == '\t') {
-      out += "\\t";
-    } else if (c == '\r') {
-      out += "\\r";
-    } else if (c < 0x20 || c == 0x7f) {
-      out += std::string("\\x") + kHex[c >> 4] + kHex[c & 15];
-    } else {
-      out += ch;
-    }
-  }
-  return out + "\"";
-}
 
 /// Names plain when they are lower snake case (and not YAML's `null`), quoted otherwise.
 std::string NameToken(const std::string& name) {
@@ -51,7 +29,7 @@ std::string NameToken(const std::string& name) {
                      std::all_of(name.begin(), name.end(), [](char c) {
                        return (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
                      });
-  return plain ? name : Quoted(name);
+  return plain ? name : yaml::Quoted(name);
 }
 
 /// FormatDouble for the writer: refuses non-finite values, naming them.
@@ -115,7 +93,7 @@ void WriteStaticEdge(std::string& out, const StaticEdge& edge) {
   if (edge.sensor_response) {
     const SensorModeResponse& r = *edge.sensor_response;
     out += "    sensor_response:\n      laser: " + NameToken(r.laser) +
-           "\n      plane_digest: " + Quoted(r.plane_digest) + "\n      columns: [";
+           "\n      plane_digest: " + yaml::Quoted(r.plane_digest) + "\n      columns: [";
     for (Eigen::Index k = 0; k < r.columns.cols(); ++k) {
       if (k > 0) out += ",\n                ";
       for (int i = 0; i < 6; ++i) {
@@ -125,9 +103,9 @@ void WriteStaticEdge(std::string& out, const StaticEdge& edge) {
     out += "]\n";
   }
   const EdgeProvenance& p = edge.provenance;
-  out += "    provenance: {tool: " + Quoted(p.tool) + ", date: " + Quoted(p.date) +
-         ", input_digest: " + Quoted(p.input_digest) +
-         ", residual_summary: " + Quoted(p.residual_summary) + "}\n";
+  out += "    provenance: {tool: " + yaml::Quoted(p.tool) + ", date: " + yaml::Quoted(p.date) +
+         ", input_digest: " + yaml::Quoted(p.input_digest) +
+         ", residual_summary: " + yaml::Quoted(p.residual_summary) + "}\n";
 }
 
 }  // namespace
@@ -218,9 +196,9 @@ std::string FrameGraphToYaml(const FrameGraph& graph) {
         out += "]}\n";
       }
       const EdgeProvenance& p = plane.provenance;
-      out += "      provenance: {tool: " + Quoted(p.tool) + ", date: " + Quoted(p.date) +
-             ", input_digest: " + Quoted(p.input_digest) +
-             ", residual_summary: " + Quoted(p.residual_summary) + "}\n";
+      out += "      provenance: {tool: " + yaml::Quoted(p.tool) +
+             ", date: " + yaml::Quoted(p.date) + ", input_digest: " + yaml::Quoted(p.input_digest) +
+             ", residual_summary: " + yaml::Quoted(p.residual_summary) + "}\n";
     }
   }
   return out;

@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <type_traits>
 
@@ -41,6 +42,29 @@ std::string ReadsVersion(const std::string& what, int version) {
 }
 
 }  // namespace
+
+std::string Quoted(const std::string& text) {
+  static const char* kHex = "0123456789ABCDEF";
+  std::string out = "\"";
+  for (const char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += ch;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c < 0x20 || c == 0x7f) {
+      out += std::string("\\x") + kHex[c >> 4] + kHex[c & 15];
+    } else {
+      out += ch;
+    }
+  }
+  return out + "\"";
+}
 
 std::string UnitHint(const std::string& key, const std::set<std::string>& known) {
   struct Unit {
@@ -143,6 +167,7 @@ std::vector<std::string> Fields::Keys() const {
   if (!node_ || node_.IsNull()) return keys;
   for (const auto& entry : node_) {
     if (!entry.first.IsScalar()) Throw(entry.first, "keys must be names");
+    CheckText(entry.first, "a key");
     keys.push_back(entry.first.Scalar());
   }
   return keys;
@@ -378,12 +403,26 @@ T Fields::Scalar(const YAML::Node& n, const std::string& path, const char* expec
     }
     return value;
   } else {
+    if constexpr (std::is_same_v<T, std::string>) CheckText(n, "field '" + path + "'");
     try {
       return n.as<T>();
     } catch (const YAML::Exception&) {
       bad();
     }
     return T{};
+  }
+}
+
+// Text fields (names, paths, descriptions) hold no control bytes but tab and newline: a NUL or
+// an escape byte in a path or a name is damage, and would not survive being written again.
+void Fields::CheckText(const YAML::Node& n, const std::string& what) const {
+  for (const char c : n.Scalar()) {
+    const auto byte = static_cast<unsigned char>(c);
+    if ((byte < 0x20 && c != '\t' && c != '\n') || byte == 0x7f) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02x", byte);
+      Throw(n, what + " contains the control byte " + hex + "; the file is text: remove it");
+    }
   }
 }
 

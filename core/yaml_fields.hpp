@@ -25,6 +25,11 @@
 
 namespace lasercell::yaml {
 
+/// `text` as a YAML double-quoted scalar, escaping quotes, backslashes and control bytes: how
+/// every lasercell YAML writer writes a name, a path or a description, so that any text reads
+/// back as written (Fields refuses control bytes other than tab and newline on reading).
+std::string Quoted(const std::string& text);
+
 /// Which exception a walker throws: OptionError (options, configs) or FileError (data files;
 /// path() is the file). The message is the same.
 enum class ErrorKind { kOption, kFile };
@@ -159,6 +164,8 @@ class Fields {
   std::vector<double> Numbers(const YAML::Node& n, const std::string& path,
                               std::size_t exact_size) const;
   [[noreturn]] void Throw(const YAML::Node& at, const std::string& message) const;
+  /// Throws naming `what` when the scalar holds a control byte other than tab and newline.
+  void CheckText(const YAML::Node& n, const std::string& what) const;
 
   YAML::Node node_;
   std::string path_;

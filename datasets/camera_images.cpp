@@ -413,7 +413,7 @@ std::vector<Eigen::Isometry3d> DrawChessboardPoses(const ChessboardTarget& targe
     const double tilt = rng.Uniform(5, 40) * kDegToRad;
     const double tilt_axis = rng.Uniform(0, 2 * std::numbers::pi);
     const double yaw = rng.Uniform(-std::numbers::pi, std::numbers::pi);
-    const Eigen::Vector2d pixel(rng.Uniform(0.2, 0.8) * w, rng.Uniform(0.2, 0.8) * h);
+    const Eigen::Vector2d pixel{rng.Uniform(0.2, 0.8) * w, rng.Uniform(0.2, 0.8) * h};
     // Board +z towards the camera (RotX(pi)), then yaw about the board normal, then tilt.
     const Eigen::Matrix3d r =
         (Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(tilt_axis), std::sin(tilt_axis), 0)) *

@@ -10,6 +10,7 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "core/random.hpp"
 #include "core/se3.hpp"
 #include "registration/kdtree.hpp"
 #include "registration/normals.hpp"
@@ -194,17 +195,17 @@ SyntheticScan RenderSyntheticScan(const PointCloud& clutter, const PointCloud& p
 Eigen::Isometry3d RandomPose(std::mt19937_64& rng, double half_mm) {
   std::normal_distribution<double> g(0.0, 1.0);
   std::uniform_real_distribution<double> u(-half_mm, half_mm);
-  Eigen::Quaterniond q(g(rng), g(rng), g(rng),
-                       g(rng));  // normalized Gaussian 4-vector: uniform on SO(3)
+  Eigen::Quaterniond q{g(rng), g(rng), g(rng),
+                       g(rng)};  // normalized Gaussian 4-vector: uniform on SO(3)
   q.normalize();
-  return PoseFromQuaternion(q, Eigen::Vector3d(u(rng), u(rng), u(rng)));
+  return PoseFromQuaternion(q, Draws<3>(u, rng));
 }
 
 Eigen::Isometry3d RandomPlacementInRs1(const Eigen::Vector3d& model_centroid,
                                        std::mt19937_64& rng) {
   std::uniform_real_distribution<double> x(-110.0, 70.0), y(-90.0, 90.0), z(-640.0, -600.0);
   Eigen::Isometry3d pose = RandomPose(rng, 0.0);
-  pose.translation() = Eigen::Vector3d(x(rng), y(rng), z(rng)) - pose.linear() * model_centroid;
+  pose.translation() = Eigen::Vector3d{x(rng), y(rng), z(rng)} - pose.linear() * model_centroid;
   return pose;
 }
 

@@ -164,16 +164,6 @@ std::string VectorYaml(const Eigen::Vector3d& v) {
   return s;
 }
 
-// A YAML double-quoted scalar.
-std::string Quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
-
 }  // namespace
 
 double UnitToMm(const std::string& unit, const std::string& field) {
@@ -263,13 +253,13 @@ PartDefinition ReadPartFile(const std::string& path) {
 std::string PartFileYaml(const PartDefinition& part) {
   std::string out = std::string("format: ") + kPartFormat +
                     "\nversion: " + std::to_string(kPartFormatVersion) + "\nname: " + part.name +
-                    "\nmodel: " + Quoted(part.model) + "\n";
+                    "\nmodel: " + yaml::Quoted(part.model) + "\n";
   if (!part.units.empty()) out += "units: " + part.units + "\n";
   if (!part.grasps.empty()) {
     out += "grasps:\n";
     for (const GraspFrame& g : part.grasps) {
       out += "  " + g.name + ":\n    part_from_grasp: " + PoseYaml(g.part_from_grasp) + "\n";
-      if (!g.description.empty()) out += "    description: " + Quoted(g.description) + "\n";
+      if (!g.description.empty()) out += "    description: " + yaml::Quoted(g.description) + "\n";
       if (g.refine_radius_mm > 0) {
         out += "    refine_radius_mm: " + FormatDouble(g.refine_radius_mm) + "\n";
       }

@@ -145,6 +145,9 @@ RobotDecode DecodeAsciiRequest(std::string_view line) {
   double values[6];
   for (int i = 0; i < 6; ++i) {
     if (!ParseDouble(t[1 + i], &values[i])) return Fail("pose value is not a finite number");
+    if (std::abs(values[i]) > kMaxAsciiValue) {
+      return Fail("pose value beyond +-1e9 (mm or degrees)");
+    }
   }
   request.base_from_flange = PoseFromValues(values);
   return {request, ""};

@@ -8,6 +8,7 @@
 #include "core/error.hpp"
 #include "core/format.hpp"
 #include "core/json_io.hpp"
+#include "core/random.hpp"
 #include "registration/icp.hpp"
 #include "registration/kdtree.hpp"
 #include "registration/localize_in_cloud.hpp"
@@ -77,8 +78,8 @@ Eigen::Isometry3d Rounds(const RoundContext& ctx, Eigen::Isometry3d pose, int ro
 Eigen::Isometry3d Perturbed(const Eigen::Isometry3d& pose, const Eigen::Vector3d& centre,
                             double angle, double shift, std::mt19937_64& rng) {
   std::normal_distribution<double> g(0.0, 1.0);
-  const Eigen::Vector3d axis = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
-  const Eigen::Vector3d dir = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+  const Eigen::Vector3d axis = Draws<3>(g, rng).normalized();
+  const Eigen::Vector3d dir = Draws<3>(g, rng).normalized();
   const Eigen::Vector3d c = pose * centre;
   Eigen::Isometry3d delta = Eigen::Isometry3d::Identity();
   delta.linear() = Eigen::AngleAxisd(angle, axis).toRotationMatrix();

@@ -34,6 +34,7 @@
 #include "calib/target_detection.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
+#include "core/random.hpp"
 #include "datasets/calibration_captures.hpp"
 #include "datasets/sim_config.hpp"
 #include "datasets/sim_profile.hpp"
@@ -271,8 +272,7 @@ nlohmann::json RunMonteCarlo(const CalibrationBenchArgs& args,
     std::vector<calib::HandEyeView> noisy = views;
     for (std::size_t i = 0; i < noisy.size(); ++i) {
       for (std::size_t k = 0; k < noisy[i].corners_px.size(); ++k) {
-        noisy[i].corners_px[k] =
-            set.images[i].corners_px[k] + Eigen::Vector2d(noise(rng), noise(rng));
+        noisy[i].corners_px[k] = set.images[i].corners_px[k] + Draws<2>(noise, rng);
       }
     }
     calib::HandEyeResult r;
@@ -431,8 +431,7 @@ nlohmann::json RunSimulated(CalibrationBenchArgs args) {
     calib::HandEyeView v;
     v.base_from_flange = truth.true_vision_robot.BaseFromFlange(im.joints_rad);
     v.corners_in_board = corners;
-    for (const auto& q : im.corners_px)
-      v.corners_px.push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
+    for (const auto& q : im.corners_px) v.corners_px.push_back(q + Draws<2>(noise, rng));
     views.push_back(v);
     v.base_from_flange = truth.nominal_vision_robot.BaseFromFlange(im.joints_rad);
     nominal_views.push_back(v);

@@ -25,6 +25,7 @@
 #include <random>
 #include <sstream>
 
+#include "core/random.hpp"
 #include "registration/icp.hpp"
 #include "registration/localize_in_cloud.hpp"
 #include "registration/verification.hpp"
@@ -366,8 +367,8 @@ nlohmann::json RunIcpComparison(const registration::PpfModel& model, const Point
   const Eigen::Vector3d centre = reference * model.model_from_centered().translation();
   std::vector<double> start_rms, ours_ms, ours_rms, ours_it, pcl_ms, pcl_rms, pcl_it;
   for (int k = 0; k < options.starts; ++k) {
-    const Eigen::Vector3d axis = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
-    const Eigen::Vector3d shift = 5.0 * Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    const Eigen::Vector3d axis = Draws<3>(g, rng).normalized();
+    const Eigen::Vector3d shift = 5.0 * Draws<3>(g, rng).normalized();
     const Eigen::Isometry3d delta = Eigen::Translation3d(centre + shift) *
                                     Eigen::AngleAxisd(3.0 * std::numbers::pi / 180.0, axis) *
                                     Eigen::Translation3d(-centre);

@@ -37,7 +37,7 @@ TEST(FitCircle, ReportedSigmaCoversTheTruth) {
   int inside = 0, total = 0;
   double worst_z = 0;
   for (int trial = 0; trial < 200; ++trial) {
-    const Eigen::Vector2d c(rng.Uniform(-50, 50), rng.Uniform(-120, -80));
+    const Eigen::Vector2d c{rng.Uniform(-50, 50), rng.Uniform(-120, -80)};
     const double radius = rng.Uniform(15, 40);
     const auto pts = Arc(c, radius, rng.Uniform(0, 360), 120, 300, 0.01, rng);
     CircleFitOptions o;

@@ -164,7 +164,7 @@ TEST(CalibrateHalfSpheres, FourSpheresMeetTheIssueNumbersAtTouchSigmaFiveMicrome
         const Eigen::Vector3d top =
             sim.centers_in_handling_base[k] + Eigen::Vector3d(0, 0, sim.radius_mm);
         touches.push_back({static_cast<int>(k),
-                           top + sigma * Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal()),
+                           top + sigma * Eigen::Vector3d{rng.Normal(), rng.Normal(), rng.Normal()},
                            std::nullopt});
       }
       HalfSphereCalibrationOptions options;
@@ -219,7 +219,7 @@ TEST(CalibrateHalfSpheres, TransformCovarianceIsCalibrated) {
                          f.covariance.block<3, 1>(0, 3)});
         const Eigen::Vector3d top = sim.centers_in_handling_base[k] + Eigen::Vector3d(0, 0, 25.0);
         touches.push_back({static_cast<int>(k),
-                           top + 0.05 * Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal()),
+                           top + 0.05 * Eigen::Vector3d{rng.Normal(), rng.Normal(), rng.Normal()},
                            std::nullopt});
       }
       HalfSphereCalibrationOptions options;

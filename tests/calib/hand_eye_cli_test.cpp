@@ -15,6 +15,7 @@
 #include "calib/pose_io.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "core/random.hpp"
 #include "datasets/calibration_captures.hpp"
 #include "datasets/sensor.hpp"
 #include "datasets/sim_config.hpp"
@@ -165,7 +166,7 @@ TEST_F(HandEyeCli, SimulatorRecordThroughCellRobot) {
     det.images.push_back(fs::path(datasets::HandEyeImageFile(i)).filename().string());
     det.corners_px.emplace_back();
     for (const auto& q : set.images[i].corners_px) {
-      det.corners_px.back().push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
+      det.corners_px.back().push_back(q + Draws<2>(noise, rng));
     }
   }
   io::WriteFileAtomically((dir_ / "corners.txt").string(), calib::ChessboardDetectionsText(det));
@@ -206,7 +207,7 @@ TEST_F(HandEyeCli, CreatesTheCellFileWhenAbsent) {
     det.images.push_back(name);
     det.corners_px.emplace_back();
     for (const auto& q : set.images[i].corners_px) {
-      det.corners_px.back().push_back(q + Eigen::Vector2d(noise(rng), noise(rng)));
+      det.corners_px.back().push_back(q + Draws<2>(noise, rng));
     }
   }
   io::WriteFileAtomically((dir_ / "poses.yaml").string(), calib::RobotPosesYaml(poses));

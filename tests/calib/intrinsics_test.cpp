@@ -11,6 +11,7 @@
 #include "calib/target_detection.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
+#include "core/random.hpp"
 #include "datasets/camera_images.hpp"
 #include "tests/sanitizer_scale.hpp"
 
@@ -51,7 +52,7 @@ std::vector<BoardView> NoisyViews(const Synthetic& s, double sigma_px, std::uint
     BoardView view;
     view.name = "view" + std::to_string(v);
     for (std::size_t i = 0; i < s.exact[v].size(); ++i) {
-      view.corners_px.push_back(s.exact[v][i] + Eigen::Vector2d(noise(rng), noise(rng)));
+      view.corners_px.push_back(s.exact[v][i] + Draws<2>(noise, rng));
       view.corner_ids.push_back(static_cast<int>(i));
     }
     views.push_back(view);
@@ -315,28 +316,39 @@ TEST(CalibrateIntrinsics, FixedAspectRatioHoldsFyEqualFx) {
   EXPECT_NEAR(r.intrinsics_sigma[0], r.intrinsics_sigma[1], 1e-12);
 }
 
-TEST(CalibrateIntrinsics, SplinedModelFitsTheOpencv8TruthToTheNoise) {
-  const Synthetic s = MakeSynthetic(14, 21);
+// How a splined fit of OPENCV8 data differs from the truth where the boards were seen, at every
+// 5th corner, after the small motion of the camera frame that the spline and the board poses can
+// trade (mrcal compares models the same way, after fitting the implied transform): the
+// difference in px and in units of the fit's own 1-sigma projection uncertainty there.
+struct SplinedVsTruth {
+  double rms_px = 0, worst_px = 0, rms_sigmas = 0, worst_sigmas = 0;
+  double frame_rotation_rad = 0, frame_shift_mm = 0, fit_rms_px = 0;
+  std::size_t corners = 0;
+};
+
+SplinedVsTruth CompareSplinedWithTruth(std::uint64_t board_seed, std::uint64_t noise_seed) {
+  const Synthetic s = MakeSynthetic(14, board_seed);
   IntrinsicsOptions options;
   options.model = LensModelKind::kSplined;
   options.spline_nx = 10;
   options.spline_ny = 10;
   const IntrinsicsResult r =
-      CalibrateIntrinsics(NoisyViews(s, 0.2, 5), s.board, 1024, 1024, options);
-  ASSERT_TRUE(r.camera);
+      CalibrateIntrinsics(NoisyViews(s, 0.2, noise_seed), s.board, 1024, 1024, options);
+  EXPECT_TRUE(r.camera);
+  if (!r.camera) return {};
   EXPECT_NE(r.camera->lensmodel().find("LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=10_Ny=10"),
             std::string::npos);
-  EXPECT_LT(r.rms_px, 0.2 * std::sqrt(2.0) * 1.1);
-  // Where the boards were seen, the splined camera projects like the truth, up to a small
-  // motion of the camera frame (which the spline and the poses can trade: mrcal compares models
-  // the same way, after fitting the implied transform).
   const calib::CameraModel truth = datasets::MakeCameraModel(s.truth);
   std::vector<Eigen::Vector3d> rays;
   std::vector<Eigen::Vector2d> expected;
+  std::vector<double> sigma;
   for (const CornerResidual& c : r.corners) {
     if (c.corner_id % 5 != 0) continue;
     rays.push_back(truth.Unproject(c.observed_px));
     expected.push_back(datasets::ProjectInView(truth, 700 * rays.back()).value());
+    const int gx = std::clamp(static_cast<int>(c.observed_px.x() / 1024 * 16), 0, 15);
+    const int gy = std::clamp(static_cast<int>(c.observed_px.y() / 1024 * 12), 0, 11);
+    sigma.push_back(r.uncertainty_px(gy, gx));
   }
   struct RotationFit {
     const CameraModel* model;
@@ -365,21 +377,51 @@ TEST(CalibrateIntrinsics, SplinedModelFitsTheOpencv8TruthToTheNoise) {
   ceres::Solver::Options so;
   ceres::Solver::Summary summary;
   ceres::Solve(so, &problem, &summary);
-  EXPECT_LT(Eigen::Vector3d(rv[0], rv[1], rv[2]).norm(), 0.02);
-  EXPECT_LT(Eigen::Vector3d(rv[3], rv[4], rv[5]).norm(), 20.0);
+  SplinedVsTruth out;
+  out.fit_rms_px = r.rms_px;
+  out.frame_rotation_rad = Eigen::Vector3d(rv[0], rv[1], rv[2]).norm();
+  out.frame_shift_mm = Eigen::Vector3d(rv[3], rv[4], rv[5]).norm();
   RotationFit fit{&*r.camera, &rays, &expected};
   std::vector<double> res(2 * rays.size());
   fit(rv, res.data());
-  // The regularisation bends the spline a little where few corners constrain it (image edges).
-  double ss = 0, worst = 0;
+  double ss = 0, ss_sigmas = 0;
   for (std::size_t i = 0; i < rays.size(); ++i) {
-    ss += res[2 * i] * res[2 * i] + res[2 * i + 1] * res[2 * i + 1];
-    worst = std::max(worst, std::hypot(res[2 * i], res[2 * i + 1]));
+    const double d = std::hypot(res[2 * i], res[2 * i + 1]);
+    ss += d * d;
+    out.worst_px = std::max(out.worst_px, d);
+    ss_sigmas += (d / sigma[i]) * (d / sigma[i]);
+    out.worst_sigmas = std::max(out.worst_sigmas, d / sigma[i]);
   }
-  std::printf("splined vs truth over %zu corners: rms %.3f px, max %.3f px\n", rays.size(),
-              std::sqrt(ss / rays.size()), worst);
-  EXPECT_LT(std::sqrt(ss / rays.size()), 0.2);
-  EXPECT_LT(worst, 1.0);
+  out.corners = rays.size();
+  out.rms_px = std::sqrt(ss / rays.size());
+  out.rms_sigmas = std::sqrt(ss_sigmas / rays.size());
+  return out;
+}
+
+// Three draws of boards and noise (0.2 px per axis). Where the boards were seen the spline must
+// be closer to the truth than one observed corner is (RMS below the corners' 2-D noise, 0.28 px);
+// the regularisation bends it more where few corners constrain it (image edges), so the worst
+// corner only has a gross bound (ten times that noise). The frame motion the spline trades with
+// the poses is small (a sign or axis error would be ~1 rad). Measured over 15 draws: RMS
+// 0.11-0.26 px, worst 0.55-1.97 px, frame 0.003-0.020 rad; the difference is 1.2-2.2 times the
+// fit's own projection uncertainty (RMS), which holds the noise but not the regularisation's
+// bias, as mrcal's does not.
+TEST(CalibrateIntrinsics, SplinedModelFitsTheOpencv8TruthToTheNoise) {
+  const double corner_noise_px = 0.2 * std::sqrt(2.0);
+  for (std::uint64_t draw = 0; draw < 3; ++draw) {
+    const SplinedVsTruth c = CompareSplinedWithTruth(21 + draw, 5 + draw);
+    std::printf(
+        "draw %d: fit rms %.3f px; splined vs truth over %zu corners: rms %.3f px, max "
+        "%.3f px (rms %.2f, max %.2f of its 1-sigma uncertainty); frame %.4f rad, "
+        "%.2f mm\n",
+        static_cast<int>(draw), c.fit_rms_px, c.corners, c.rms_px, c.worst_px, c.rms_sigmas,
+        c.worst_sigmas, c.frame_rotation_rad, c.frame_shift_mm);
+    EXPECT_LT(c.fit_rms_px, corner_noise_px * 1.1);
+    EXPECT_LT(c.rms_px, corner_noise_px);
+    EXPECT_LT(c.worst_px, 10 * corner_noise_px);
+    EXPECT_LT(c.frame_rotation_rad, 0.05);
+    EXPECT_LT(c.frame_shift_mm, 20.0);
+  }
 }
 
 // ---- bad input ----
@@ -414,10 +456,11 @@ TEST(CalibrateIntrinsics, ParallelViewsFlagTheFocalLengthUnobservable) {
   std::uniform_real_distribution<double> u(-1, 1);
   for (int v = 0; v < 8; ++v) {
     Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-    pose.linear() = Eigen::AngleAxisd(0.005 * u(rng), Eigen::Vector3d::UnitX()).toRotationMatrix() *
-                    Eigen::AngleAxisd(0.005 * u(rng), Eigen::Vector3d::UnitY()).toRotationMatrix() *
-                    Eigen::AngleAxisd(0.5 * u(rng), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    pose.translation() = Eigen::Vector3d(-160 + 60 * u(rng), -100 + 60 * u(rng), 700 + 80 * u(rng));
+    const Eigen::Vector3d angles{0.005 * u(rng), 0.005 * u(rng), 0.5 * u(rng)};
+    pose.linear() = Eigen::AngleAxisd(angles.x(), Eigen::Vector3d::UnitX()).toRotationMatrix() *
+                    Eigen::AngleAxisd(angles.y(), Eigen::Vector3d::UnitY()).toRotationMatrix() *
+                    Eigen::AngleAxisd(angles.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    pose.translation() = Eigen::Vector3d{-160 + 60 * u(rng), -100 + 60 * u(rng), 700 + 80 * u(rng)};
     s.camera_from_board.push_back(pose);
     std::vector<Eigen::Vector2d> q;
     for (const Eigen::Vector3d& c : s.board.Corners())

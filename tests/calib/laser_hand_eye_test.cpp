@@ -12,6 +12,7 @@
 
 #include "calib/camera_model.hpp"
 #include "core/error.hpp"
+#include "core/random.hpp"
 #include "core/se3.hpp"
 #include "datasets/robots.hpp"
 #include "datasets/simulate.hpp"
@@ -66,7 +67,7 @@ HandEyeOutcome SolveSynthetic(const datasets::SimConfig& config,
     std::mt19937_64 rng(99);
     std::normal_distribution<double> n(0.0, known_centre_sigma_mm);
     for (const Eigen::Vector3d& c : poses.centres_in_base) {
-      options.solver.known_centres_in_base.push_back(c + Eigen::Vector3d(n(rng), n(rng), n(rng)));
+      options.solver.known_centres_in_base.push_back(c + Draws<3>(n, rng));
     }
     options.solver.known_centre_sigma_mm = known_centre_sigma_mm;
   }

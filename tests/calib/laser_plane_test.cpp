@@ -18,6 +18,7 @@
 #include "calib/cost_functions/plane_board_joint.hpp"
 #include "calib/cost_functions/plane_point_distance.hpp"
 #include "core/error.hpp"
+#include "core/random.hpp"
 #include "datasets/camera_images.hpp"
 #include "datasets/simulate.hpp"
 #include "tests/cli_util.hpp"
@@ -492,9 +493,9 @@ TEST(LaserPlaneStripes, RenderedBoardsGiveTheTruePlane) {
   for (const auto& item : r.items) used += item.used ? 1 : 0;
   EXPECT_GE(used, 3);
   // Corner noise/bias of SB (0.03-0.1 px, SIMULATOR.md) tilts each board plane by ~1e-4 rad;
-  // the joint refinement over 4 views with ~1400 stripe peaks of ~0.03 px: measured (seed 31)
-  // normal 0.0005 deg, d 0.006 mm, RMS 0.012 mm (point fit on the PnP boards alone: 0.0014 deg,
-  // 0.017 mm). Bounds: the 0.01 deg; 0.05 mm for d (one seed, 4 views).
+  // the joint refinement over the views the laser crosses, ~0.03 px stripe peaks: measured (seed
+  // 31) normal 0.0020 deg, d 0.015 mm, RMS 0.013 mm. Bounds: the 0.01 deg; 0.05 mm for
+  // d (one seed, 4 views).
   EXPECT_LT(AngleDeg(r.normal, scene.laser_n), 0.01) << r.Summary();
   EXPECT_LT(std::abs(r.offset_mm - scene.laser_d), 0.05) << r.Summary();
   EXPECT_LT(r.rms_mm, 0.05);
@@ -516,12 +517,14 @@ TEST(LaserPlaneStripes, WithExactCornersOnlyTheStripePeaksLimitThePlane) {
   std::vector<StripeObservation> observations;
   for (std::size_t i = 0; i < scene.images.size(); ++i) {
     StripeObservation o = DetectStripe(scene.camera, scene.images[i], scene.target.board);
-    ASSERT_FALSE(o.stripe_px.empty()) << o.note;
+    // A board the laser misses has no stripe; the calibration leaves it out, and so does this.
+    if (o.stripe_px.empty()) continue;
     o.corners_px.clear();
     for (const auto& c : corners_in_target)
       o.corners_px.push_back(scene.camera.Project(poses[i] * c));
     observations.push_back(o);
   }
+  ASSERT_GE(observations.size(), 3u);
   const LaserPlaneResult r =
       CalibrateLaserPlaneFromStripeObservations(scene.camera, observations, scene.target.board);
   std::printf("exact corners: normal %.5f deg, d %.4f mm, rms %.4f mm\n",
@@ -706,8 +709,7 @@ TEST(LaserPlaneStripes, ReportedSigmaCoversTheTruthOverMonteCarloDraws) {
     for (std::size_t i = 0; i < poses.size(); ++i) {
       StripeObservation o;
       o.name = "view" + std::to_string(i);
-      for (const auto& c : corners[i])
-        o.corners_px.push_back(c + Eigen::Vector2d(corner_noise(rng), corner_noise(rng)));
+      for (const auto& c : corners[i]) o.corners_px.push_back(c + Draws<2>(corner_noise, rng));
       for (const auto& q : stripes[i])
         o.stripe_px.push_back(q + Eigen::Vector2d(0, row_noise(rng)));
       observations.push_back(o);

@@ -14,9 +14,9 @@ namespace lasercell::calib {
 namespace {
 
 Eigen::Isometry3d RandomPose(datasets::Rng& rng) {
-  const Eigen::Vector3d w(rng.Normal(), rng.Normal(), rng.Normal());
-  const Eigen::Vector3d t(rng.Uniform(-1000, 1000), rng.Uniform(-1000, 1000),
-                          rng.Uniform(-1000, 1000));
+  const Eigen::Vector3d w{rng.Normal(), rng.Normal(), rng.Normal()};
+  const Eigen::Vector3d t{rng.Uniform(-1000, 1000), rng.Uniform(-1000, 1000),
+                          rng.Uniform(-1000, 1000)};
   return PoseFromRotationVector(w, t);
 }
 
@@ -70,11 +70,11 @@ TEST(FitRigidTransform, CovarianceIsCalibrated) {
     std::vector<Eigen::Matrix3d> src_cov, dst_cov;
     for (const auto& p : Layout()) {
       const Eigen::Vector3d s_sigma(0.01, 0.02, 0.05), d_sigma(0.05, 0.05, 0.05);
-      src.push_back(p + Eigen::Vector3d(rng.Normal() * s_sigma.x(), rng.Normal() * s_sigma.y(),
-                                        rng.Normal() * s_sigma.z()));
-      dst.push_back(truth * p + Eigen::Vector3d(rng.Normal() * d_sigma.x(),
+      src.push_back(p + Eigen::Vector3d{rng.Normal() * s_sigma.x(), rng.Normal() * s_sigma.y(),
+                                        rng.Normal() * s_sigma.z()});
+      dst.push_back(truth * p + Eigen::Vector3d{rng.Normal() * d_sigma.x(),
                                                 rng.Normal() * d_sigma.y(),
-                                                rng.Normal() * d_sigma.z()));
+                                                rng.Normal() * d_sigma.z()});
       src_cov.push_back(s_sigma.cwiseAbs2().asDiagonal());
       dst_cov.push_back(d_sigma.cwiseAbs2().asDiagonal());
     }

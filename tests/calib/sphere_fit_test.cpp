@@ -21,7 +21,7 @@ using testing::SampleCap;
 TEST(SphereDistanceCost, DerivativesMatchNumericDifferences) {
   datasets::Rng rng(11);
   for (int k = 0; k < 20; ++k) {
-    const Eigen::Vector3d p(rng.Uniform(-40, 40), rng.Uniform(-40, 40), rng.Uniform(-40, 40));
+    const Eigen::Vector3d p{rng.Uniform(-40, 40), rng.Uniform(-40, 40), rng.Uniform(-40, 40)};
     std::unique_ptr<ceres::CostFunction> cost(SphereDistanceCost::Create(p));
     double center[3] = {rng.Uniform(-5, 5), rng.Uniform(-5, 5), rng.Uniform(-5, 5)};
     double radius = rng.Uniform(10, 30);
@@ -44,7 +44,7 @@ TEST(FitSphere, HalfSphereCentreWithinTwentyMicrometres) {
   datasets::Rng rng(2026);
   double worst_fixed = 0, worst_free = 0;
   for (int draw = 0; draw < 20; ++draw) {
-    const Eigen::Vector3d c(rng.Uniform(-300, 300), rng.Uniform(-300, 300), rng.Uniform(500, 700));
+    const Eigen::Vector3d c{rng.Uniform(-300, 300), rng.Uniform(-300, 300), rng.Uniform(500, 700)};
     const auto points = SampleCap(c, 25.0, 85.0, 0.05, rng);
     ASSERT_GT(points.size(), 1200u);
     SphereFitOptions fixed;
@@ -75,7 +75,7 @@ TEST(FitSphere, CentreCovarianceIsCalibrated) {
     datasets::Rng rng(free_radius ? 77 : 78);
     int inside = 0, total = 0;
     for (int draw = 0; draw < lasercell::test::Draws(150); ++draw) {
-      const Eigen::Vector3d c(rng.Uniform(-50, 50), rng.Uniform(-50, 50), rng.Uniform(-50, 50));
+      const Eigen::Vector3d c{rng.Uniform(-50, 50), rng.Uniform(-50, 50), rng.Uniform(-50, 50)};
       const auto points = SampleCap(c, 25.0, 80.0, 0.05, rng, 2.58, 1.5);
       SphereFitOptions options;
       if (!free_radius) options.radius_mm = 25.0;
@@ -104,7 +104,7 @@ TEST(FitSphere, GrossOutliersAreFlaggedAndDoNotPull) {
   // 10 % outliers: a stray surface 1-10 mm off the sphere (reflections, stand edge, dust).
   for (std::size_t i = 0; i < clean / 10; ++i) {
     const Eigen::Vector3d dir =
-        Eigen::Vector3d(rng.Normal(), rng.Normal(), std::abs(rng.Normal())).normalized();
+        Eigen::Vector3d{rng.Normal(), rng.Normal(), std::abs(rng.Normal())}.normalized();
     points.push_back(c + (25.0 + rng.Uniform(1.0, 10.0)) * dir);
   }
   SphereFitOptions options;

@@ -24,7 +24,7 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 Eigen::Matrix3d RandomTilt(datasets::Rng& rng, double max_deg) {
-  Eigen::Vector3d axis(rng.Normal(), rng.Normal(), rng.Normal());
+  Eigen::Vector3d axis{rng.Normal(), rng.Normal(), rng.Normal()};
   return Eigen::AngleAxisd(rng.Uniform(-max_deg, max_deg) * kDeg, axis.normalized())
       .toRotationMatrix();
 }
@@ -54,7 +54,7 @@ SyntheticSet MakeSet(std::uint64_t seed, int poses, double robot_sigma_mm) {
   for (int i = 0; i < poses; ++i) {
     const double h = rng.Uniform(5, 30);  // r / R <= 0.992: every section is used
     const double r = std::sqrt(radius * radius - h * h);
-    const Eigen::Vector3d s(rng.Uniform(40, 70), -h, rng.Uniform(-160, -130));
+    const Eigen::Vector3d s{rng.Uniform(40, 70), -h, rng.Uniform(-160, -130)};
     Eigen::Isometry3d base_from_sensor = Eigen::Isometry3d::Identity();
     base_from_sensor.linear() = RandomTilt(rng, 15);
     base_from_sensor.translation() = set.centre_in_base - base_from_sensor.linear() * s;
@@ -63,11 +63,11 @@ SyntheticSet MakeSet(std::uint64_t seed, int poses, double robot_sigma_mm) {
     const Eigen::Isometry3d true_base_from_flange =
         base_from_sensor * set.flange_from_sensor.inverse();
     Eigen::Isometry3d error = Eigen::Isometry3d::Identity();
-    const Eigen::Vector3d w(rng.Normal(), rng.Normal(), rng.Normal());
+    const Eigen::Vector3d w{rng.Normal(), rng.Normal(), rng.Normal()};
     error.linear() =
         Eigen::AngleAxisd(w.norm() * robot_sigma_mm / 500, w.normalized()).toRotationMatrix();
     error.translation() =
-        robot_sigma_mm * Eigen::Vector3d(rng.Normal(), rng.Normal(), rng.Normal());
+        robot_sigma_mm * Eigen::Vector3d{rng.Normal(), rng.Normal(), rng.Normal()};
     p.base_from_flange = error * true_base_from_flange;
     // The facing arc: about the direction from the circle centre to the sensor origin.
     const double towards = std::atan2(-s.z(), -s.x());

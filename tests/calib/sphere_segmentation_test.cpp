@@ -214,7 +214,7 @@ TEST(LineCorrelationFactor, MakesTheCentreCovarianceCalibratedUnderCorrelatedNoi
   const double phi = 0.8, sigma = 0.05, r = 25.0;
   int inside = 0, inside_raw = 0, total = 0;
   for (int draw = 0; draw < lasercell::test::Draws(150); ++draw) {
-    const Eigen::Vector3d c(rng.Uniform(-50, 50), rng.Uniform(-50, 50), rng.Uniform(-50, 50));
+    const Eigen::Vector3d c{rng.Uniform(-50, 50), rng.Uniform(-50, 50), rng.Uniform(-50, 50)};
     PointCloud cloud;
     const double ox = rng.Uniform(0, testing::kProfileSpacingMm);
     const double oy = rng.Uniform(0, testing::kColumnSpacingMm);

@@ -32,7 +32,7 @@ inline std::vector<Eigen::Vector3d> SampleCap(const Eigen::Vector3d& center, dou
       const double rho2 = x * x + y * y;
       if (rho2 > rho_max * rho_max) continue;
       const Eigen::Vector3d p(x, y, std::sqrt(radius * radius - rho2));
-      const Eigen::Vector3d noise(rng.Normal() * sigma, rng.Normal() * sigma, rng.Normal() * sigma);
+      const Eigen::Vector3d noise{rng.Normal() * sigma, rng.Normal() * sigma, rng.Normal() * sigma};
       points.push_back(center + p + noise);
     }
   }

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/random.hpp"
 
 namespace lasercell {
 namespace {
@@ -32,9 +33,9 @@ using ::testing::HasSubstr;
 
 Eigen::Isometry3d RandomPose(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
-  const Eigen::Vector3d axis = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+  const Eigen::Vector3d axis = Draws<3>(n, rng).normalized();
   return PoseFromQuaternion(Eigen::Quaterniond(Eigen::AngleAxisd(3.0 * n(rng), axis)),
-                            500.0 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+                            500.0 * Draws<3>(n, rng));
 }
 
 StaticEdge Edge(const std::string& parent, const std::string& child,
@@ -311,10 +312,9 @@ TEST(FrameGraphTest, SetParentFromChildStoresTheCanonicalQuaternionOnce) {
   std::mt19937 rng(12);
   std::normal_distribution<double> n(0.0, 1.0);
   for (int trial = 0; trial < 2000; ++trial) {
-    const Eigen::Quaterniond q = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized();
-    const Eigen::Isometry3d pose =
-        PoseFromQuaternion(trial % 2 ? q : Eigen::Quaterniond(-q.coeffs()),
-                           100.0 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+    const Eigen::Quaterniond q = Eigen::Quaterniond{n(rng), n(rng), n(rng), n(rng)}.normalized();
+    const Eigen::Isometry3d pose = PoseFromQuaternion(
+        trial % 2 ? q : Eigen::Quaterniond(-q.coeffs()), 100.0 * Draws<3>(n, rng));
     StaticEdge edge;
     edge.SetParentFromChild(pose);
     ASSERT_EQ(edge.parent_from_child.rotation.coeffs(),

@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/io/file_util.hpp"
+#include "core/random.hpp"
 #include "tests/cli_util.hpp"
 
 namespace lasercell {
@@ -58,9 +59,8 @@ bool SameBits(const A& a, const B& b) {
 
 Eigen::Isometry3d RandomPose(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
-  Eigen::Isometry3d pose(
-      Eigen::AngleAxisd(3.0 * n(rng), Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized()));
-  pose.translation() = 700.0 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+  Eigen::Isometry3d pose(Eigen::AngleAxisd(3.0 * n(rng), Draws<3>(n, rng).normalized()));
+  pose.translation() = 700.0 * Draws<3>(n, rng);
   return pose;
 }
 
@@ -143,9 +143,11 @@ FrameGraph RandomCell(std::mt19937& rng, int frames) {
   for (const char* robot : {"vision_robot", "handling_robot"}) {
     std::vector<DhJoint> rows(6);
     for (DhJoint& r : rows) r = {300 * n(rng), 2 * n(rng), 300 * n(rng), n(rng), 1e-3 * n(rng)};
+    const Eigen::Isometry3d base = RandomPose(rng);
+    const Eigen::Isometry3d tool = RandomPose(rng);
     graph.SetRobot(
         robot, DhChain(robot[0] == 'v' ? DhConvention::kStandard : DhConvention::kModified, rows,
-                       RandomPose(rng), RandomPose(rng)));
+                       base, tool));
   }
   for (int i = 1; i < frames; ++i) {
     const int j = std::uniform_int_distribution<int>(0, i - 1)(rng);
@@ -279,17 +281,19 @@ TEST(FrameGraphYamlTest, RandomCellsRoundTripBitExactly) {
 /// and near pi included), or after arithmetic (slightly off orthonormal).
 Eigen::Isometry3d AnyPose(std::mt19937& rng, int trial) {
   std::normal_distribution<double> n(0.0, 1.0);
-  const Eigen::Vector3d t(n(rng), n(rng), n(rng));
+  const Eigen::Vector3d t{n(rng), n(rng), n(rng)};
   if (trial % 3 == 0) {
-    return PoseFromQuaternion(Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)), t);
+    return PoseFromQuaternion(Eigen::Quaterniond{n(rng), n(rng), n(rng), n(rng)}, t);
   }
   if (trial % 3 == 1) {
-    const double angle = trial % 2 ? std::numbers::pi - std::pow(10.0, -n(rng) * n(rng) - 1)
-                                   : std::pow(10.0, -8 * std::abs(n(rng)));
-    return Eigen::Translation3d(t) *
-           Eigen::AngleAxisd(angle, Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized());
+    const Eigen::Vector2d e{n(rng), n(rng)};
+    const double angle = trial % 2 ? std::numbers::pi - std::pow(10.0, -e.x() * e.y() - 1)
+                                   : std::pow(10.0, -8 * std::abs(e.x()));
+    return Eigen::Translation3d(t) * Eigen::AngleAxisd(angle, Draws<3>(n, rng).normalized());
   }
-  return RandomPose(rng) * RandomPose(rng) * RandomPose(rng).inverse();
+  const Eigen::Isometry3d a = RandomPose(rng);
+  const Eigen::Isometry3d b = RandomPose(rng);
+  return a * b * RandomPose(rng).inverse();
 }
 
 /// The rotation_wxyz numbers of the first pose in `text` after `field`.
@@ -691,8 +695,8 @@ FrameGraph CellWithLaserPlane(std::mt19937& rng) {
                           Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()));
   graph.SetStaticEdge(edge);
   LaserPlaneEntry plane;
-  plane.normal = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
-  plane.point_mm = Eigen::Vector3d(g(rng), g(rng), g(rng)) * 300.0;
+  plane.normal = Draws<3>(g, rng).normalized();
+  plane.point_mm = Draws<3>(g, rng) * 300.0;
   Eigen::Matrix4d a = Eigen::Matrix4d::NullaryExpr([&]() { return g(rng) * 1e-4; });
   plane.covariance = (a * a.transpose()).eval();
   plane.camera_covariance = (0.5 * a * a.transpose()).eval();

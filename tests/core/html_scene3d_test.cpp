@@ -88,7 +88,8 @@ Scene3d TestScene(std::size_t points = 40000) {
   sweep.name = "sweep";
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> u(-100.0f, 100.0f);
-  for (std::size_t i = 0; i < points; ++i) sweep.positions.emplace_back(u(rng), u(rng), 0.0f);
+  for (std::size_t i = 0; i < points; ++i)
+    sweep.positions.push_back(Eigen::Vector3f{u(rng), u(rng), 0.0f});
   sweep.size_mm = 1.5f;
   scene.points.push_back(sweep);
   Eigen::Isometry3d base_from_part = Eigen::Isometry3d::Identity();

@@ -40,8 +40,8 @@ inline PointCloud MakeFullCloud(std::size_t n, std::int32_t cols = 7, unsigned s
   std::normal_distribution<double> gauss;
   PointCloud c;
   for (std::size_t i = 0; i < n; ++i) {
-    c.positions.emplace_back(coord(rng), coord(rng), coord(rng));
-    c.normals.push_back(Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng) + 3.0).normalized());
+    c.positions.push_back(Eigen::Vector3d{coord(rng), coord(rng), coord(rng)});
+    c.normals.push_back(Eigen::Vector3d{gauss(rng), gauss(rng), gauss(rng) + 3.0}.normalized());
     c.intensity.push_back(static_cast<float>(coord(rng)) * 0.37f);
     c.profile.push_back(static_cast<std::int32_t>(i) / cols);
     c.column.push_back(static_cast<std::int32_t>(i) % cols);

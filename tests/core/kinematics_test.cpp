@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/random.hpp"
 
 namespace lasercell {
 namespace {
@@ -72,9 +73,9 @@ Eigen::Isometry3d Ur5Reference(const std::vector<double>& q) {
 
 Eigen::Isometry3d RandomPose(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
-  const Eigen::Vector3d axis = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+  const Eigen::Vector3d axis = Draws<3>(n, rng).normalized();
   Eigen::Isometry3d pose(Eigen::AngleAxisd(2.0 * n(rng), axis));
-  pose.translation() = 200.0 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+  pose.translation() = 200.0 * Draws<3>(n, rng);
   return pose;
 }
 
@@ -270,11 +271,11 @@ TEST(KinematicsTest, MountsAreStoredAsGivenWithTheirMatricesCached) {
     // Any sign, -0, and a norm off 1 by less than 1e-9, as a file may hold them.
     const double off = 1.0 + 9e-10 * (2 * (trial % 2) - 1);
     const QuaternionPose base{
-        Eigen::Quaterniond(Eigen::Vector4d(n(rng), n(rng), -0.0, n(rng)).normalized() * off),
-        100.0 * Eigen::Vector3d(n(rng), -0.0, n(rng))};
+        Eigen::Quaterniond(Eigen::Vector4d{n(rng), n(rng), -0.0, n(rng)}.normalized() * off),
+        100.0 * Eigen::Vector3d{n(rng), -0.0, n(rng)}};
     const QuaternionPose flange{
-        Eigen::Quaterniond(-Eigen::Vector4d(n(rng), n(rng), n(rng), n(rng)).normalized()),
-        Eigen::Vector3d(n(rng), n(rng), n(rng))};
+        Eigen::Quaterniond(-Eigen::Vector4d{n(rng), n(rng), n(rng), n(rng)}.normalized()),
+        Draws<3>(n, rng)};
     const DhChain chain(DhConvention::kStandard, NominalUr5().joints(), base, flange);
     EXPECT_TRUE(SameBits(chain.base_from_chain_stored(), base)) << "trial " << trial;
     EXPECT_TRUE(SameBits(chain.chain_from_flange_stored(), flange)) << "trial " << trial;

@@ -8,6 +8,7 @@
 #include <random>
 
 #include "core/error.hpp"
+#include "core/random.hpp"
 #include "core/se3.hpp"
 
 namespace lasercell {
@@ -20,8 +21,8 @@ PointCloud RandomCloud(std::size_t n, unsigned seed) {
   std::uniform_real_distribution<double> u(-100.0, 100.0);
   PointCloud cloud;
   for (std::size_t i = 0; i < n; ++i) {
-    cloud.positions.emplace_back(u(rng), u(rng), u(rng));
-    cloud.normals.push_back(Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized());
+    cloud.positions.push_back(Eigen::Vector3d{u(rng), u(rng), u(rng)});
+    cloud.normals.push_back(Draws<3>(u, rng).normalized());
     cloud.intensity.push_back(static_cast<float>(i));
   }
   return cloud;

@@ -18,6 +18,7 @@
 #include "core/error.hpp"
 #include "core/frame_graph.hpp"
 #include "core/kinematics.hpp"
+#include "core/random.hpp"
 
 namespace lasercell {
 namespace {
@@ -28,8 +29,8 @@ using ::testing::HasSubstr;
 Eigen::Isometry3d RandomPose(std::mt19937& rng, double half_mm) {
   std::normal_distribution<double> n(0.0, 1.0);
   std::uniform_real_distribution<double> angle(0.0, 3.0), t(-half_mm, half_mm);
-  const Eigen::Vector3d axis = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
-  return PoseFromRotationVector(angle(rng) * axis, Eigen::Vector3d(t(rng), t(rng), t(rng)));
+  const Eigen::Vector3d axis = Draws<3>(n, rng).normalized();
+  return PoseFromRotationVector(angle(rng) * axis, Draws<3>(t, rng));
 }
 
 // A random full-rank covariance with correlations: rotation sigmas about `rot_rad`,
@@ -79,8 +80,8 @@ TEST(PoseCovarianceTest, ExpAndLogAreInverse) {
   for (const double angle : {0.0, 1e-9, 1e-4, 5e-3, 2e-2, 0.7, 2.0, 3.1}) {
     for (int trial = 0; trial < 20; ++trial) {
       Vector6d xi;
-      xi.head<3>() = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized() * angle;
-      xi.tail<3>() = 300.0 * Eigen::Vector3d(n(rng), n(rng), n(rng));
+      xi.head<3>() = Draws<3>(n, rng).normalized() * angle;
+      xi.tail<3>() = 300.0 * Draws<3>(n, rng);
       const Vector6d back = LogSe3(ExpSe3(xi));
       EXPECT_LT((back - xi).head<3>().norm(), 1e-12) << "angle " << angle;
       EXPECT_LT((back - xi).tail<3>().norm(), 1e-12 * 300.0) << "angle " << angle;
@@ -205,9 +206,10 @@ TEST(PoseCovarianceTest, FrameGraphCovarianceMatchesMonteCarloAlongAPath) {
   GaussianSampler s1(c1), s2(c2), s3(c3);
   std::vector<Vector6d> errors;
   for (int i = 0; i < 20000; ++i) {
-    const Eigen::Isometry3d sampled = (ExpSe3(s1(rng)) * cell_from_base) *
-                                      (ExpSe3(s2(rng)) * base_from_tool) *
-                                      (ExpSe3(s3(rng)) * sensor_from_tool).inverse();
+    const Vector6d e1 = s1(rng), e2 = s2(rng), e3 = s3(rng);
+    const Eigen::Isometry3d sampled = (ExpSe3(e1) * cell_from_base) *
+                                      (ExpSe3(e2) * base_from_tool) *
+                                      (ExpSe3(e3) * sensor_from_tool).inverse();
     errors.push_back(LogSe3(sampled * nominal.inverse()));
   }
   const Matrix6d sample = SampleCovariance<6>(errors);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/error.hpp"
+#include "core/random.hpp"
 
 namespace lasercell {
 namespace {
@@ -21,7 +22,7 @@ constexpr double kPi = std::numbers::pi;
 
 Eigen::Vector3d RandomAxis(std::mt19937& rng) {
   std::normal_distribution<double> n(0.0, 1.0);
-  return Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+  return Draws<3>(n, rng).normalized();
 }
 
 /// Rotation matrices agree (sign-free, unlike quaternion coefficients).
@@ -155,8 +156,7 @@ TEST(Se3Test, AverageQuaternionsIgnoresSignsAndUsesWeights) {
   std::normal_distribution<double> noise(0.0, 0.01);
   std::vector<Eigen::Quaterniond> cloud;
   for (int i = 0; i < 400; ++i) {
-    Eigen::Quaterniond q =
-        q1 * QuaternionFromRotationVector(Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
+    Eigen::Quaterniond q = q1 * QuaternionFromRotationVector(Draws<3>(noise, rng));
     if (i % 2 == 1) q.coeffs() = -q.coeffs();
     cloud.push_back(q);
   }
@@ -264,7 +264,7 @@ TEST(Se3Test, CanonicalQuaternionHasThePositiveFirstNonzeroAndNoNegativeZero) {
   std::mt19937 rng(21);
   std::normal_distribution<double> n(0.0, 1.0);
   for (int trial = 0; trial < 1000; ++trial) {
-    const Eigen::Quaterniond q = Eigen::Quaterniond(n(rng), n(rng), n(rng), n(rng)).normalized();
+    const Eigen::Quaterniond q = Eigen::Quaterniond{n(rng), n(rng), n(rng), n(rng)}.normalized();
     const Eigen::Quaterniond c = CanonicalQuaternion(q.toRotationMatrix());
     EXPECT_GT(c.w(), 0.0);
     EXPECT_NEAR(c.norm(), 1.0, 1e-15);
@@ -291,8 +291,9 @@ TEST(Se3Test, QuaternionPoseKeepsItsCoefficientsAndConvertsOnce) {
   std::mt19937 rng(22);
   std::normal_distribution<double> n(0.0, 1.0);
   for (int trial = 0; trial < 1000; ++trial) {
-    const Eigen::Isometry3d pose = PoseFromRotationVector(
-        3.0 * n(rng) * RandomAxis(rng), 500.0 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+    const double angle = 3.0 * n(rng);
+    const Eigen::Vector3d axis = RandomAxis(rng);
+    const Eigen::Isometry3d pose = PoseFromRotationVector(angle * axis, 500.0 * Draws<3>(n, rng));
     const QuaternionPose stored = QuaternionPose::FromIsometry(pose);
     EXPECT_EQ(stored.rotation.coeffs(), CanonicalQuaternion(pose.linear()).coeffs());
     EXPECT_EQ(stored.translation_mm, pose.translation());
@@ -362,7 +363,7 @@ TEST(FixedXyzAngles, RoundTripAndMatchTheRobotConvention) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> angle(-179.0, 179.0), tilt(-89.0, 89.0);
   for (int i = 0; i < 200; ++i) {
-    const Eigen::Vector3d abc(angle(rng), tilt(rng), angle(rng));
+    const Eigen::Vector3d abc{angle(rng), tilt(rng), angle(rng)};
     const Eigen::Vector3d back = FixedXyzDegFromRotation(RotationFromFixedXyzDeg(abc));
     EXPECT_TRUE(back.isApprox(abc, 1e-9)) << abc.transpose() << " -> " << back.transpose();
   }

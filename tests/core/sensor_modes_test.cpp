@@ -26,7 +26,7 @@ LaserPlaneEntry PlaneWithModes(std::mt19937& rng) {
     if (k < 3) {
       for (int i = 0; i < 12; ++i) m.intrinsics_step.push_back(g(rng) * 1e-3);
     }
-    m.plane_step = Eigen::Vector4d(g(rng), g(rng), g(rng), g(rng) * 100) * 1e-5;
+    m.plane_step = Eigen::Vector4d{g(rng), g(rng), g(rng), g(rng) * 100} * 1e-5;
     cov += m.plane_step * m.plane_step.transpose();
     plane.error_modes.push_back(m);
   }

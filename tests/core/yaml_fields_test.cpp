@@ -86,6 +86,24 @@ TEST(YamlFields, ErrorsNameTheFileAndTheDottedField) {
             "f.yaml: line 1: field 'x' must be a finite number (got '.nan')");
 }
 
+TEST(YamlFields, TextFieldsAndKeysRefuseControlBytes) {
+  // Found by fuzzing: a model path with control bytes did not survive being written and read
+  // again. Tab and newline are text and stay.
+  EXPECT_EQ(ErrorOf([] {
+              Fields top = Fields::Parse("model: \"a\\0b.stl\"\n", "p.yaml");
+              std::string model;
+              top.Read("model", &model);
+            }),
+            "p.yaml: line 1: field 'model' contains the control byte 0x00; the file is text: "
+            "remove it");
+  EXPECT_NE(ErrorOf([] { Fields::Parse("\"k\\x1b\": 1\n", "p.yaml").Keys(); }).find("a key"),
+            std::string::npos);
+  Fields top = Fields::Parse("note: \"two\\tcolumns\\nand lines\"\n", "p.yaml");
+  std::string note;
+  top.Read("note", &note);
+  EXPECT_EQ(note, "two\tcolumns\nand lines");
+}
+
 TEST(YamlFields, RequireFormatNamesWhatWasFoundAndWhatThisBuildReads) {
   const auto require = [](const std::string& text) {
     return ErrorOf([&] {

@@ -258,9 +258,9 @@ TEST(ChairParts, RenderMeshIsClosedOutwardAndHoldsTheSolidsVolume) {
     const int n = 200000;
     int inside = 0;
     for (int i = 0; i < n; ++i) {
-      const Eigen::Vector3d p(rng.Uniform(box.min().x(), box.max().x()),
+      const Eigen::Vector3d p{rng.Uniform(box.min().x(), box.max().x()),
                               rng.Uniform(box.min().y(), box.max().y()),
-                              rng.Uniform(box.min().z(), box.max().z()));
+                              rng.Uniform(box.min().z(), box.max().z())};
       inside += SolidContains(part.solid, p) ? 1 : 0;
     }
     const double f = static_cast<double>(inside) / n;

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "core/error.hpp"
+#include "core/random.hpp"
 #include "datasets/chair_parts.hpp"
 #include "datasets/chair_seat.hpp"
 #include "datasets/sim_profile.hpp"
@@ -22,7 +23,7 @@ namespace {
 TEST(ClosestPointOnTriangle, IsTheNearestPointOfTheTriangle) {
   std::mt19937_64 rng(71);
   std::uniform_real_distribution<double> u(-10.0, 10.0);
-  const auto random_point = [&] { return Eigen::Vector3d(u(rng), u(rng), u(rng)); };
+  const auto random_point = [&] { return Draws<3>(u, rng); };
   for (int trial = 0; trial < 200; ++trial) {
     const Eigen::Vector3d a = random_point(), b = random_point(), c = random_point();
     const Eigen::Vector3d p = 2.0 * random_point();

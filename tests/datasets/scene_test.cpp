@@ -25,9 +25,9 @@ Eigen::Isometry3d Pose(double rx, double ry, double rz, double x, double y, doub
 std::pair<Eigen::Vector3d, Eigen::Vector3d> RandomRay(Rng& rng, const Eigen::Vector3d& from,
                                                       const Eigen::Vector3d& at, double spread) {
   const Eigen::Vector3d o =
-      from + Eigen::Vector3d(rng.Uniform(-50, 50), rng.Uniform(-50, 50), rng.Uniform(-50, 50));
+      from + Eigen::Vector3d{rng.Uniform(-50, 50), rng.Uniform(-50, 50), rng.Uniform(-50, 50)};
   const Eigen::Vector3d t =
-      at + spread * Eigen::Vector3d(rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1));
+      at + spread * Eigen::Vector3d{rng.Uniform(-1, 1), rng.Uniform(-1, 1), rng.Uniform(-1, 1)};
   return {o, (t - o).normalized()};
 }
 

@@ -131,6 +131,10 @@ TEST(RobotProtocol, MalformedRequestsSayWhy) {
   }
   EXPECT_TRUE(DecodeAsciiRequest("LOOK 1 2 3 4 5 6\r").request);
   EXPECT_TRUE(DecodeAsciiRequest("  PING ").request);
+  // A pose no robot reaches: the replies' encoder could not write it back (found by fuzzing).
+  EXPECT_EQ(DecodeAsciiRequest("LOOK 1e12 2 3 4 5 6").error,
+            "pose value beyond +-1e9 (mm or degrees)");
+  EXPECT_TRUE(DecodeAsciiRequest("LOOK 1e9 2 3 4 5 -1e9").request);
 }
 
 // A server on a thread with a handler that finds two grasps per LOOK.

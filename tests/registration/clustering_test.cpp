@@ -8,6 +8,7 @@
 #include <random>
 
 #include "core/error.hpp"
+#include "core/random.hpp"
 #include "core/se3.hpp"
 #include "registration_test_util.hpp"
 
@@ -22,8 +23,9 @@ void AddGroup(const Eigen::Isometry3d& centre, int count, double votes, double t
   std::uniform_real_distribution<double> u(0.2, 1.0);
   for (int i = 0; i < count; ++i) {
     PoseHypothesis h;
-    h.scene_from_centered =
-        centre * test::RandomPerturbation(rng, angle_rad * u(rng), trans_mm * u(rng));
+    const double angle = angle_rad * u(rng);
+    const double shift = trans_mm * u(rng);
+    h.scene_from_centered = centre * test::RandomPerturbation(rng, angle, shift);
     h.votes = votes;
     out->push_back(h);
   }
@@ -157,11 +159,12 @@ Correspondences MakeCorrespondences(const Eigen::Isometry3d& truth, int count, d
     const Eigen::Vector3d m(x, y, (x * x - y * y) / 400.0);
     const Eigen::Vector3d n = Eigen::Vector3d(-x / 200.0, y / 200.0, 1.0).normalized();
     const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
-    Eigen::Vector3d s = truth * (m + half_step_mm * (box(rng) * u + box(rng) * v) + along(rng) * n);
-    if (unit(rng) < outliers) s = truth * Eigen::Vector3d(150 * box(rng), 100 * box(rng), 0);
-    const Eigen::Matrix3d r = truth.linear() * QuaternionFromRotationVector(
-                                                   Eigen::Vector3d(turn(rng), turn(rng), turn(rng)))
-                                                   .toRotationMatrix();
+    const Eigen::Vector3d jitter{box(rng), box(rng), along(rng)};
+    Eigen::Vector3d s =
+        truth * (m + half_step_mm * (jitter.x() * u + jitter.y() * v) + jitter.z() * n);
+    if (unit(rng) < outliers) s = truth * Eigen::Vector3d{150 * box(rng), 100 * box(rng), 0};
+    const Eigen::Matrix3d r =
+        truth.linear() * QuaternionFromRotationVector(Draws<3>(turn, rng)).toRotationMatrix();
     PoseHypothesis h;
     h.scene_reference = h.model_reference = static_cast<std::uint32_t>(i);
     h.votes = 10.0 + 10.0 * unit(rng);

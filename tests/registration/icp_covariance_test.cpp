@@ -101,7 +101,7 @@ void AddPatchError(const PatchError& patch, const Eigen::Vector3d& toward_sensor
   if (patch.side_mm <= 0.0) return;
   std::uniform_real_distribution<double> shift(0.0, patch.side_mm);
   std::normal_distribution<double> offset(0.0, patch.sigma_mm);
-  const Eigen::Vector3d grid_shift(shift(rng), shift(rng), shift(rng));
+  const Eigen::Vector3d grid_shift{shift(rng), shift(rng), shift(rng)};
   std::map<std::array<long, 3>, double> offsets;
   for (Eigen::Vector3d& p : cloud->positions) {
     const Eigen::Vector3d cell = ((p + grid_shift) / patch.side_mm).array().floor();

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/error.hpp"
+#include "core/random.hpp"
 
 namespace lasercell::registration {
 namespace {
@@ -15,7 +16,7 @@ std::vector<Eigen::Vector3d> RandomPoints(std::size_t n, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-50.0, 50.0);
   std::vector<Eigen::Vector3d> points(n);
-  for (auto& p : points) p = Eigen::Vector3d(u(rng), u(rng), u(rng));
+  for (auto& p : points) p = Draws<3>(u, rng);
   return points;
 }
 

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/error.hpp"
+#include "core/random.hpp"
 #include "registration/ppf_feature.hpp"
 #include "registration_test_util.hpp"
 #include "tests/cli_util.hpp"
@@ -22,8 +23,7 @@ struct OrientedPoint {
 
 OrientedPoint RandomOrientedPoint(std::mt19937_64& rng) {
   std::normal_distribution<double> g(0.0, 1.0);
-  return {Eigen::Vector3d(g(rng), g(rng), g(rng)) * 40.0,
-          Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized()};
+  return {Draws<3>(g, rng) * 40.0, Draws<3>(g, rng).normalized()};
 }
 
 TEST(PpfFeatureTest, InvariantUnderRigidTransforms) {

@@ -21,6 +21,7 @@
 #include "core/error.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/point_cloud.hpp"
+#include "core/random.hpp"
 #include "core/se3.hpp"
 #include "datasets/synthetic_scan.hpp"
 #include "registration/kdtree.hpp"
@@ -91,7 +92,7 @@ inline Eigen::Isometry3d RandomPose(std::mt19937_64& rng, double half_mm) {
 inline Eigen::Isometry3d RandomPerturbation(std::mt19937_64& rng, double angle_rad,
                                             double trans_mm) {
   std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::Vector3d w(g(rng), g(rng), g(rng)), t(g(rng), g(rng), g(rng));
+  Eigen::Vector3d w{g(rng), g(rng), g(rng)}, t{g(rng), g(rng), g(rng)};
   return PoseFromRotationVector(w.normalized() * angle_rad, t.normalized() * trans_mm);
 }
 
@@ -101,7 +102,7 @@ inline PointCloud SpherePoints(std::size_t n, double radius_mm, const Eigen::Vec
   std::normal_distribution<double> g(0.0, 1.0);
   PointCloud cloud;
   for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3d d = Eigen::Vector3d(g(rng), g(rng), g(rng)).normalized();
+    const Eigen::Vector3d d = Draws<3>(g, rng).normalized();
     cloud.positions.push_back(centre + radius_mm * d);
     cloud.normals.push_back(d);
   }
