@@ -22,6 +22,8 @@ void AddTable1BenchCommand(CLI::App& bench);
 void AddStreamBenchCommand(CLI::App& bench);
 /// Registers `bench serve` under `bench` (bench_serve.cpp).
 void AddServeBenchCommand(CLI::App& bench);
+/// Registers `bench serve-load` under `bench` (bench_serve.cpp).
+void AddServeLoadBenchCommand(CLI::App& bench);
 
 /// Arguments of `lasercell bench robustness`.
 struct RobustnessBenchArgs {

@@ -9,7 +9,6 @@
 #include <atomic>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <string>
 #include <thread>
@@ -17,11 +16,13 @@
 
 #include "core/error.hpp"
 #include "core/json_io.hpp"
+#include "core/process_memory.hpp"
 #include "core/stats.hpp"
 #include "localize/job.hpp"
 #include "localize/job_run.hpp"
 #include "localize/pose_server.hpp"
 #include "localize/robot_client.hpp"
+#include "localize/serve_load.hpp"
 #include "tools/bench.hpp"
 
 namespace lasercell::tools {
@@ -34,15 +35,6 @@ struct ServeBenchArgs {
   int threads = 1;
   std::string json_out;
 };
-
-double ResidentMb() {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  }
-  return 0.0;
-}
 
 double Ms(std::chrono::steady_clock::duration d) {
   return std::chrono::duration<double, std::milli>(d).count();
@@ -128,7 +120,55 @@ void RunServeBench(const ServeBenchArgs& args) {
                                   {"rss_end_mb", rss_end}});
 }
 
+struct ServeLoadArgs {
+  std::string job;
+  localize::ServeLoadOptions load;
+  int threads = 1;
+  std::string json_out;
+};
+
+void RunServeLoadBench(const ServeLoadArgs& args) {
+  const localize::Job job = localize::ReadJobFile(args.job);
+  localize::JobRunOptions run;
+  run.threads = args.threads;
+  localize::JobRunner runner(job, run);
+  const localize::ServeLoadReport report = localize::RunServeLoad(
+      localize::JobLookHandler(runner), args.load,
+      [](const std::string& line) { std::fprintf(stderr, "%s\n", line.c_str()); });
+  std::printf(
+      "pose server on loopback under %d misbehaving clients, %s (%llu replies per valid "
+      "cycle)\n\n%s",
+      report.clients, args.job.c_str(), static_cast<unsigned long long>(report.reference_grasps),
+      report.Markdown().c_str());
+  for (const std::string& p : report.problems) std::printf("- %s\n", p.c_str());
+  if (!args.json_out.empty()) json::WriteFile(args.json_out, report.Json());
+}
+
 }  // namespace
+
+void AddServeLoadBenchCommand(CLI::App& bench) {
+  CLI::App* cmd = bench.add_subcommand(
+      "serve-load",
+      "The pose server under misbehaving clients: every valid request answered right, memory");
+  auto args = std::make_shared<ServeLoadArgs>();
+  cmd->add_option("job", args->job, "Job file (its profile file is the sweep of every LOOK)")
+      ->required();
+  cmd->add_option("--clients", args->load.clients, "Connections at once")->capture_default_str();
+  cmd->add_option("--seconds", args->load.seconds, "Wall time of the load")->capture_default_str();
+  cmd->add_option("--warmup", args->load.warmup_seconds, "Seconds before memory is measured")
+      ->capture_default_str();
+  cmd->add_option("--valid-fraction", args->load.valid_fraction, "Share of connections that behave")
+      ->capture_default_str();
+  cmd->add_option("--seed", args->load.seed, "Seed of the clients' choices")->capture_default_str();
+  args->load.server.send_buffer_bytes = 8192;
+  cmd->add_option("--send-buffer", args->load.server.send_buffer_bytes,
+                  "Server's kernel send buffer per connection, bytes (0 = the system's): small, "
+                  "so unread replies reach the server's own bound within the run")
+      ->capture_default_str();
+  cmd->add_option("--threads", args->threads, "Job threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--json", args->json_out, "Also write the report as JSON");
+  cmd->callback([args] { RunServeLoadBench(*args); });
+}
 
 void AddServeBenchCommand(CLI::App& bench) {
   CLI::App* cmd = bench.add_subcommand(

@@ -157,6 +157,7 @@ void AddBenchCommands(CLI::App& app) {
   AddTable1BenchCommand(*bench);
   AddStreamBenchCommand(*bench);
   AddServeBenchCommand(*bench);
+  AddServeLoadBenchCommand(*bench);
 }
 
 }  // namespace lasercell::tools
