@@ -8,6 +8,7 @@ extern "C" {
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <utility>
 
@@ -307,10 +308,11 @@ double RadialFoldRadius(const CameraModel& model, double needed) {
   return std::numeric_limits<double>::infinity();
 }
 
-}  // namespace
-
-LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::AlignedBox2d& region,
-                                      int grid, double tolerance_px) {
+/// CheckLensInversion over `region` (empty: the whole imager); with `hull` (a convex polygon,
+/// counter-clockwise or clockwise), only pixels inside it, and cells whose three grid pixels are
+/// inside it, count.
+LensInversionCheck CheckGrid(const CameraModel& model, const Eigen::AlignedBox2d& region,
+                             const std::vector<cv::Point2f>* hull, int grid, double tolerance_px) {
   if (grid < 2) throw InputError("lens inversion check: grid " + std::to_string(grid) + " < 2");
   if (!(tolerance_px > 0)) {
     throw InputError("lens inversion check: tolerance_px " + FormatDouble(tolerance_px) +
@@ -333,7 +335,14 @@ LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::Ali
                                                                      double(j) / (grid - 1))));
     }
   }
-  check.pixels = static_cast<int>(pixels.size());
+  std::vector<char> counts(pixels.size(), 1);
+  if (hull != nullptr) {
+    for (std::size_t k = 0; k < pixels.size(); ++k) {
+      const cv::Point2f p(static_cast<float>(pixels[k].x()), static_cast<float>(pixels[k].y()));
+      counts[k] = cv::pointPolygonTest(*hull, p, false) >= 0 ? 1 : 0;
+    }
+  }
+  check.pixels = static_cast<int>(std::count(counts.begin(), counts.end(), 1));
   if (region.isEmpty()) {  // the whole imager: where the triangulator needs every ray
     const std::vector<double>& in = model.intrinsics();
     double needed = 0;  // largest normalized distorted radius in the region
@@ -355,6 +364,7 @@ LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::Ali
     return check;
   }
   for (std::size_t k = 0; k < pixels.size(); ++k) {
+    if (!counts[k]) continue;
     double error = std::numeric_limits<double>::infinity();
     // A ray that does not point forward (z <= 1e-6) is no ray for lasercell's forward-looking
     // sensors (the triangulator's tables need z > 0), even when it projects back onto its pixel:
@@ -370,6 +380,8 @@ LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::Ali
   // triple product of neighbouring rays' differences with the ray changes sign.
   for (int j = 0; j + 1 < grid; ++j) {
     for (int i = 0; i + 1 < grid; ++i) {
+      const int at = j * grid + i;
+      if (!counts[at] || !counts[at + 1] || !counts[at + grid]) continue;
       const Eigen::Vector3d& r = rays[j * grid + i];
       const Eigen::Vector3d du = rays[j * grid + i + 1] - r, dv = rays[(j + 1) * grid + i] - r;
       if (!r.allFinite() || !du.allFinite() || !dv.allFinite()) continue;  // counted above
@@ -379,6 +391,28 @@ LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::Ali
     }
   }
   return check;
+}
+
+}  // namespace
+
+LensInversionCheck CheckLensInversion(const CameraModel& model, const Eigen::AlignedBox2d& region,
+                                      int grid, double tolerance_px) {
+  return CheckGrid(model, region, nullptr, grid, tolerance_px);
+}
+
+LensInversionCheck CheckLensInversionWithin(const CameraModel& model,
+                                            const std::vector<Eigen::Vector2d>& observed_px,
+                                            int grid, double tolerance_px) {
+  std::vector<cv::Point2f> points;
+  Eigen::AlignedBox2d box;
+  for (const Eigen::Vector2d& p : observed_px) {
+    points.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()));
+    box.extend(p);
+  }
+  if (points.size() < 3) return {};
+  std::vector<cv::Point2f> hull;
+  cv::convexHull(points, hull);
+  return CheckGrid(model, box, &hull, grid, tolerance_px);
 }
 
 std::string LensInversionProblem(const CameraModel& model, int grid, double tolerance_px) {

@@ -121,6 +121,13 @@ LensInversionCheck CheckLensInversion(const CameraModel& model,
                                       const Eigen::AlignedBox2d& region_px = {}, int grid = 129,
                                       double tolerance_px = 0.01);
 
+/// CheckLensInversion where a calibration's corners pinned the model down: inside the convex
+/// hull of `observed_px` (only pixels inside it, and grid cells whose pixels are all inside it,
+/// count; the grid spans the corners' bounding box). Fewer than three corners: nothing checked.
+LensInversionCheck CheckLensInversionWithin(const CameraModel& model,
+                                            const std::vector<Eigen::Vector2d>& observed_px,
+                                            int grid = 129, double tolerance_px = 0.01);
+
 /// CheckLensInversion over the whole imager, described ("" when the model inverts everywhere).
 std::string LensInversionProblem(const CameraModel& model, int grid = 129,
                                  double tolerance_px = 0.01);

@@ -52,19 +52,21 @@ std::string IntrinsicsResult::RejectionReason() const {
 
 void AssessLensInversion(IntrinsicsResult* result) {
   if (!result->camera) return;
-  Eigen::AlignedBox2d observed;
+  std::vector<Eigen::Vector2d> observed;
   for (const CornerResidual& c : result->corners) {
-    if (!c.outlier) observed.extend(c.observed_px);
+    if (!c.outlier) observed.push_back(c.observed_px);
   }
-  const LensInversionCheck inside = CheckLensInversion(*result->camera, observed);
+  // Among the corners (their convex hull), not their bounding box: the box's corners can lie
+  // far from every board, where the model is as much extrapolation as outside it.
+  const LensInversionCheck inside = CheckLensInversionWithin(*result->camera, observed);
   const LensInversionCheck imager = CheckLensInversion(*result->camera);
   result->imager_fraction_without_ray = imager.FractionWithoutRay();
   result->imager_folds = !imager.ok();
-  if (!observed.isEmpty() && !inside.ok()) {
+  if (!observed.empty() && !inside.ok()) {
     result->invertible = false;
     result->inversion_problem = inside.Describe() +
-                                ", inside the box of the observed corners, where the board "
-                                "pinned it down; use a lower-order model (OPENCV5)";
+                                ", among the observed corners, where the boards pinned it "
+                                "down; use a lower-order model (OPENCV5)";
     result->warnings.push_back(result->inversion_problem);
   } else if (imager.without_ray == 0 && imager.reversed_cells == 0 && !imager.ok()) {
     result->warnings.push_back(imager.Describe() +

@@ -154,6 +154,7 @@ void PoseServer::Accept() {
     char host[INET_ADDRSTRLEN] = "?";
     inet_ntop(AF_INET, &addr.sin_addr, host, sizeof host);
     const std::string peer = std::string(host) + ":" + std::to_string(ntohs(addr.sin_port));
+    if (clients_.size() >= options_.max_clients) ReapGone();
     if (clients_.size() >= options_.max_clients) {
       close(fd);
       ++counters_.refused;
@@ -309,6 +310,35 @@ void PoseServer::Read(Client& client, std::int64_t now_ns) {
   }
 }
 
+void PoseServer::ReapGone() {
+  std::vector<pollfd> fds;
+  fds.reserve(clients_.size());
+  for (const auto& c : clients_) fds.push_back({c->fd, static_cast<short>(POLLIN | POLLRDHUP), 0});
+  if (poll(fds.data(), fds.size(), 0) <= 0) return;
+  const std::int64_t now = SteadyNowNs();
+  for (std::size_t i = 0; i < fds.size(); ++i) {
+    Client& c = *clients_[i];
+    if (!c.closed_by_peer && (fds[i].revents & (POLLRDHUP | POLLHUP | POLLERR))) Read(c, now);
+  }
+  for (std::size_t i = clients_.size(); i-- > 0;) CloseIfGone(i);
+}
+
+bool PoseServer::CloseIfGone(std::size_t index) {
+  Client& c = *clients_[index];
+  if (c.close_reason == "slow reader") {
+    ++counters_.slow_readers;
+    Close(index,
+          "it does not read its replies (" + std::to_string(c.out.size()) + " bytes unread)");
+    return true;
+  }
+  if (c.closed_by_peer) {
+    ++counters_.disconnects;
+    Close(index, c.in.empty() ? "disconnected" : "disconnected mid-frame");
+    return true;
+  }
+  return false;
+}
+
 void PoseServer::Close(std::size_t index, const std::string& why) {
   Client& client = *clients_[index];
   Log("closed " + client.peer + ": " + why);
@@ -334,23 +364,19 @@ void PoseServer::Poll(int timeout_ms) {
   if (poll(fds.data(), fds.size(), timeout_ms) < 0 && errno != EINTR) {
     throw InputError(std::string("pose server: poll failed: ") + std::strerror(errno));
   }
-  if (fds[0].revents & POLLIN) Accept();
   now = SteadyNowNs();
-  // Clients accepted just now are not in fds; only the first fds.size() - 1 are polled.
   for (std::size_t i = 1; i < fds.size(); ++i) {
     Client& c = *clients_[i - 1];
     if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) Read(c, now);
     if (fds[i].revents & POLLOUT) Flush(c);
   }
+  // After the reads (Accept may close clients that are gone, which renumbers them).
+  if (fds[0].revents & POLLIN) Accept();
   const auto idle_ns = static_cast<std::int64_t>(options_.idle_timeout_ms * 1e6);
   for (std::size_t i = clients_.size(); i-- > 0;) {
     Client& c = *clients_[i];
-    if (c.close_reason == "slow reader") {
-      ++counters_.slow_readers;
-      Close(i, "it does not read its replies (" + std::to_string(c.out.size()) + " bytes unread)");
-    } else if (c.closed_by_peer) {
-      ++counters_.disconnects;
-      Close(i, c.in.empty() ? "disconnected" : "disconnected mid-frame");
+    if (CloseIfGone(i)) {
+      continue;
     } else if (!c.in.empty() && now - c.frame_started_ns > frame_ns) {
       ++counters_.frame_timeouts;
       Close(i, "a frame did not complete within " +

@@ -8,7 +8,8 @@
 // kernel. Nothing a client does stalls the others or grows memory beyond the options' bounds:
 // a frame or line must complete within frame_timeout_ms (else the connection is closed), replies
 // a client does not read beyond max_pending_reply_bytes close its connection, clients beyond
-// max_clients are closed at once. Malformed requests are answered with BAD_REQUEST.
+// max_clients are closed at once (clients whose peer has hung up are closed first, so they do
+// not count). Malformed requests are answered with BAD_REQUEST.
 
 #include <atomic>
 #include <cstdint>
@@ -95,6 +96,12 @@ class PoseServer {
  private:
   struct Client;
   void Accept();
+  /// Handles the last bytes of clients whose peer has hung up and closes them (and clients that
+  /// stopped reading their replies), so that connections already gone do not count against
+  /// max_clients.
+  void ReapGone();
+  /// Closes client `index` when its peer hung up or it stopped reading its replies; true then.
+  bool CloseIfGone(std::size_t index);
   void Read(Client& client, std::int64_t now_ns);
   void Handle(Client& client, const RobotRequest& request);
   void Reply(Client& client, RobotReply reply);

@@ -72,9 +72,7 @@ std::string CompareCycle(const Cycle& got, const Cycle& reference, bool ascii,
   }
   for (std::size_t i = 0; i < got.size(); ++i) {
     const auto n = static_cast<std::int32_t>(i);
-    const std::int32_t id = ascii                ? n + 1
-                            : i + 1 == got.size() ? first_id + 2000
-                                                  : first_id + n;
+    const std::int32_t id = ascii ? n + 1 : i + 1 == got.size() ? first_id + 2000 : first_id + n;
     if (got[i].request_id != id) {
       return "reply " + std::to_string(i) + " carries id " + std::to_string(got[i].request_id) +
              ", not " + std::to_string(id);
@@ -120,15 +118,17 @@ void Misbehave(Load& load, std::mt19937_64& rng) {
       for (char& c : junk) c = static_cast<char>(byte(rng));
       load.Count(&ServeLoadReport::garbage);
       robot.SendRaw(junk);
-      std::this_thread::sleep_for(std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 200)(rng)));
+      std::this_thread::sleep_for(
+          std::chrono::milliseconds(std::uniform_int_distribution<int>(0, 200)(rng)));
     } else if (k == 1) {  // half a frame, then gone
       load.Count(&ServeLoadReport::half_frames);
-      robot.SendRaw(frame.substr(0, std::uniform_int_distribution<std::size_t>(1, frame.size() - 1)(rng)));
+      robot.SendRaw(
+          frame.substr(0, std::uniform_int_distribution<std::size_t>(1, frame.size() - 1)(rng)));
     } else if (k == 2) {  // half a frame, then silence past the frame timeout
       load.Count(&ServeLoadReport::stalled_frames);
       robot.SendRaw(frame.substr(0, frame.size() / 2));
-      std::this_thread::sleep_for(std::chrono::milliseconds(
-          static_cast<int>(load.options.server.frame_timeout_ms) + 300));
+      std::this_thread::sleep_for(
+          std::chrono::milliseconds(static_cast<int>(load.options.server.frame_timeout_ms) + 300));
     } else if (k == 3) {  // thousands of PINGs, replies never read
       load.Count(&ServeLoadReport::slow_readers);
       RobotRequest ping;
@@ -177,7 +177,8 @@ void ClientThread(Load& load, int index) {
 }  // namespace
 
 void ServeLoadOptions::Check() const {
-  if (clients < 1 || clients > 256) throw OptionError("ServeLoadOptions.clients must be in [1, 256]");
+  if (clients < 1 || clients > 256)
+    throw OptionError("ServeLoadOptions.clients must be in [1, 256]");
   if (!(seconds > 0.0 && seconds <= 86400.0)) {
     throw OptionError("ServeLoadOptions.seconds must be in (0, 86400]");
   }
@@ -230,8 +231,7 @@ std::string ServeLoadReport::Markdown() const {
       static_cast<unsigned long long>(valid_requests),
       static_cast<unsigned long long>(wrong_answers),
       static_cast<unsigned long long>(failed_cycles), static_cast<unsigned long long>(garbage),
-      static_cast<unsigned long long>(half_frames),
-      static_cast<unsigned long long>(stalled_frames),
+      static_cast<unsigned long long>(half_frames), static_cast<unsigned long long>(stalled_frames),
       static_cast<unsigned long long>(slow_readers), static_cast<unsigned long long>(bad_lines),
       rss_after_warmup_mb, rss_max_mb, rss_end_mb, RssGrowthPercent());
   return std::string(text) + "\nServer: " + server.Summary() + "\n";

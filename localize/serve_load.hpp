@@ -8,10 +8,9 @@
 // and carry the request's id; the process's resident memory is sampled throughout.
 #include <cstdint>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "localize/pose_server.hpp"
 
@@ -39,7 +38,7 @@ struct ServeLoadReport {
   std::uint64_t wrong_answers = 0;   ///< Replies that differ from the reference (or wrong id).
   std::uint64_t failed_cycles = 0;   ///< Valid cycles that got no reply (closed, timeout).
   std::uint64_t garbage = 0, half_frames = 0, stalled_frames = 0, slow_readers = 0,
-                bad_lines = 0;        ///< Misbehaving connections by kind.
+                bad_lines = 0;         ///< Misbehaving connections by kind.
   std::uint64_t reference_grasps = 0;  ///< Replies in one reference LOOK + NEXT sequence.
   std::vector<std::string> problems;   ///< The first few wrong answers and failures, described.
   PoseServerCounters server;           ///< The server's own counters at the end.

@@ -161,9 +161,16 @@ void AddServeLoadBenchCommand(CLI::App& bench) {
       ->capture_default_str();
   cmd->add_option("--seed", args->load.seed, "Seed of the clients' choices")->capture_default_str();
   args->load.server.send_buffer_bytes = 8192;
+  // Above the clients, so that a refused connection would be the server's fault: with a limit
+  // of exactly 8, 8 clients saw ~4 of 65 connections refused in 40 s, the server then holding 9
+  // established ones (not yet explained). The limit itself is tested in pose_server_test.
+  args->load.server.max_clients = 16;
   cmd->add_option("--send-buffer", args->load.server.send_buffer_bytes,
                   "Server's kernel send buffer per connection, bytes (0 = the system's): small, "
                   "so unread replies reach the server's own bound within the run")
+      ->capture_default_str();
+  cmd->add_option("--max-clients", args->load.server.max_clients,
+                  "Server's connection limit (beyond it, connections are closed at once)")
       ->capture_default_str();
   cmd->add_option("--threads", args->threads, "Job threads (0 = all cores)")->capture_default_str();
   cmd->add_option("--json", args->json_out, "Also write the report as JSON");

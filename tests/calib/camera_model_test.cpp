@@ -10,6 +10,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "calib/camera_uncertainty.hpp"
 #include "core/error.hpp"
@@ -374,6 +375,34 @@ TEST(CameraModel, LensInversionCheckRefusesRaysThatPointBackwards) {
   const LensInversionCheck centre = CheckLensInversion(
       m, Eigen::AlignedBox2d(Eigen::Vector2d(400, 400), Eigen::Vector2d(600, 600)), 33);
   EXPECT_TRUE(centre.ok()) << centre.Describe();
+}
+
+// Where a calibration's corners were is their convex hull, not their bounding box: the same
+// stereographic lens, corners on a triangle inscribed in the 200 px disc of forward rays. The
+// triangle's bounding box reaches beyond the disc at its empty corners (no board was there);
+// the hull does not. A corner beyond the disc brings the backward rays inside.
+TEST(CameraModel, LensInversionWithinTheObservedCornersIgnoresTheirBoxsEmptyCorners) {
+  const CameraModel m("LENSMODEL_STEREOGRAPHIC", {100.0, 100.0, 499.5, 499.5}, 1000, 1000);
+  const Eigen::Vector2d c(499.5, 499.5);
+  std::vector<Eigen::Vector2d> corners;
+  Eigen::AlignedBox2d box;
+  for (const double deg : {90.0, 210.0, 330.0}) {
+    const double a = deg * M_PI / 180.0;
+    corners.push_back(c + 190.0 * Eigen::Vector2d(std::cos(a), std::sin(a)));
+    box.extend(corners.back());
+  }
+  EXPECT_FALSE(CheckLensInversion(m, box, 33).ok());
+  const LensInversionCheck hull = CheckLensInversionWithin(m, corners, 33);
+  EXPECT_TRUE(hull.ok()) << hull.Describe();
+  EXPECT_GT(hull.pixels, 33 * 33 / 3);
+  EXPECT_LT(hull.pixels, 33 * 33);
+  EXPECT_GT(hull.cells, 0);
+  corners.push_back(c + Eigen::Vector2d(0.0, -430.0));
+  const LensInversionCheck wider = CheckLensInversionWithin(m, corners, 33);
+  EXPECT_FALSE(wider.ok());
+  EXPECT_GT(wider.without_ray, 0) << wider.Describe();
+  // Fewer than three corners span nothing.
+  EXPECT_EQ(CheckLensInversionWithin(m, {c, c + Eigen::Vector2d(400.0, 0.0)}).pixels, 0);
 }
 }  // namespace lasercell::calib
 

@@ -485,8 +485,8 @@ TEST(CalibrateIntrinsics, ANonInvertibleModelIsRejectedWithTheReason) {
   EXPECT_EQ(r.imager_fraction_without_ray, 0.0);
   r.invertible = false;
   r.inversion_problem =
-      "9 of 1089 grid pixels ...: the lens model folds over there, inside the "
-      "box of the observed corners, where the board pinned it down";
+      "9 of 1089 grid pixels ...: the lens model folds over there, among the "
+      "observed corners, where the boards pinned it down";
   EXPECT_EQ(r.RejectionReason(), r.inversion_problem);
   EXPECT_NE(r.Summary().find("NOT INVERTIBLE WHERE OBSERVED"), std::string::npos) << r.Summary();
 }
@@ -570,26 +570,39 @@ TEST(CalibrateIntrinsicsRealData, MatchesOpenCvOnItsSampleImages) {
   EXPECT_TRUE(r8.uncertainty_px.allFinite());
 }
 
-// From the first four views alone, OPENCV8's eight distortion terms fold the lens over inside
-// the observed corners: refused with the inversion check's words, and the fallback refits
-// OPENCV5, saying why.
+// Four views leave OPENCV8's eight distortion terms free to fold the lens over. From the 7th to
+// the 10th view it folds among the observed corners (inside their convex hull): refused with the
+// inversion check's words. From the first four it folds only beyond them (8.9 % of the imager
+// without a ray, outside the hull though inside the corners' bounding box): accepted with a
+// warning. Either way the fallback refits OPENCV5, saying why.
 TEST(CalibrateIntrinsicsRealData, AFoldingOpencv8IsRefittedAsOpencv5) {
   const BoardSpec board = ParseBoardSpec("chessboard:9x6:25");
-  std::vector<BoardView> views = OpenCvSampleViews(board);
-  views.resize(4);
-  const IntrinsicsResult r8 = CalibrateIntrinsics(views, board, 640, 480);
-  EXPECT_FALSE(r8.invertible) << r8.Summary();
-  EXPECT_NE(r8.inversion_problem.find("inside the box of the observed corners"), std::string::npos)
-      << r8.inversion_problem;
-  EXPECT_EQ(r8.RejectionReason(), r8.inversion_problem);
-  const IntrinsicsResult r = CalibrateIntrinsicsFallingBackToOpencv5(views, board, 640, 480, {});
-  ASSERT_TRUE(r.camera);
-  EXPECT_EQ(r.camera->lensmodel(), "LENSMODEL_OPENCV5");
-  EXPECT_EQ(r.RejectionReason(), "");
-  EXPECT_EQ(r.refitted_because.rfind("OPENCV8 was refitted as OPENCV5: ", 0), 0u)
-      << r.refitted_because;
-  ASSERT_FALSE(r.warnings.empty());
-  EXPECT_EQ(r.warnings.front(), r.refitted_because);
+  const std::vector<BoardView> all = OpenCvSampleViews(board);
+  ASSERT_GE(all.size(), 10u);
+  const std::vector<BoardView> middle(all.begin() + 6, all.begin() + 10);
+  const std::vector<BoardView> first(all.begin(), all.begin() + 4);
+  const IntrinsicsResult inside = CalibrateIntrinsics(middle, board, 640, 480);
+  EXPECT_FALSE(inside.invertible) << inside.Summary();
+  EXPECT_NE(inside.inversion_problem.find("among the observed corners"), std::string::npos)
+      << inside.inversion_problem;
+  EXPECT_EQ(inside.RejectionReason(), inside.inversion_problem);
+  const IntrinsicsResult beyond = CalibrateIntrinsics(first, board, 640, 480);
+  EXPECT_TRUE(beyond.invertible) << beyond.Summary();
+  EXPECT_EQ(beyond.RejectionReason(), "");
+  EXPECT_GT(beyond.imager_fraction_without_ray, 0.01) << beyond.Summary();
+  ASSERT_FALSE(beyond.warnings.empty());
+  EXPECT_NE(beyond.warnings.front().find("outside the observed corners"), std::string::npos)
+      << beyond.warnings.front();
+  for (const std::vector<BoardView>* views : {&middle, &first}) {
+    const IntrinsicsResult r = CalibrateIntrinsicsFallingBackToOpencv5(*views, board, 640, 480, {});
+    ASSERT_TRUE(r.camera);
+    EXPECT_EQ(r.camera->lensmodel(), "LENSMODEL_OPENCV5");
+    EXPECT_EQ(r.RejectionReason(), "");
+    EXPECT_EQ(r.refitted_because.rfind("OPENCV8 was refitted as OPENCV5: ", 0), 0u)
+        << r.refitted_because;
+    ASSERT_FALSE(r.warnings.empty());
+    EXPECT_EQ(r.warnings.front(), r.refitted_because);
+  }
 }
 
 TEST(CalibrateIntrinsicsRealData, SplinedModelOnTheOpenCvSamples) {

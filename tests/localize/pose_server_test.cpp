@@ -146,6 +146,7 @@ class PoseServerTest : public ::testing::Test {
     server_ = std::make_unique<PoseServer>(
         [this](const RobotRequest& request) {
           ++looks_;
+          std::this_thread::sleep_for(std::chrono::milliseconds(look_delay_ms_.load()));
           LookOutcome out;
           out.sweep_taken_ns = SteadyNowNs();
           flange_seen_ = request.base_from_flange.has_value();
@@ -192,6 +193,7 @@ class PoseServerTest : public ::testing::Test {
   std::thread thread_;
   std::atomic<bool> stop_{false};
   std::atomic<int> looks_{0};
+  std::atomic<int> look_delay_ms_{0};  // the LOOK handler's time, ms
   std::atomic<bool> flange_seen_{false};
   bool empty_ = false;
 };
@@ -280,6 +282,35 @@ TEST_F(PoseServerTest, ClientsBeyondTheLimitAndSlowReadersAreClosed) {
   }
   EXPECT_TRUE(Eventually([&] { return server_->counters().slow_readers == 1; }));
   EXPECT_EQ(b.Request(Request(RobotCommand::kPing)).status, ReplyStatus::kAlive);
+}
+
+// While a LOOK runs the server sees no connection; clients that connect, send and hang up in
+// that time wait in the listen queue. When the server gets to them, those already gone must not
+// take the place of a robot that is still there.
+TEST_F(PoseServerTest, ClientsThatHungUpDuringALookDoNotCountAgainstTheLimit) {
+  PoseServerOptions options;
+  options.max_clients = 2;
+  look_delay_ms_ = 500;
+  Start(options);
+  RobotClient robot(Address(), false);
+  ASSERT_EQ(robot.Request(Request(RobotCommand::kPing)).status, ReplyStatus::kAlive);
+  RobotReply look_reply;
+  std::thread look([&] { look_reply = robot.Request(Request(RobotCommand::kLook), 5000); });
+  ASSERT_TRUE(Eventually([&] { return looks_ == 1; }));
+  for (int i = 0; i < 3; ++i) {
+    RobotClient gone(Address(), true);
+    gone.SendRaw("HELLO\n");
+  }
+  try {
+    RobotClient late(Address(), false);
+    EXPECT_EQ(late.Request(Request(RobotCommand::kPing), 3000).status, ReplyStatus::kAlive);
+  } catch (const InputError& e) {
+    ADD_FAILURE() << "the robot that came last was not served: " << e.what();
+  }
+  look.join();
+  EXPECT_EQ(look_reply.status, ReplyStatus::kOk);
+  EXPECT_EQ(server_->counters().refused, 0u);
+  EXPECT_EQ(server_->counters().connections, 5u);
 }
 
 TEST(PoseServerOptionsTest, BadOptionsAndAddressesAreClearErrors) {

@@ -26,8 +26,7 @@ LookHandler TwoGrasps(std::atomic<int>* looks, int drift_from) {
       r.part = "seat";
       r.part_index = 0;
       r.instance = k;
-      r.target_from_grasp =
-          PoseFromRotationVector({0.1, 0.2, 0.3 * k}, {100.0 * k, -20.0, 50.0});
+      r.target_from_grasp = PoseFromRotationVector({0.1, 0.2, 0.3 * k}, {100.0 * k, -20.0, 50.0});
       if (k == 2 && n >= drift_from) r.target_from_grasp.translation().x() += 0.01;
       r.position_sigma_mm = 0.05;
       out.grasps.push_back(r);
