@@ -283,4 +283,19 @@ std::optional<RobotReply> DecodeAsciiReply(std::string_view line) {
   return reply;
 }
 
+std::string ReplyText(const RobotReply& reply) {
+  std::string text = ReplyStatusName(reply.status);
+  if (reply.status != ReplyStatus::kOk) return text;
+  const Eigen::Vector3d t = reply.target_from_grasp.translation();
+  const Eigen::Vector3d a = FixedXyzDegFromRotation(reply.target_from_grasp.linear());
+  char buffer[400];
+  std::snprintf(buffer, sizeof buffer,
+                " part %d%s%s instance %d  x y z %.3f %.3f %.3f mm  rx ry rz %.3f %.3f %.3f deg"
+                "  sigma %.3f mm  %d left",
+                reply.part_index, reply.part.empty() ? "" : " ", reply.part.c_str(), reply.instance,
+                t.x(), t.y(), t.z(), a.x(), a.y(), a.z(), reply.position_sigma_mm,
+                reply.instances_left);
+  return text + buffer;
+}
+
 }  // namespace lasercell::localize

@@ -101,6 +101,9 @@ std::string EncodeAsciiRequest(const RobotRequest& request);
 std::string EncodeBinaryReply(const RobotReply& reply);
 /// Encodes an ASCII reply line with its '\n'.
 std::string EncodeAsciiReply(const RobotReply& reply);
+/// A reply for people: the status name and, for an ok reply, "part 0 seat instance 1  x y z ..
+/// mm  rx ry rz .. deg  sigma .. mm  0 left" (fixed-axis XYZ angles, as `robot-client` prints).
+std::string ReplyText(const RobotReply& reply);
 /// Decodes a binary reply (the robot side); nullopt when the frame is not one.
 std::optional<RobotReply> DecodeBinaryReply(std::string_view frame);
 /// Decodes an ASCII reply line (the robot side); nullopt when the line is not one.

@@ -34,15 +34,6 @@ bool SameAnswer(const RobotReply& a, const RobotReply& b) {
          a.target_from_grasp.matrix() == b.target_from_grasp.matrix();
 }
 
-std::string Describe(const RobotReply& r) {
-  const Eigen::Vector3d t = r.target_from_grasp.translation();
-  char text[200];
-  std::snprintf(text, sizeof text, "status %d part %d '%s' instance %d left %d at [%.4f %.4f %.4f]",
-                static_cast<int>(r.status), r.part_index, r.part.c_str(), r.instance,
-                r.instances_left, t.x(), t.y(), t.z());
-  return text;
-}
-
 /// Runs one valid cycle on a new connection; ids count from `first_id`.
 Cycle ValidCycle(const std::string& address, bool ascii, std::int32_t first_id) {
   RobotClient robot(address, ascii);
@@ -78,8 +69,8 @@ std::string CompareCycle(const Cycle& got, const Cycle& reference, bool ascii,
              ", not " + std::to_string(id);
     }
     if (!SameAnswer(got[i], reference[i])) {
-      return "reply " + std::to_string(i) + ": " + Describe(got[i]) + "; expected " +
-             Describe(reference[i]);
+      return "reply " + std::to_string(i) + ": " + ReplyText(got[i]) + "; expected " +
+             ReplyText(reference[i]);
     }
   }
   return "";
@@ -210,7 +201,7 @@ nlohmann::json ServeLoadReport::Json() const {
             {"stalled_frames", stalled_frames},
             {"slow_readers", slow_readers},
             {"bad_lines", bad_lines}}},
-          {"reference_replies", reference_grasps},
+          {"reference_replies", reference_replies},
           {"problems", problems},
           {"server", server.Summary()},
           {"rss_after_warmup_mb", rss_after_warmup_mb},
@@ -258,7 +249,7 @@ ServeLoadReport RunServeLoad(const LookHandler& look, const ServeLoadOptions& op
     throw InputError(std::string("serve load: the reference cycle before the load failed: ") +
                      e.what());
   }
-  load.report.reference_grasps = load.reference[0].size();
+  load.report.reference_replies = load.reference[0].size();
   const Clock::time_point t0 = Clock::now();
   load.end = t0 + std::chrono::microseconds(static_cast<long long>(options.seconds * 1e6));
   std::vector<std::thread> clients;

@@ -38,10 +38,10 @@ struct ServeLoadReport {
   std::uint64_t wrong_answers = 0;   ///< Replies that differ from the reference (or wrong id).
   std::uint64_t failed_cycles = 0;   ///< Valid cycles that got no reply (closed, timeout).
   std::uint64_t garbage = 0, half_frames = 0, stalled_frames = 0, slow_readers = 0,
-                bad_lines = 0;         ///< Misbehaving connections by kind.
-  std::uint64_t reference_grasps = 0;  ///< Replies in one reference LOOK + NEXT sequence.
-  std::vector<std::string> problems;   ///< The first few wrong answers and failures, described.
-  PoseServerCounters server;           ///< The server's own counters at the end.
+                bad_lines = 0;          ///< Misbehaving connections by kind.
+  std::uint64_t reference_replies = 0;  ///< Replies in one reference cycle (LOOK, NEXTs, PING).
+  std::vector<std::string> problems;    ///< The first few wrong answers and failures, described.
+  PoseServerCounters server;            ///< The server's own counters at the end.
   double rss_after_warmup_mb = 0.0, rss_max_mb = 0.0, rss_end_mb = 0.0;
   /// (end - after warm-up) / after warm-up, percent.
   double RssGrowthPercent() const;

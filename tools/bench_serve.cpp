@@ -138,7 +138,7 @@ void RunServeLoadBench(const ServeLoadArgs& args) {
   std::printf(
       "pose server on loopback under %d misbehaving clients, %s (%llu replies per valid "
       "cycle)\n\n%s",
-      report.clients, args.job.c_str(), static_cast<unsigned long long>(report.reference_grasps),
+      report.clients, args.job.c_str(), static_cast<unsigned long long>(report.reference_replies),
       report.Markdown().c_str());
   for (const std::string& p : report.problems) std::printf("- %s\n", p.c_str());
   if (!args.json_out.empty()) json::WriteFile(args.json_out, report.Json());

@@ -105,16 +105,8 @@ void RunRobotClient(const ClientArgs& args) {
       request.command = localize::RobotCommand::kPing;
     }
     const localize::RobotReply r = client.Request(request, args.timeout_s * 1000.0);
-    const Eigen::Vector3d t = r.target_from_grasp.translation();
-    const Eigen::Vector3d a = FixedXyzDegFromRotation(r.target_from_grasp.linear());
-    std::printf("%s: %s", name.c_str(), localize::ReplyStatusName(r.status));
-    if (r.status == localize::ReplyStatus::kOk) {
-      std::printf(
-          " part %d%s%s instance %d  x y z %.3f %.3f %.3f mm  rx ry rz %.3f %.3f %.3f deg"
-          "  sigma %.3f mm  %d left  %.1f ms",
-          r.part_index, r.part.empty() ? "" : " ", r.part.c_str(), r.instance, t.x(), t.y(), t.z(),
-          a.x(), a.y(), a.z(), r.position_sigma_mm, r.instances_left, r.latency_ms);
-    }
+    std::printf("%s: %s", name.c_str(), localize::ReplyText(r).c_str());
+    if (r.status == localize::ReplyStatus::kOk) std::printf("  %.1f ms", r.latency_ms);
     std::printf("\n");
   }
 }

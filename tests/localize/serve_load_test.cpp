@@ -51,7 +51,7 @@ TEST(ServeLoad, EveryValidRequestIsAnsweredRightAmongMisbehavingClients) {
   const ServeLoadReport r = RunServeLoad(TwoGrasps(&looks, 1 << 30), ShortLoad());
   std::printf("%s", r.Markdown().c_str());
   for (const std::string& p : r.problems) std::printf("  %s\n", p.c_str());
-  EXPECT_EQ(r.reference_grasps, 4u);  // LOOK, NEXT, NEXT -> NO_MORE, PING
+  EXPECT_EQ(r.reference_replies, 4u);  // LOOK, NEXT, NEXT -> NO_MORE, PING
   EXPECT_GT(r.valid_cycles, 0u);
   EXPECT_EQ(r.valid_requests, 4 * r.valid_cycles);
   EXPECT_EQ(r.wrong_answers, 0u);
