@@ -1,7 +1,5 @@
 #include "registration/ppf_matcher.hpp"
 
-#include <tbb/enumerable_thread_specific.h>
-
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -107,7 +105,7 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
   const double radius = model.max_pair_distance_mm();
   std::vector<std::vector<PoseHypothesis>> per_reference(refs);
   std::vector<std::size_t> pairs_of(refs, 0), votes_of(refs, 0);
-  tbb::enumerable_thread_specific<Voter> voters([&] {
+  WorkerLocal<Voter> voters([&] {
     Voter v;
     v.accumulator.assign(model.points().size() * alpha_bins, 0);
     return v;

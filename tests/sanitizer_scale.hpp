@@ -1,13 +1,17 @@
 #pragma once
 // Monte-Carlo tests run every draw in the normal build, where their statistics are asserted.
-// Under AddressSanitizer (10-30x slower in these loops) they run a few draws of the same code,
-// which is what the sanitizer build is for (memory errors, undefined behaviour); their
-// statistical assertions hold only over the full draw count, so they are skipped there.
+// Under AddressSanitizer or ThreadSanitizer (10-30x slower in these loops) they run a few draws of
+// the same code, which is what the sanitizer build is for (memory errors, undefined behaviour);
+// their statistical assertions hold only over the full draw count, so they are skipped there.
 
 namespace lasercell::test {
 
-#if defined(__SANITIZE_ADDRESS__)
+// GCC defines __SANITIZE_ADDRESS__ / __SANITIZE_THREAD__; clang 14 only answers __has_feature.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 inline constexpr bool kSanitizerBuild = true;
+#elif defined(__has_feature)
+inline constexpr bool kSanitizerBuild =
+    __has_feature(address_sanitizer) || __has_feature(thread_sanitizer);
 #else
 inline constexpr bool kSanitizerBuild = false;
 #endif

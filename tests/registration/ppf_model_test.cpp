@@ -120,6 +120,17 @@ TEST(PpfModelTest, StoresEveryOrderedPairUnderItsKey) {
   EXPECT_TRUE(model.Lookup(0xFFFFFFF0U).empty());
 }
 
+TEST(PpfModelTest, TheTableIsTheSameForAnyThreadCount) {
+  PpfModelOptions options;
+  options.sampling_step_relative = 0.06;
+  options.threads = 1;
+  const std::string one = PpfModel::Build(BoxModel(), options).Serialize();
+  for (const int threads : {2, 3, 0}) {
+    options.threads = threads;
+    EXPECT_EQ(PpfModel::Build(BoxModel(), options).Serialize(), one) << threads << " threads";
+  }
+}
+
 TEST(PpfModelTest, QuantizationAgreesWithAngleBins) {
   const PpfModel model = PpfModel::Build(BoxModel());
   std::mt19937_64 rng(34);
