@@ -57,27 +57,40 @@ void KillWritersOf(
   const std::string version0 = comparable(io::ReadFileBytes(path));
   ASSERT_NE(version0, version1) << "the two versions must differ for the test to see a change";
 
-  // Kill moments spread over about three writes (fsyncs make a write's time vary).
+  // Kill moments: after 0, 1 or 2 writes the child reports complete, plus a random delay of up to
+  // one write's time (fsyncs make it vary). Counting the writes through a pipe keeps the moments
+  // spread over the versions however slow the child is to start (a loaded machine, a sanitizer).
   const auto start = std::chrono::steady_clock::now();
   for (int i = 0; i < 5; ++i) write(path, i % 2);
   const auto per_write = std::chrono::duration_cast<std::chrono::microseconds>(
                              std::chrono::steady_clock::now() - start) /
                          5;
   std::mt19937 rng(std::hash<std::string>{}(name));
-  std::uniform_int_distribution<long> delay_us(0, std::max<long>(3 * per_write.count(), 200));
+  std::uniform_int_distribution<int> writes_before(0, 2);
+  std::uniform_int_distribution<long> delay_us(0, std::max<long>(per_write.count(), 200));
 
   int saw[2] = {0, 0};
   int saw_temporary = 0;
   for (int k = 0; k < kKills; ++k) {
+    int done[2];
+    ASSERT_EQ(::pipe(done), 0);
     const pid_t child = ::fork();
     ASSERT_GE(child, 0);
     if (child == 0) {
-      for (int v = 1;; v ^= 1) write(path, v);  // until killed
+      ::close(done[0]);
+      for (int v = 1;; v ^= 1) {  // until killed
+        write(path, v);
+        if (::write(done[1], "w", 1) != 1) ::_exit(3);
+      }
     }
+    ::close(done[1]);
+    char byte = 0;
+    for (int w = writes_before(rng); w > 0; --w) ASSERT_EQ(::read(done[0], &byte, 1), 1);
     std::this_thread::sleep_for(std::chrono::microseconds(delay_us(rng)));
     ::kill(child, SIGKILL);
     int status = 0;
     ASSERT_EQ(::waitpid(child, &status, 0), child);
+    ::close(done[0]);
     ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "the writer failed itself";
     const std::string bytes = io::ReadFileBytes(path);
     const std::string now = comparable(bytes);
