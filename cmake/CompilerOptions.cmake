@@ -36,7 +36,7 @@ if(LASERCELL_SANITIZE)
 endif()
 
 # ThreadSanitizer (scripts/test-threads): core/parallel.hpp then runs its loops on std::thread,
-# since Debian's libtbb is not instrumented. -O1 as in the ASan build; -g for the race reports'
+# since Debian's libtbb is not instrumented. -O1 as in the GCC ASan build; -g for the race reports'
 # source lines.
 if(LASERCELL_SANITIZE_THREAD)
   if(LASERCELL_SANITIZE)

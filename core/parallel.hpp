@@ -40,6 +40,10 @@
 
 namespace lasercell {
 
+/// Number of fixed-size chunks covering n items; use with ParallelForChunks over chunk indices
+/// when partial sums must be merged in a fixed order (deterministic reductions).
+inline std::size_t ChunkCount(std::size_t n, std::size_t chunk) { return (n + chunk - 1) / chunk; }
+
 #if defined(LASERCELL_THREAD_SANITIZER)
 namespace detail {
 /// The ThreadSanitizer build's loop: `threads` workers (the caller is one of them) take chunks
@@ -47,7 +51,7 @@ namespace detail {
 /// re-thrown here once every worker has joined.
 template <typename Body>
 void ParallelForOnStdThreads(int threads, std::size_t n, std::size_t grain, const Body& body) {
-  const std::size_t chunks = (n + grain - 1) / grain;
+  const std::size_t chunks = ChunkCount(n, grain);
   const std::size_t hardware = std::max(1u, std::thread::hardware_concurrency());
   const std::size_t workers =
       std::min(chunks, threads <= 0 ? hardware : static_cast<std::size_t>(threads));
@@ -130,9 +134,5 @@ class WorkerLocal {
   tbb::enumerable_thread_specific<T> slots_;
 #endif
 };
-
-/// Number of fixed-size chunks covering n items; use with ParallelForChunks over chunk indices
-/// when partial sums must be merged in a fixed order (deterministic reductions).
-inline std::size_t ChunkCount(std::size_t n, std::size_t chunk) { return (n + chunk - 1) / chunk; }
 
 }  // namespace lasercell
