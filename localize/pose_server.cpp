@@ -314,16 +314,16 @@ void PoseServer::ReapGone() {
   std::vector<pollfd> fds;
   fds.reserve(clients_.size());
   for (const auto& c : clients_) fds.push_back({c->fd, static_cast<short>(POLLIN | POLLRDHUP), 0});
-  if (poll(fds.data(), fds.size(), 0) <= 0) return;
+  const bool any = poll(fds.data(), fds.size(), 0) > 0;
   const std::int64_t now = SteadyNowNs();
-  for (std::size_t i = 0; i < fds.size(); ++i) {
+  for (std::size_t i = 0; any && i < fds.size(); ++i) {
     Client& c = *clients_[i];
     if (!c.closed_by_peer && (fds[i].revents & (POLLRDHUP | POLLHUP | POLLERR))) Read(c, now);
   }
-  for (std::size_t i = clients_.size(); i-- > 0;) CloseIfGone(i);
+  for (std::size_t i = clients_.size(); i-- > 0;) CloseIfDone(i, now);
 }
 
-bool PoseServer::CloseIfGone(std::size_t index) {
+bool PoseServer::CloseIfDone(std::size_t index, std::int64_t now_ns) {
   Client& c = *clients_[index];
   if (c.close_reason == "slow reader") {
     ++counters_.slow_readers;
@@ -334,6 +334,20 @@ bool PoseServer::CloseIfGone(std::size_t index) {
   if (c.closed_by_peer) {
     ++counters_.disconnects;
     Close(index, c.in.empty() ? "disconnected" : "disconnected mid-frame");
+    return true;
+  }
+  const auto frame_ns = static_cast<std::int64_t>(options_.frame_timeout_ms * 1e6);
+  if (!c.in.empty() && now_ns - c.frame_started_ns > frame_ns) {
+    ++counters_.frame_timeouts;
+    Close(index, "a frame did not complete within " +
+                     std::to_string(static_cast<int>(options_.frame_timeout_ms)) + " ms");
+    return true;
+  }
+  const auto idle_ns = static_cast<std::int64_t>(options_.idle_timeout_ms * 1e6);
+  if (idle_ns > 0 && now_ns - c.last_activity_ns > idle_ns) {
+    ++counters_.idle_timeouts;
+    Close(index,
+          "silent for " + std::to_string(static_cast<int>(options_.idle_timeout_ms)) + " ms");
     return true;
   }
   return false;
@@ -370,22 +384,11 @@ void PoseServer::Poll(int timeout_ms) {
     if (fds[i].revents & (POLLIN | POLLHUP | POLLERR)) Read(c, now);
     if (fds[i].revents & POLLOUT) Flush(c);
   }
-  // After the reads (Accept may close clients that are gone, which renumbers them).
+  // After the reads (Accept may close clients that are done, which renumbers them).
   if (fds[0].revents & POLLIN) Accept();
-  const auto idle_ns = static_cast<std::int64_t>(options_.idle_timeout_ms * 1e6);
-  for (std::size_t i = clients_.size(); i-- > 0;) {
-    Client& c = *clients_[i];
-    if (CloseIfGone(i)) {
-      continue;
-    } else if (!c.in.empty() && now - c.frame_started_ns > frame_ns) {
-      ++counters_.frame_timeouts;
-      Close(i, "a frame did not complete within " +
-                   std::to_string(static_cast<int>(options_.frame_timeout_ms)) + " ms");
-    } else if (idle_ns > 0 && now - c.last_activity_ns > idle_ns) {
-      ++counters_.idle_timeouts;
-      Close(i, "silent for " + std::to_string(static_cast<int>(options_.idle_timeout_ms)) + " ms");
-    }
-  }
+  // `now` from before the reads: bytes that arrived while this round ran (a LOOK may take long)
+  // get read in the next one before their frame is judged.
+  for (std::size_t i = clients_.size(); i-- > 0;) CloseIfDone(i, now);
 }
 
 }  // namespace lasercell::localize

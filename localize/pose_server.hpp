@@ -96,12 +96,13 @@ class PoseServer {
  private:
   struct Client;
   void Accept();
-  /// Handles the last bytes of clients whose peer has hung up and closes them (and clients that
-  /// stopped reading their replies), so that connections already gone do not count against
+  /// Handles the last bytes of clients whose peer has hung up, then closes every client that is
+  /// done (CloseIfDone), so that connections already gone or overdue do not count against
   /// max_clients.
   void ReapGone();
-  /// Closes client `index` when its peer hung up or it stopped reading its replies; true then.
-  bool CloseIfGone(std::size_t index);
+  /// Closes client `index` when its peer hung up, it stopped reading its replies, its frame did
+  /// not complete within frame_timeout_ms or it was silent past idle_timeout_ms; true then.
+  bool CloseIfDone(std::size_t index, std::int64_t now_ns);
   void Read(Client& client, std::int64_t now_ns);
   void Handle(Client& client, const RobotRequest& request);
   void Reply(Client& client, RobotReply reply);

@@ -313,6 +313,33 @@ TEST_F(PoseServerTest, ClientsThatHungUpDuringALookDoNotCountAgainstTheLimit) {
   EXPECT_EQ(server_->counters().connections, 5u);
 }
 
+// A client whose half frame went overdue while a LOOK ran is as good as gone: the robot that
+// connects next must get its place, not a refusal (the overdue one is closed first).
+TEST_F(PoseServerTest, AClientWhoseFrameWentOverdueDuringALookDoesNotCountAgainstTheLimit) {
+  PoseServerOptions options;
+  options.max_clients = 2;  // Start() sets frame_timeout_ms = 300
+  look_delay_ms_ = 900;
+  Start(options);
+  RobotClient robot(Address(), false);
+  ASSERT_EQ(robot.Request(Request(RobotCommand::kPing)).status, ReplyStatus::kAlive);
+  RobotClient stalled(Address(), false);
+  stalled.SendRaw(EncodeBinaryRequest(Request(RobotCommand::kPing)).substr(0, 10));
+  ASSERT_TRUE(Eventually([&] { return server_->clients() == 2; }));  // accepted before the LOOK
+  RobotReply look_reply;
+  std::thread look([&] { look_reply = robot.Request(Request(RobotCommand::kLook), 5000); });
+  ASSERT_TRUE(Eventually([&] { return looks_ == 1; }));
+  try {
+    RobotClient late(Address(), false);
+    EXPECT_EQ(late.Request(Request(RobotCommand::kPing), 3000).status, ReplyStatus::kAlive);
+  } catch (const InputError& e) {
+    ADD_FAILURE() << "the robot that came during the LOOK was not served: " << e.what();
+  }
+  look.join();
+  EXPECT_EQ(look_reply.status, ReplyStatus::kOk);
+  EXPECT_EQ(server_->counters().refused, 0u);
+  EXPECT_EQ(server_->counters().frame_timeouts, 1u);
+}
+
 TEST(PoseServerOptionsTest, BadOptionsAndAddressesAreClearErrors) {
   PoseServerOptions options;
   options.max_clients = 0;
