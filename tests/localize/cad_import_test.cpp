@@ -19,6 +19,7 @@
 #include "core/error.hpp"
 #include "localize/cad_export.hpp"
 #include "tests/cli_util.hpp"
+#include "tests/sanitizer_scale.hpp"
 
 namespace lasercell::localize {
 namespace {
@@ -363,6 +364,8 @@ TEST(CadImport, ExtensionIsCaseInsensitiveAndReadsAreDeterministicAndThreadSafe)
   EXPECT_EQ(a.samples.normals, b.samples.normals);
   EXPECT_EQ(a.mesh.faces, b.mesh.faces);
   // Concurrent reads and writes (OpenCASCADE's settings are process-wide) give the same model.
+  // Under ASan the threads take turns: its allocator is not fork-safe (tests/sanitizer_scale.hpp),
+  // and a read forks while the other thread allocates.
   std::vector<CadModel> models(2);
   std::vector<std::string> errors(2);
   std::vector<std::thread> threads;
@@ -376,8 +379,11 @@ TEST(CadImport, ExtensionIsCaseInsensitiveAndReadsAreDeterministicAndThreadSafe)
         errors[t] = e.what();
       }
     });
+    if (!test::kAllocatorForkSafe) threads.back().join();
   }
-  for (std::thread& thread : threads) thread.join();
+  for (std::thread& thread : threads) {
+    if (thread.joinable()) thread.join();
+  }
   EXPECT_EQ(errors, std::vector<std::string>(2));
   for (const CadModel& model : models) EXPECT_EQ(model.samples.positions, a.samples.positions);
   // Each concurrent write kept its own unit (the unit is a process-wide OpenCASCADE setting).
