@@ -8,8 +8,10 @@
 // kernel. Nothing a client does stalls the others or grows memory beyond the options' bounds:
 // a frame or line must complete within frame_timeout_ms (else the connection is closed), replies
 // a client does not read beyond max_pending_reply_bytes close its connection, clients beyond
-// max_clients are closed at once (clients whose peer has hung up are closed first, so they do
-// not count). Malformed requests are answered with BAD_REQUEST.
+// max_clients are closed at once (clients whose peer has hung up, or whose frame or silence is
+// overdue, are closed first, so they do not count). A client that left with requests still
+// unsent in its kernel looks alive until they are read: set max_clients above the number of
+// robots. Malformed requests are answered with BAD_REQUEST.
 
 #include <atomic>
 #include <cstdint>
@@ -28,7 +30,7 @@ namespace lasercell::localize {
 struct PoseServerOptions {
   std::string bind_address = "0.0.0.0";  ///< Interface to listen on.
   std::uint16_t port = 0;                ///< TCP port; 0 = any free port (see port()).
-  std::size_t max_clients = 8;           ///< Connections served at once.
+  std::size_t max_clients = 8;           ///< Connections served at once (above the robots').
   double frame_timeout_ms = 2000.0;      ///< A started frame or line must complete within this.
   /// A connection silent for this long is closed, ms; 0 = never (robots keep theirs open).
   double idle_timeout_ms = 0.0;
