@@ -318,7 +318,11 @@ void PoseServer::ReapGone() {
   const std::int64_t now = SteadyNowNs();
   for (std::size_t i = 0; any && i < fds.size(); ++i) {
     Client& c = *clients_[i];
-    if (!c.closed_by_peer && (fds[i].revents & (POLLRDHUP | POLLHUP | POLLERR))) Read(c, now);
+    // Everything that arrived is read first (a frame's rest, a peer's last bytes and its end),
+    // so no one is judged overdue or alive on stale bytes.
+    if (!c.closed_by_peer && (fds[i].revents & (POLLIN | POLLRDHUP | POLLHUP | POLLERR))) {
+      Read(c, now);
+    }
   }
   for (std::size_t i = clients_.size(); i-- > 0;) CloseIfDone(i, now);
 }

@@ -98,9 +98,9 @@ class PoseServer {
  private:
   struct Client;
   void Accept();
-  /// Handles the last bytes of clients whose peer has hung up, then closes every client that is
-  /// done (CloseIfDone), so that connections already gone or overdue do not count against
-  /// max_clients.
+  /// Reads what every client has sent (a hung-up peer's last bytes and its end included), then
+  /// closes every client that is done (CloseIfDone), so that connections already gone or overdue
+  /// do not count against max_clients.
   void ReapGone();
   /// Closes client `index` when its peer hung up, it stopped reading its replies, its frame did
   /// not complete within frame_timeout_ms or it was silent past idle_timeout_ms; true then.
