@@ -16,9 +16,10 @@ inline constexpr bool kSanitizerBuild =
 inline constexpr bool kSanitizerBuild = false;
 #endif
 
-// AddressSanitizer's allocator (clang 14, GCC 12) takes none of its locks around fork(): a child
-// forked while another thread of the parent held one deadlocks on its first allocation (seen in
-// the CAD reader's isolated child). glibc's malloc, the normal build's, is fork-safe.
+// AddressSanitizer's allocator (clang 14's, seen; GCC's libasan is treated alike) takes none of
+// its locks around fork(): a child forked while another thread of the parent held one deadlocks
+// on its first allocation (seen in the CAD reader's isolated child). glibc's malloc, the normal
+// build's, is fork-safe.
 #if defined(__SANITIZE_ADDRESS__)
 inline constexpr bool kAllocatorForkSafe = false;
 #elif defined(__has_feature)
