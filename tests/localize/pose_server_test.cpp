@@ -181,6 +181,15 @@ class PoseServerTest : public ::testing::Test {
     r.request_id = id;
     return r;
   }
+  // A robot that connects now gets its PING answered (`when` says when it came, for the failure).
+  void ExpectANewRobotIsServed(const std::string& when) const {
+    try {
+      RobotClient late(Address(), false);
+      EXPECT_EQ(late.Request(Request(RobotCommand::kPing), 3000).status, ReplyStatus::kAlive);
+    } catch (const InputError& e) {
+      ADD_FAILURE() << "the robot that " << when << " was not served: " << e.what();
+    }
+  }
   // Waits (at most 2 s) until `done` holds: the server thread updates what it checks.
   static bool Eventually(const std::function<bool()>& done) {
     for (int i = 0; i < 200 && !done(); ++i) {
@@ -301,12 +310,7 @@ TEST_F(PoseServerTest, ClientsThatHungUpDuringALookDoNotCountAgainstTheLimit) {
     RobotClient gone(Address(), true);
     gone.SendRaw("HELLO\n");
   }
-  try {
-    RobotClient late(Address(), false);
-    EXPECT_EQ(late.Request(Request(RobotCommand::kPing), 3000).status, ReplyStatus::kAlive);
-  } catch (const InputError& e) {
-    ADD_FAILURE() << "the robot that came last was not served: " << e.what();
-  }
+  ExpectANewRobotIsServed("came last");
   look.join();
   EXPECT_EQ(look_reply.status, ReplyStatus::kOk);
   EXPECT_EQ(server_->counters().refused, 0u);
@@ -328,12 +332,7 @@ TEST_F(PoseServerTest, AClientWhoseFrameWentOverdueDuringALookDoesNotCountAgains
   RobotReply look_reply;
   std::thread look([&] { look_reply = robot.Request(Request(RobotCommand::kLook), 5000); });
   ASSERT_TRUE(Eventually([&] { return looks_ == 1; }));
-  try {
-    RobotClient late(Address(), false);
-    EXPECT_EQ(late.Request(Request(RobotCommand::kPing), 3000).status, ReplyStatus::kAlive);
-  } catch (const InputError& e) {
-    ADD_FAILURE() << "the robot that came during the LOOK was not served: " << e.what();
-  }
+  ExpectANewRobotIsServed("came during the LOOK");
   look.join();
   EXPECT_EQ(look_reply.status, ReplyStatus::kOk);
   EXPECT_EQ(server_->counters().refused, 0u);
