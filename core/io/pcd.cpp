@@ -5,8 +5,8 @@
 //  - binary: points one after another, fields in header order, little endian.
 //  - binary_compressed: uint32 compressed size, uint32 uncompressed size, then LZF data that
 //    decompresses to the fields one after another (all values of field 1, then of field 2...).
-//  - Organized clouds (HEIGHT > 1): grid_rows = HEIGHT, grid_cols = WIDTH and every kept point
-//    gets profile = row, column = col (unless the file carries profile/column fields).
+//  - Organized clouds (HEIGHT > 1, WIDTH > 0): grid_rows = HEIGHT, grid_cols = WIDTH and every
+//    kept point gets profile = row, column = col (unless the file carries profile/column fields).
 //  - VIEWPOINT is validated (7 finite numbers) but not applied: in PCL it is acquisition
 //    metadata and points are stored in the cloud's own frame. A non-identity viewpoint is
 //    mentioned in ReadReport::notes.
@@ -334,8 +334,10 @@ PointCloud PcdReader::Read() {
   }
   const auto profile = static_cast<std::size_t>(Slot::kProfile);
   const auto column = static_cast<std::size_t>(Slot::kColumn);
-  // Organized file without profile/column fields: the grid cell follows from the index.
-  const bool derive_grid = h_.height > 1 && !kept[profile] && !kept[column];
+  // Organized file without profile/column fields: the grid cell follows from the index. A grid
+  // of HEIGHT rows and WIDTH 0 holds no point: the cloud is empty and not organized.
+  const bool organized = h_.height > 1 && h_.width > 0;
+  const bool derive_grid = organized && !kept[profile] && !kept[column];
   if (derive_grid) kept[profile] = kept[column] = true;
 
   // Check that the data can hold POINTS before allocating anything of that size.
@@ -369,7 +371,7 @@ PointCloud PcdReader::Read() {
   report_.points_in_file = static_cast<std::size_t>(h_.points);
   report_.dropped_non_finite = builder.dropped();
   PointCloud cloud = builder.Take();
-  if (h_.height > 1) {
+  if (organized) {
     cloud.grid_rows = static_cast<std::int32_t>(h_.height);
     cloud.grid_cols = static_cast<std::int32_t>(h_.width);
   } else {

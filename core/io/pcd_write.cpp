@@ -29,7 +29,7 @@ std::string EncodePcdUnchecked(const PointCloud& cloud, const WriteOptions& opti
   if (layout.timestamp) fields.push_back({"timestamp", 'F', 8});
 
   std::string out = "# .PCD v0.7 - Point Cloud Data file format\n# lasercell_format 1\n";
-  if (cloud.grid_rows > 0) {
+  if (cloud.grid_rows > 0 && cloud.grid_cols > 0) {
     out += "# lasercell_grid " + std::to_string(cloud.grid_rows) + " " +
            std::to_string(cloud.grid_cols) + "\n";
   }

@@ -20,7 +20,7 @@ std::string PlyHeaderText(const PointCloud& cloud, std::size_t face_count,
        : encoding == PlyEncoding::kBinaryBigEndian ? "binary_big_endian"
                                                    : "binary_little_endian";
   h += " 1.0\ncomment lasercell_format 1\n";
-  if (cloud.grid_rows > 0) {
+  if (cloud.grid_rows > 0 && cloud.grid_cols > 0) {
     h += "comment lasercell_grid " + std::to_string(cloud.grid_rows) + " " +
          std::to_string(cloud.grid_cols) + "\n";
   }

@@ -18,6 +18,7 @@ using test::Bytes;
 using test::FileErrorMessage;
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 constexpr const char* kXyzHeader =
     "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 1\n"
@@ -180,6 +181,35 @@ TEST(PcdRead, OrganizedAsciiGridCellsKeptNansDropped) {
   EXPECT_THAT(cloud.column, ElementsAre(0, 2, 0, 2));
   EXPECT_EQ(cloud.positions[3], Eigen::Vector3d(13, 14, 15));
   EXPECT_THAT(report.ignored_fields, ElementsAre("rgb"));
+}
+
+// A grid of HEIGHT rows and no columns holds no point: the cloud is empty and not organized, so
+// writing and reading it again gives the same bytes (a fuzzer's finding).
+TEST(PcdRead, HeightWithoutWidthIsAnEmptyUnorganizedCloud) {
+  const std::string pcd =
+      "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nHEIGHT 2\n"
+      "VIEWPOINT 0 0 0 1 0 0 0\nDATA ascii\n";
+  const PointCloud cloud = ParsePcd(pcd, "no_width.pcd");
+  EXPECT_EQ(cloud.size(), 0u);
+  EXPECT_EQ(cloud.grid_rows, 0);
+  EXPECT_EQ(cloud.grid_cols, 0);
+  const std::string written = EncodePcd(cloud);
+  EXPECT_THAT(written, Not(HasSubstr("lasercell_grid")));
+  EXPECT_EQ(EncodePcd(ParsePcd(written, "written.pcd")), written);
+}
+
+// A grid size with a zero dimension is not a grid: neither writer records it, so both files
+// read back (the PLY reader refuses a grid comment with a zero).
+TEST(PointCloudWrite, AGridWithNoColumnsIsNotWritten) {
+  PointCloud cloud;
+  cloud.positions = {{1, 2, 3}, {4, 5, 6}};
+  cloud.grid_rows = 2;
+  const std::string pcd = EncodePcd(cloud);
+  const std::string ply = EncodePly({cloud, {}});
+  EXPECT_THAT(pcd, Not(HasSubstr("lasercell_grid")));
+  EXPECT_THAT(ply, Not(HasSubstr("lasercell_grid")));
+  EXPECT_EQ(ParsePcd(pcd, "rows_only.pcd").size(), 2u);
+  EXPECT_EQ(ParsePly(ply, "rows_only.ply").vertices.size(), 2u);
 }
 
 TEST(PcdRead, BinaryMixedTypesAndMultiValueFields) {
