@@ -281,6 +281,9 @@ void PlyReader::SkipElement(const detail::PlyElement& e) {
     report_.notes.push_back("skipped element '" + e.name + "' (" + std::to_string(e.count) +
                             " instances)");
   }
+  // An element without properties occupies no data, whatever its count (up to 2^64 - 1): a loop
+  // over its instances would only spin.
+  if (e.properties.empty()) return;
   if (!ascii_ && !e.HasList()) {
     pos_ += static_cast<std::size_t>(e.count * e.MinBytes(nullptr));  // CheckRoom: fits
     return;

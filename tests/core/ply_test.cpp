@@ -354,6 +354,22 @@ TEST(PlyRead, UnknownElementsAreSkippedAsciiAndBinary) {
   }
 }
 
+// An element without properties holds no data, so even the largest count is skipped at once (a
+// fuzzer's finding: the reader looped over 14 billion empty instances).
+TEST(PlyRead, AnElementWithoutPropertiesIsSkippedWhateverItsCount) {
+  for (const char* format : {"ascii", "binary_little_endian"}) {
+    std::string ply = std::string("ply\nformat ") + format +
+                      " 1.0\nelement nothing 18446744073709551615\nelement vertex 1\n"
+                      "property float x\nproperty float y\nproperty float z\nend_header\n";
+    ply += std::string(format) == "ascii" ? "1 2 3\n" : Bytes().Le(1.f, 2.f, 3.f).str();
+    ReadReport report;
+    const TriangleMesh mesh = ParsePly(ply, "empty_element.ply", &report);
+    ASSERT_EQ(mesh.vertices.size(), 1u) << format;
+    EXPECT_EQ(mesh.vertices.positions[0], Eigen::Vector3d(1, 2, 3)) << format;
+    EXPECT_THAT(report.notes, ElementsAre(HasSubstr("skipped element 'nothing'"))) << format;
+  }
+}
+
 TEST(PlyRead, CrLfHeaderAndGridComment) {
   const std::string ply =
       "ply\r\nformat ascii 1.0\r\ncomment lasercell_format 1\r\ncomment lasercell_grid 2 3\r\n"
