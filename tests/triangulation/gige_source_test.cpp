@@ -17,6 +17,7 @@
 
 #include "core/error.hpp"
 #include "tests/cli_util.hpp"
+#include "tests/sanitizer_scale.hpp"
 #include "tests/triangulation/gige_test_device.hpp"
 #include "triangulation/profile_io.hpp"
 
@@ -89,6 +90,9 @@ GigeSourceOptions FakeOptions() {
   o.line_scan.line_rate_hz = 4000.0;  // 250 buffers/s x 16 lines
   o.line_scan.max_sweep_profiles = 16 * 60;
   o.image_height = 1024;
+  // The fake camera runs in this process: under a sanitizer it can pause longer than the default
+  // gap between two buffers, which would end the sweep early.
+  if (test::kSanitizerBuild) o.sweep_gap_ms = 2000.0;
   return o;
 }
 
