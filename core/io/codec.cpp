@@ -299,18 +299,6 @@ void AppendNumber(std::string& out, std::int64_t value) {
   out.append(buf, ptr);
 }
 
-std::string UnitHint(const PointCloud& cloud) {
-  if (cloud.size() < 2) return {};
-  const double diagonal = cloud.Bounds().Diagonal();
-  if (!(diagonal > 0.0 && diagonal < 10.0)) return {};
-  char buf[160];
-  std::snprintf(buf, sizeof(buf),
-                "extent %.3g \xE2\x80\x94 looks like metres; lasercell expects millimetres "
-                "(scale by 1000)",
-                diagonal);
-  return buf;
-}
-
 void CheckWritable(const PointCloud& cloud, std::span<const Eigen::Vector3i> faces,
                    const WriteOptions& options, const std::string& what) {
   cloud.Validate(what);

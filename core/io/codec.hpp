@@ -224,9 +224,6 @@ void AppendNumber(std::string& out, double value);
 void AppendNumber(std::string& out, float value);
 void AppendNumber(std::string& out, std::int64_t value);
 
-/// Unit hint for a cloud whose bounding-box diagonal looks like metres; empty otherwise.
-std::string UnitHint(const PointCloud& cloud);
-
 /// Decodes `count` records of fixed layout into `builder` (the caller has checked that the
 /// bytes are there). Native-order float32 fields take a fast path.
 void DecodeFixed(const char* base, std::uint64_t count, const std::vector<FieldLoad>& fields,

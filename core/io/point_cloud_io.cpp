@@ -2,6 +2,8 @@
 // validate, encode and write atomically.
 #include "core/io/point_cloud_io.hpp"
 
+#include <cstdio>
+
 #include "core/error.hpp"
 #include "core/io/codec.hpp"
 #include "core/io/file_util.hpp"
@@ -21,6 +23,18 @@ Format FormatOf(const std::string& path, bool allow_pcd) {
 
 }  // namespace
 
+std::string UnitHint(const PointCloud& cloud) {
+  if (cloud.size() < 2) return {};
+  const double diagonal = cloud.Bounds().Diagonal();
+  if (!(diagonal > 0.0 && diagonal < 10.0)) return {};
+  char buf[160];
+  std::snprintf(buf, sizeof(buf),
+                "extent %.3g \xE2\x80\x94 looks like metres; lasercell expects millimetres "
+                "(scale by 1000)",
+                diagonal);
+  return buf;
+}
+
 PointCloud ReadPointCloud(const std::string& path, ReadReport* report) {
   const Format format = FormatOf(path, true);
   const MappedFile file(path);
@@ -28,7 +42,7 @@ PointCloud ReadPointCloud(const std::string& path, ReadReport* report) {
   PointCloud cloud = format == Format::kPly
                          ? std::move(ParsePly(file.bytes(), path, &local).vertices)
                          : ParsePcd(file.bytes(), path, &local);
-  local.unit_hint = detail::UnitHint(cloud);
+  local.unit_hint = UnitHint(cloud);
   if (report != nullptr) *report = std::move(local);
   return cloud;
 }
@@ -38,7 +52,7 @@ TriangleMesh ReadPlyMesh(const std::string& path, ReadReport* report) {
   const MappedFile file(path);
   ReadReport local;
   TriangleMesh mesh = ParsePly(file.bytes(), path, &local);
-  local.unit_hint = detail::UnitHint(mesh.vertices);
+  local.unit_hint = UnitHint(mesh.vertices);
   if (report != nullptr) *report = std::move(local);
   return mesh;
 }

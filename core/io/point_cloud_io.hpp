@@ -46,6 +46,10 @@ struct ReadReport {
   std::vector<std::string> notes;
 };
 
+/// Non-empty when the cloud's bounding-box diagonal (under 10) looks like metres rather than
+/// millimetres: the text of ReadReport::unit_hint, e.g. "extent 0.42 — looks like metres; ...".
+std::string UnitHint(const PointCloud& cloud);
+
 /// PLY encodings lasercell writes.
 enum class PlyEncoding { kBinaryLittleEndian, kBinaryBigEndian, kAscii };
 

@@ -1,0 +1,65 @@
+#pragma once
+// Shared pieces of the Python module `lasercell` (pybind11): NumPy array conversion with the
+// argument named in every error, and the registration function of each bound area.
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace lasercell::python {
+
+namespace py = pybind11;
+
+/// Registers lasercell.Error, InputError (also a ValueError), FileError (also an OSError),
+/// OptionError, InternalError and UnitError, and translates the C++ exceptions into them.
+void BindErrors(py::module_& m);
+/// PointCloud, ReadReport, read/write of PLY and PCD.
+void BindPointCloud(py::module_& m);
+/// FrameGraph: load/save cell.yaml, transforms with covariance.
+void BindFrameGraph(py::module_& m);
+
+/// Raises lasercell.InputError (a ValueError) with `message`.
+[[noreturn]] void ThrowInput(const std::string& message);
+/// Raises lasercell.UnitError (an InputError) with `message`.
+[[noreturn]] void ThrowUnit(const std::string& message);
+
+/// Copies an (N,3) array of any real dtype and any strides into Vector3d rows. Throws TypeError
+/// for a non-real dtype, InputError for another shape or (when `finite`) a NaN/inf value;
+/// messages name `arg`.
+std::vector<Eigen::Vector3d> ToVector3Rows(const py::handle& array, const std::string& arg,
+                                           bool finite = true);
+/// An (N,) array of a real or integer dtype, by kind, copied; `expected_size` when not SIZE_MAX.
+std::vector<double> ToDoubles(const py::handle& array, const std::string& arg,
+                              std::size_t expected_size, bool finite = true);
+std::vector<float> ToFloats(const py::handle& array, const std::string& arg,
+                            std::size_t expected_size);
+std::vector<std::int32_t> ToInt32s(const py::handle& array, const std::string& arg,
+                                   std::size_t expected_size);
+/// A 4x4 homogeneous rigid transform -> Isometry3d; InputError unless the last row is
+/// [0 0 0 1] and the rotation block is orthonormal within 1e-9.
+Eigen::Isometry3d ToIsometry(const py::handle& array, const std::string& arg);
+/// Isometry3d -> a new 4x4 float64 array.
+py::array_t<double> FromIsometry(const Eigen::Isometry3d& pose);
+
+/// A read-only NumPy view of `rows` x `cols` values at `data` (row-major, contiguous) whose
+/// lifetime is tied to `owner` (the Python object that holds the C++ storage).
+template <typename T>
+py::array ReadOnlyView(const T* data, std::size_t rows, std::size_t cols, py::handle owner) {
+  std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(rows)};
+  std::vector<py::ssize_t> strides{static_cast<py::ssize_t>(cols * sizeof(T))};
+  if (cols > 1) {
+    shape.push_back(static_cast<py::ssize_t>(cols));
+    strides.push_back(static_cast<py::ssize_t>(sizeof(T)));
+  }
+  py::array view(py::dtype::of<T>(), shape, strides, data, owner);
+  py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return view;
+}
+
+}  // namespace lasercell::python

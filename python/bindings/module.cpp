@@ -1,0 +1,13 @@
+// The Python module `lasercell` (its compiled part, lasercell._lasercell): bindings of the
+// library API, NumPy arrays in and out (python/lasercell/__init__.py re-exports it).
+#include "python/bindings/bindings.hpp"
+
+namespace py = pybind11;
+
+PYBIND11_MODULE(_lasercell, m) {
+  m.doc() = "lasercell: laser-triangulation metrology cell toolkit (millimetres, radians)";
+  m.attr("__version__") = LASERCELL_VERSION;
+  lasercell::python::BindErrors(m);
+  lasercell::python::BindPointCloud(m);
+  lasercell::python::BindFrameGraph(m);
+}

@@ -1,0 +1,27 @@
+"""lasercell: laser-triangulation metrology cell toolkit.
+
+Units are millimetres and radians; transforms are 4x4 float64 arrays ``target_from_source``
+(``p_target = T @ p_source``). Arrays returned by lasercell are read-only views into its own
+storage; arrays passed in are copied, in any real dtype and memory order.
+
+Errors: ``lasercell.InputError`` (also a ``ValueError``) for invalid input, with subclasses
+``FileError`` (also an ``OSError``; ``.path``), ``OptionError`` and ``UnitError``;
+``lasercell.InternalError`` for a bug in lasercell. All derive from ``lasercell.Error``.
+"""
+
+from ._lasercell import (  # noqa: F401
+    __version__,
+    Error,
+    FileError,
+    FrameGraph,
+    InputError,
+    InternalError,
+    OptionError,
+    PointCloud,
+    ReadReport,
+    TransformWithCovariance,
+    UnitError,
+    read_point_cloud,
+    read_point_cloud_with_report,
+    write_point_cloud,
+)
