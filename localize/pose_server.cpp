@@ -339,7 +339,6 @@ void PoseServer::ReapGone() {
     }
   }
   for (std::size_t i = clients_.size(); i-- > 0;) CloseIfDone(i, now);
-  Publish();
 }
 
 bool PoseServer::CloseIfDone(std::size_t index, std::int64_t now_ns) {
