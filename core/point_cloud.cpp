@@ -34,18 +34,24 @@ std::vector<T> Gather(const std::vector<T>& from, std::span<const std::size_t> i
 }  // namespace
 
 void PointCloud::Validate(const std::string& what) const {
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    if (!positions[i].allFinite()) {
+      throw InputError(what + ": point " + std::to_string(i) +
+                       " has a non-finite coordinate; remove NaN/inf points before use");
+    }
+  }
+  ValidateAttributes(what);
+}
+
+void PointCloud::ValidateAttributes(const std::string& what) const {
   const std::size_t n = positions.size();
   CheckSize(normals, n, "normals", what);
   CheckSize(intensity, n, "intensity", what);
   CheckSize(profile, n, "profile", what);
   CheckSize(column, n, "column", what);
   CheckSize(timestamp_s, n, "timestamp", what);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!positions[i].allFinite()) {
-      throw InputError(what + ": point " + std::to_string(i) +
-                       " has a non-finite coordinate; remove NaN/inf points before use");
-    }
-    if (!normals.empty() && !normals[i].allFinite()) {
+  for (std::size_t i = 0; i < normals.size(); ++i) {
+    if (!normals[i].allFinite()) {
       throw InputError(what + ": normal of point " + std::to_string(i) +
                        " is not finite; recompute normals or drop the point");
     }

@@ -72,6 +72,9 @@ struct PointCloud {
   /// Throws InputError naming `what` when attribute sizes disagree with positions, a position
   /// is not finite, a normal is not finite, or grid indices fall outside the grid.
   void Validate(const std::string& what = "point cloud") const;
+  /// Validate() without the pass over the positions, for a caller that checked each position
+  /// for finiteness as it filled them (the Python bindings' array copy).
+  void ValidateAttributes(const std::string& what) const;
 
   /// Bounding box of the positions.
   BoundingBox Bounds() const;

@@ -25,7 +25,12 @@ Format FormatOf(const std::string& path, bool allow_pcd) {
 
 std::string UnitHint(const PointCloud& cloud) {
   if (cloud.size() < 2) return {};
-  const double diagonal = cloud.Bounds().Diagonal();
+  return UnitHint(cloud.Bounds(), cloud.size());
+}
+
+std::string UnitHint(const BoundingBox& bounds, std::size_t points) {
+  if (points < 2) return {};
+  const double diagonal = bounds.Diagonal();
   if (!(diagonal > 0.0 && diagonal < 10.0)) return {};
   char buf[160];
   std::snprintf(buf, sizeof(buf),

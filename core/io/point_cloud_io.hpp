@@ -49,6 +49,8 @@ struct ReadReport {
 /// Non-empty when the cloud's bounding-box diagonal (under 10) looks like metres rather than
 /// millimetres: the text of ReadReport::unit_hint, e.g. "extent 0.42 — looks like metres; ...".
 std::string UnitHint(const PointCloud& cloud);
+/// The same test on a bounding box already known (of `points` points).
+std::string UnitHint(const BoundingBox& bounds, std::size_t points);
 
 /// PLY encodings lasercell writes.
 enum class PlyEncoding { kBinaryLittleEndian, kBinaryBigEndian, kAscii };

@@ -57,19 +57,58 @@ void ThrowNotFinite(const std::string& arg, std::size_t index) {
 
 }  // namespace
 
+namespace {
+
+// Copies (N, 3) values of type S at any strides into rows, testing finiteness (x - x is 0 for
+// finite x, NaN otherwise) and finding the bounding box in the same pass; the failing row is
+// searched only when a NaN/inf was seen.
+template <typename S>
+void FillRows(const py::array& a, std::vector<Eigen::Vector3d>* rows, bool finite,
+              const std::string& arg, BoundingBox* bounds) {
+  const auto* base = static_cast<const char*>(a.data());
+  const py::ssize_t row_stride = a.strides(0), col_stride = a.strides(1);
+  const auto at = [&](std::size_t i, int c) {
+    return static_cast<double>(*reinterpret_cast<const S*>(
+        base + static_cast<py::ssize_t>(i) * row_stride + c * col_stride));
+  };
+  Eigen::Array3d low = Eigen::Array3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Array3d high = -low;
+  Eigen::Array3d nan_probe = Eigen::Array3d::Zero();
+  for (std::size_t i = 0; i < rows->size(); ++i) {
+    const Eigen::Array3d p(at(i, 0), at(i, 1), at(i, 2));
+    (*rows)[i] = p.matrix();
+    nan_probe += p - p;
+    low = low.min(p);
+    high = high.max(p);
+  }
+  if (finite && !nan_probe.allFinite()) {
+    for (std::size_t i = 0; i < rows->size(); ++i) {
+      if (!(*rows)[i].allFinite()) ThrowNotFinite(arg, i);
+    }
+  }
+  if (bounds != nullptr && !rows->empty()) {
+    bounds->min = low.matrix();
+    bounds->max = high.matrix();
+  }
+}
+
+}  // namespace
+
 std::vector<Eigen::Vector3d> ToVector3Rows(const py::handle& array, const std::string& arg,
-                                           bool finite) {
+                                           bool finite, BoundingBox* bounds) {
   const py::array a = RealArray(array, arg, true);
   if (a.ndim() != 2 || a.shape(1) != 3) {
     ThrowInput(arg + ": expected shape (N, 3), got " + ShapeText(a));
   }
-  const auto values = Cast<double>(a);
-  const std::size_t n = static_cast<std::size_t>(a.shape(0));
-  std::vector<Eigen::Vector3d> rows(n);
-  const double* data = values.data();
-  for (std::size_t i = 0; i < n; ++i) {
-    rows[i] = Eigen::Vector3d(data[3 * i], data[3 * i + 1], data[3 * i + 2]);
-    if (finite && !rows[i].allFinite()) ThrowNotFinite(arg, i);
+  std::vector<Eigen::Vector3d> rows(static_cast<std::size_t>(a.shape(0)));
+  // float64 and float32 are read in place at any strides (no temporary array: its fresh pages
+  // would cost more than the copy); other dtypes are cast to float64 once first.
+  if (py::isinstance<py::array_t<double>>(a)) {
+    FillRows<double>(a, &rows, finite, arg, bounds);
+  } else if (py::isinstance<py::array_t<float>>(a)) {
+    FillRows<float>(a, &rows, finite, arg, bounds);
+  } else {
+    FillRows<double>(Cast<double>(a), &rows, finite, arg, bounds);
   }
   return rows;
 }
@@ -88,8 +127,14 @@ std::vector<double> ToDoubles(const py::handle& array, const std::string& arg,
 
 std::vector<float> ToFloats(const py::handle& array, const std::string& arg,
                             std::size_t expected_size) {
-  const std::vector<double> values = ToDoubles(array, arg, expected_size, true);
-  return std::vector<float>(values.begin(), values.end());
+  const py::array a = RealArray(array, arg, true);
+  CheckSize(a, arg, expected_size);
+  const auto values = Cast<float>(a);  // no copy for a float32 array
+  std::vector<float> out(values.data(), values.data() + values.size());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (!std::isfinite(out[i])) ThrowNotFinite(arg, i);
+  }
+  return out;
 }
 
 std::vector<std::int32_t> ToInt32s(const py::handle& array, const std::string& arg,

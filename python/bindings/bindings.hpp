@@ -9,8 +9,13 @@
 #include <Eigen/Geometry>
 #include <cstddef>
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include "core/point_cloud.hpp"
+#include "core/progress.hpp"
+#include "registration/localize_options_io.hpp"
 
 namespace lasercell::python {
 
@@ -24,16 +29,42 @@ void BindPointCloud(py::module_& m);
 /// FrameGraph: load/save cell.yaml, transforms with covariance.
 void BindFrameGraph(py::module_& m);
 
+/// CameraModel: .cameramodel files, project/unproject arrays.
+void BindCameraModel(py::module_& m);
+/// PpfModel, localize_in_cloud and its result.
+void BindRegistration(py::module_& m);
+/// estimate_normals, crop_box, voxel_grid_downsample, align_icp.
+void BindRegistrationStages(py::module_& m);
+/// Profile files, sweeps (profiles -> points).
+void BindTriangulation(py::module_& m);
+/// Jobs: load, run, result.
+void BindLocalizeJob(py::module_& m);
+
+/// The text of a localize options file from a dict of its keys (JSON, which is YAML flow
+/// syntax); NumPy scalars and arrays are accepted. TypeError naming `arg` for a non-dict.
+std::string OptionsText(const py::object& options, const std::string& arg);
+/// LocalizeSettings from such a dict (None: the defaults), through the options file's reader:
+/// OptionError naming `arg` and the field for an unknown key or a wrong type.
+registration::LocalizeSettings SettingsFromDict(const py::object& options, const std::string& arg);
+/// A ProgressCallback calling `callback(stage, fraction)` with the GIL taken; empty for None.
+/// Raising in the callback (or Ctrl-C) stops the work with that exception.
+ProgressCallback ToProgress(const py::object& callback);
+/// A new 2-D float64 array holding `m`.
+py::array_t<double> FromMatrix(const Eigen::MatrixXd& m);
+/// A JSON value as the equivalent Python object (dict, list, str, float, bool, None).
+py::object JsonToPython(const nlohmann::json& value);
+
 /// Raises lasercell.InputError (a ValueError) with `message`.
 [[noreturn]] void ThrowInput(const std::string& message);
 /// Raises lasercell.UnitError (an InputError) with `message`.
 [[noreturn]] void ThrowUnit(const std::string& message);
 
-/// Copies an (N,3) array of any real dtype and any strides into Vector3d rows. Throws TypeError
-/// for a non-real dtype, InputError for another shape or (when `finite`) a NaN/inf value;
-/// messages name `arg`.
+/// Copies an (N,3) array of any real dtype and any strides into Vector3d rows, in one pass that
+/// also finds the bounding box (into `bounds` when not null and N > 0). Throws TypeError for a
+/// non-real dtype, InputError for another shape or (when `finite`) a NaN/inf value; messages
+/// name `arg`.
 std::vector<Eigen::Vector3d> ToVector3Rows(const py::handle& array, const std::string& arg,
-                                           bool finite = true);
+                                           bool finite = true, BoundingBox* bounds = nullptr);
 /// An (N,) array of a real or integer dtype, by kind, copied; `expected_size` when not SIZE_MAX.
 std::vector<double> ToDoubles(const py::handle& array, const std::string& arg,
                               std::size_t expected_size, bool finite = true);

@@ -28,15 +28,6 @@ JointValues ToJoints(const py::object& joints) {
   return out;
 }
 
-py::array_t<double> Matrix6(const Matrix6d& m) {
-  py::array_t<double> out({6, 6});
-  auto view = out.mutable_unchecked<2>();
-  for (int r = 0; r < 6; ++r) {
-    for (int c = 0; c < 6; ++c) view(r, c) = m(r, c);
-  }
-  return out;
-}
-
 }  // namespace
 
 void BindFrameGraph(py::module_& m) {
@@ -49,7 +40,7 @@ void BindFrameGraph(py::module_& m) {
           "4x4 float64, mm.")
       .def_property_readonly(
           "covariance",
-          [](const TransformWithCovarianceResult& r) { return Matrix6(r.covariance); },
+          [](const TransformWithCovarianceResult& r) { return FromMatrix(r.covariance); },
           "6x6 over [rotation vector (rad); translation (mm)], left "
           "perturbation in the `to` frame.")
       .def_readonly("edges_without_covariance",
@@ -95,6 +86,55 @@ for unknown or unconnected frames, or missing joint values.)doc")
           },
           py::arg("to"), py::arg("from_"), py::arg("joints") = py::none(),
           "transform() with its covariance (TransformWithCovariance).")
+      .def(
+          "set_static_edge",
+          [](FrameGraph& g, const std::string& parent, const std::string& child,
+             const py::handle& parent_from_child, const py::object& covariance,
+             const std::string& tool) {
+            StaticEdge edge;
+            edge.parent = parent;
+            edge.child = child;
+            edge.SetParentFromChild(ToIsometry(parent_from_child, "parent_from_child"));
+            edge.provenance.tool = tool;
+            if (!covariance.is_none()) {
+              const std::vector<double> c =
+                  ToDoubles(py::array::ensure(covariance).attr("reshape")(-1), "covariance", 36);
+              edge.covariance = Eigen::Map<const Matrix6d>(c.data()).transpose();
+            }
+            g.SetStaticEdge(edge);
+          },
+          py::arg("parent"), py::arg("child"), py::arg("parent_from_child"),
+          py::arg("covariance") = py::none(), py::arg("tool") = "python",
+          "Adds or replaces a static edge (4x4, mm; covariance 6x6 over [rotation vector (rad); "
+          "translation (mm)] or None). InputError when it would close a cycle.")
+      .def("remove_edge", &FrameGraph::RemoveEdge, py::arg("a"), py::arg("b"),
+           "Removes the edge between a and b; False when there was none.")
+      .def(
+          "set_laser_plane",
+          [](FrameGraph& g, const std::string& name, const py::handle& normal,
+             const py::handle& point_mm, const std::string& frame) {
+            const std::vector<double> n = ToDoubles(normal, "normal", 3);
+            const std::vector<double> p = ToDoubles(point_mm, "point_mm", 3);
+            LaserPlaneEntry plane;
+            plane.frame = frame;
+            plane.normal = Eigen::Vector3d(n[0], n[1], n[2]);
+            plane.point_mm = Eigen::Vector3d(p[0], p[1], p[2]);
+            g.SetLaserPlane(name, plane);
+          },
+          py::arg("name"), py::arg("normal"), py::arg("point_mm"), py::arg("frame") = "sensor",
+          "Adds or replaces a laser plane: unit normal and a point of it, mm, in `frame`.")
+      .def_property_readonly(
+          "laser_planes",
+          [](const FrameGraph& g) {
+            py::dict planes;
+            for (const auto& [name, plane] : g.laser_planes()) {
+              planes[py::str(name)] =
+                  py::make_tuple(plane.frame, py::array_t<double>(3, plane.normal.data()),
+                                 py::array_t<double>(3, plane.point_mm.data()));
+            }
+            return planes;
+          },
+          "{name: (frame, unit normal (3,), point (3,) mm)}.")
       .def("__repr__", [](const FrameGraph& g) {
         return "<lasercell.FrameGraph " + std::to_string(g.Frames().size()) + " frames, " +
                std::to_string(g.Robots().size()) + " robots>";

@@ -10,4 +10,9 @@ PYBIND11_MODULE(_lasercell, m) {
   lasercell::python::BindErrors(m);
   lasercell::python::BindPointCloud(m);
   lasercell::python::BindFrameGraph(m);
+  lasercell::python::BindCameraModel(m);
+  lasercell::python::BindTriangulation(m);
+  lasercell::python::BindRegistration(m);
+  lasercell::python::BindRegistrationStages(m);
+  lasercell::python::BindLocalizeJob(m);
 }

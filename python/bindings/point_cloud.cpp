@@ -27,7 +27,8 @@ CloudPtr MakeCloud(const py::handle& positions, const py::object& normals,
                    const py::object& timestamp_s, const std::optional<std::pair<int, int>>& grid,
                    bool allow_small_extent) {
   auto cloud = std::make_shared<PointCloud>();
-  cloud->positions = ToVector3Rows(positions, "positions");
+  BoundingBox bounds;
+  cloud->positions = ToVector3Rows(positions, "positions", true, &bounds);
   const std::size_t n = cloud->size();
   if (!normals.is_none()) {
     cloud->normals = ToVector3Rows(normals, "normals");
@@ -48,9 +49,9 @@ CloudPtr MakeCloud(const py::handle& positions, const py::object& normals,
     cloud->grid_rows = grid->first;
     cloud->grid_cols = grid->second;
   }
-  cloud->Validate("PointCloud");
+  cloud->ValidateAttributes("PointCloud");  // ToVector3Rows checked the positions
   if (!allow_small_extent) {
-    const std::string hint = io::UnitHint(*cloud);
+    const std::string hint = io::UnitHint(bounds, n);
     if (!hint.empty()) {
       ThrowUnit("positions: " + hint + "; pass allow_small_extent=True if it really is mm");
     }

@@ -1,0 +1,162 @@
+// Localization jobs (localize/job.hpp, localize/job_run.hpp): lasercell.Job.load reads a job
+// file (with its part files), lasercell.run_job runs it once on its profile file as
+// `lasercell job run` does, and lasercell.JobRunner loads a job once and runs it on sweep after
+// sweep. Results carry the part and grasp poses in the target frame (handling_base by default)
+// as 4x4 arrays with 6x6 covariances, and the whole result file as a dict.
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+
+#include "localize/job.hpp"
+#include "localize/job_run.hpp"
+#include "python/bindings/bindings.hpp"
+
+namespace lasercell::python {
+namespace {
+
+using localize::Job;
+using localize::JobResult;
+using localize::PartInstance;
+using ResultPtr = std::shared_ptr<JobResult>;
+
+localize::JobRunOptions RunOptions(int threads, bool load_meshes, const py::object& progress) {
+  localize::JobRunOptions options;
+  options.threads = threads;
+  options.load_meshes = load_meshes;
+  options.progress = ToProgress(progress);
+  return options;
+}
+
+void BindJob(py::module_& m) {
+  py::class_<Job>(m, "Job", "A job file: cell, camera, sweep source, target frame, parts.")
+      .def_static("load", &localize::ReadJobFile, py::arg("path"),
+                  "Reads a job file (format lasercell.job) and the part files it names; paths in "
+                  "it are resolved against its folder. OptionError names the file and field.")
+      .def_readonly("file", &Job::file)
+      .def_readonly("cell", &Job::cell, "cell.yaml, resolved.")
+      .def_readonly("camera", &Job::camera, ".cameramodel, resolved.")
+      .def_readonly("laser", &Job::laser, "Laser plane name in the cell.")
+      .def_readonly("profiles", &Job::profiles, "The .lcp profile file, resolved.")
+      .def_readonly("target_frame", &Job::target_frame)
+      .def_readonly("grasp_tolerance_mm", &Job::grasp_tolerance_mm)
+      .def_property_readonly(
+          "parts",
+          [](const Job& job) {
+            py::list parts;
+            for (const localize::JobPart& p : job.parts) {
+              parts.append(py::make_tuple(p.part.name, p.instances));
+            }
+            return parts;
+          },
+          "[(part name, instances to find)] in job order.")
+      .def("__repr__", [](const Job& job) {
+        return "<lasercell.Job " + job.file + ": " + std::to_string(job.parts.size()) +
+               " part(s) in " + job.target_frame + ">";
+      });
+}
+
+void BindInstance(py::module_& m) {
+  py::class_<PartInstance>(m, "PartInstance", "A found part and its grasps, in the target frame.")
+      .def_readonly("part", &PartInstance::part)
+      .def_readonly("frame", &PartInstance::frame, "'<part>_<k>', k from 1 in order found.")
+      .def_property_readonly(
+          "target_from_part",
+          [](const PartInstance& i) { return FromIsometry(i.target_from_part); }, "4x4, mm.")
+      .def_property_readonly(
+          "covariance", [](const PartInstance& i) { return FromMatrix(i.covariance); },
+          "6x6 over [rotation vector (rad); translation (mm)]: the calibrated edges on the path "
+          "and the fit; meaningful when covariance_valid.")
+      .def_readonly("covariance_valid", &PartInstance::covariance_valid)
+      .def_property_readonly(
+          "grasps",
+          [](const PartInstance& i) {
+            py::dict grasps;
+            for (const localize::GraspPose& g : i.grasps) {
+              grasps[py::str(g.name)] = FromIsometry(g.target_from_grasp);
+            }
+            return grasps;
+          },
+          "{grasp name: 4x4 target_from_grasp} (the handling robot's gripper_tcp target).")
+      .def_readonly("graspable", &PartInstance::graspable)
+      .def_readonly("not_graspable_reason", &PartInstance::not_graspable_reason)
+      .def_readonly("ambiguous", &PartInstance::ambiguous)
+      .def_readonly("candidate", &PartInstance::candidate, "Votes, support, ICP of the search.");
+}
+
+void BindResult(py::module_& m) {
+  py::class_<JobResult, ResultPtr>(m, "JobResult", "What one run of a job found.")
+      .def_property_readonly(
+          "instances", [](const JobResult& r) { return r.parts.instances; },
+          "Found instances (PartInstance), in the order found.")
+      .def_property_readonly(
+          "all_found", [](const JobResult& r) { return r.parts.AllFound(); },
+          "Every requested instance was found.")
+      .def_property_readonly(
+          "sweep",
+          [](const ResultPtr& r) {
+            return std::shared_ptr<triangulation::SweepResult>(r, &r->sweep);
+          },
+          "The sweep in the target frame (Sweep).")
+      .def_readonly("notes", &JobResult::notes)
+      .def("summary", &JobResult::Summary)
+      .def(
+          "to_dict", [](const JobResult& r) { return JsonToPython(localize::JobResultJson(r)); },
+          "The result file (format lasercell.localization_job) as a dict, as `lasercell job "
+          "run --out` writes it (timings included).")
+      .def(
+          "cell_with_instances",
+          [](const JobResult& r, const FrameGraph& cell) {
+            return localize::CellWithInstances(cell, r);
+          },
+          py::arg("cell"), "A copy of cell with one static edge per found instance.")
+      .def("__repr__",
+           [](const JobResult& r) { return "<lasercell.JobResult " + r.Summary() + ">"; });
+}
+
+void BindRunner(py::module_& m) {
+  py::class_<localize::JobRunner>(
+      m, "JobRunner",
+      "A job loaded once (cell, camera, lookup tables, part models) and run on sweep after "
+      "sweep, as a cell does while profiles arrive.")
+      .def(py::init([](const Job& job, int threads, bool load_meshes, const py::object& progress) {
+             const localize::JobRunOptions options = RunOptions(threads, load_meshes, progress);
+             py::gil_scoped_release release;
+             return std::make_unique<localize::JobRunner>(job, options);
+           }),
+           py::arg("job"), py::arg("threads") = -1, py::arg("load_meshes") = false,
+           py::arg("progress") = py::none())
+      .def(
+          "run",
+          [](localize::JobRunner& runner, const triangulation::ProfileSet& profiles,
+             const std::string& source_name) {
+            py::gil_scoped_release release;
+            return std::make_shared<JobResult>(runner.Run(profiles, source_name));
+          },
+          py::arg("profiles"), py::arg("source_name") = "python",
+          "Localizes the job's parts in one sweep (a ProfileSet).");
+}
+
+}  // namespace
+
+void BindLocalizeJob(py::module_& m) {
+  BindJob(m);
+  BindInstance(m);
+  BindResult(m);
+  BindRunner(m);
+  m.def(
+      "run_job",
+      [](const Job& job, int threads, bool load_meshes, const py::object& progress) {
+        const localize::JobRunOptions options = RunOptions(threads, load_meshes, progress);
+        py::gil_scoped_release release;
+        return std::make_shared<JobResult>(localize::RunJob(job, options));
+      },
+      py::arg("job"), py::arg("threads") = -1, py::arg("load_meshes") = false,
+      py::arg("progress") = py::none(),
+      R"doc(Runs the job once on its profile file: profiles -> sweep in the target frame -> part
+and grasp poses. threads >= 0 overrides the job's. progress(stage, fraction): "models",
+"profiles", "triangulation", then the searches. Parts not found are in the result; a cell,
+camera, laser plane, profile file or model that cannot be used raises FileError/InputError.)doc");
+}
+
+}  // namespace lasercell::python

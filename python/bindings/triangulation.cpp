@@ -1,0 +1,224 @@
+// Laser profiles to points: lasercell.read_profiles (the .lcp profile file,
+// triangulation/profile_io.hpp) as arrays, and lasercell.scan_profiles, the sweep assembly of
+// `lasercell scan triangulate` (triangulation/sweep.hpp): profiles + camera + laser plane (given,
+// or the cell's) + motion -> a PointCloud in the sensor, a linear sweep's or the cell's frame.
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "calib/camera_model.hpp"
+#include "core/frame_graph.hpp"
+#include "python/bindings/bindings.hpp"
+#include "triangulation/linear_sweep.hpp"
+#include "triangulation/profile_io.hpp"
+#include "triangulation/sweep.hpp"
+#include "triangulation/triangulator.hpp"
+
+namespace lasercell::python {
+namespace {
+
+using triangulation::ProfileSet;
+using triangulation::SweepResult;
+using ProfilesPtr = std::shared_ptr<ProfileSet>;
+
+// One field of every profile: a (P,) array when `columns` is 0 and `per_column` false, else a
+// (P, columns) array (columns may be 0: a profile file without joints gives (P, 0) joints).
+template <typename T, typename Get>
+py::array_t<T> Stack(const ProfileSet& set, std::size_t columns, bool per_column, Get get) {
+  const std::size_t n = set.profiles.size();
+  std::vector<py::ssize_t> shape{static_cast<py::ssize_t>(n)};
+  if (per_column) shape.push_back(static_cast<py::ssize_t>(columns));
+  py::array_t<T> out(shape);
+  T* data = out.mutable_data();
+  const std::size_t stride = per_column ? columns : 1;
+  for (std::size_t i = 0; i < n; ++i) get(set.profiles[i], data + i * stride);
+  return out;
+}
+
+template <typename T>
+void CopyRow(const std::vector<T>& row, T* out) {
+  std::copy(row.begin(), row.end(), out);
+}
+
+triangulation::SweepMotion Motion(const std::string& name) {
+  if (name == "none") return triangulation::SweepMotion::kNone;
+  if (name == "linear") return triangulation::SweepMotion::kLinear;
+  if (name == "robot") return triangulation::SweepMotion::kRobot;
+  ThrowInput("motion: expected 'none', 'linear' or 'robot', got '" + name + "'");
+}
+
+void BindProfiles(py::module_& m) {
+  py::class_<ProfileSet, ProfilesPtr>(m, "ProfileSet", R"doc(
+The profiles of a .lcp file: one subpixel peak row (or NaN) per image column per exposure.
+The per-profile arrays are copies: row_px, intensity, width_px are (P, C) float32; sequence is
+(P,) uint64, timestamp_ns (P,) int64 (sensor clock), joints_rad (P, J) float64.)doc")
+      .def("__len__", [](const ProfileSet& s) { return s.profiles.size(); })
+      .def_property_readonly("image_width",
+                             [](const ProfileSet& s) { return s.header.image_width; })
+      .def_property_readonly("image_height",
+                             [](const ProfileSet& s) { return s.header.image_height; })
+      .def_property_readonly("first_column",
+                             [](const ProfileSet& s) { return s.header.first_column; })
+      .def_property_readonly("columns", [](const ProfileSet& s) { return s.header.columns; })
+      .def_property_readonly("robot", [](const ProfileSet& s) { return s.header.robot; })
+      .def_property_readonly("metadata", [](const ProfileSet& s) { return s.header.metadata; })
+      .def_property_readonly("sequence",
+                             [](const ProfileSet& s) {
+                               return Stack<std::uint64_t>(
+                                   s, 0, false,
+                                   [](const auto& p, auto* out) { *out = p.sequence; });
+                             })
+      .def_property_readonly("timestamp_ns",
+                             [](const ProfileSet& s) {
+                               return Stack<std::int64_t>(
+                                   s, 0, false,
+                                   [](const auto& p, auto* out) { *out = p.timestamp_ns; });
+                             })
+      .def_property_readonly("joints_rad",
+                             [](const ProfileSet& s) {
+                               return Stack<double>(
+                                   s, s.header.joint_count, true,
+                                   [](const auto& p, auto* out) { CopyRow(p.joints_rad, out); });
+                             })
+      .def_property_readonly("row_px",
+                             [](const ProfileSet& s) {
+                               return Stack<float>(
+                                   s, s.header.columns, true,
+                                   [](const auto& p, auto* out) { CopyRow(p.row_px, out); });
+                             })
+      .def_property_readonly("intensity",
+                             [](const ProfileSet& s) {
+                               return Stack<float>(
+                                   s, s.header.columns, true,
+                                   [](const auto& p, auto* out) { CopyRow(p.intensity, out); });
+                             })
+      .def_property_readonly("width_px",
+                             [](const ProfileSet& s) {
+                               return Stack<float>(
+                                   s, s.header.columns, true,
+                                   [](const auto& p, auto* out) { CopyRow(p.width_px, out); });
+                             })
+      .def("__repr__", [](const ProfileSet& s) {
+        return "<lasercell.ProfileSet " + std::to_string(s.profiles.size()) + " profiles x " +
+               std::to_string(s.header.columns) + " columns>";
+      });
+
+  m.def(
+      "read_profiles",
+      [](const std::string& path) {
+        py::gil_scoped_release release;
+        return std::make_shared<ProfileSet>(triangulation::ReadProfiles(path));
+      },
+      py::arg("path"), "Reads a .lcp profile file; FileError naming the problem.");
+}
+
+void BindSweep(py::module_& m) {
+  py::class_<SweepResult, std::shared_ptr<SweepResult>>(m, "Sweep",
+                                                        "Profiles turned into one cloud.")
+      .def_property_readonly(
+          "cloud",
+          [](const std::shared_ptr<SweepResult>& s) {
+            // The cloud shares the sweep's lifetime (aliasing pointer, no copy).
+            return std::shared_ptr<PointCloud>(s, &s->cloud);
+          },
+          "The points (organized: grid = (profiles, columns)), mm, in `frame`.")
+      .def_readonly("frame", &SweepResult::frame, "'sensor' or the target frame.")
+      .def_readonly("profiles", &SweepResult::profiles)
+      .def_readonly("sequence_gaps", &SweepResult::sequence_gaps)
+      .def_property_readonly(
+          "counts",
+          [](const SweepResult& s) {
+            py::dict d;
+            d["points"] = s.counts.points;
+            d["no_peak"] = s.counts.no_peak;
+            d["outside_image"] = s.counts.outside_image;
+            d["parallel"] = s.counts.parallel;
+            d["behind_camera"] = s.counts.behind_camera;
+            d["out_of_range"] = s.counts.out_of_range;
+            return d;
+          },
+          "Valid points and rejections by reason, over all profiles.")
+      .def_property_readonly(
+          "frame_from_sensor",
+          [](const SweepResult& s) {
+            py::array_t<double> out({static_cast<py::ssize_t>(s.frame_from_sensor.size()),
+                                     py::ssize_t{4}, py::ssize_t{4}});
+            auto view = out.mutable_unchecked<3>();
+            for (std::size_t i = 0; i < s.frame_from_sensor.size(); ++i) {
+              const Eigen::Matrix4d& t = s.frame_from_sensor[i].matrix();
+              for (int r = 0; r < 4; ++r) {
+                for (int c = 0; c < 4; ++c) view(static_cast<py::ssize_t>(i), r, c) = t(r, c);
+              }
+            }
+            return out;
+          },
+          "(P, 4, 4): the sensor pose of each profile in the sweep frame.")
+      .def("summary", &SweepResult::Summary)
+      .def("__repr__",
+           [](const SweepResult& s) { return "<lasercell.Sweep " + s.Summary() + ">"; });
+}
+
+}  // namespace
+
+void BindTriangulation(py::module_& m) {
+  BindProfiles(m);
+  BindSweep(m);
+  m.def(
+      "scan_profiles",
+      [](const ProfileSet& profiles, const calib::CameraModel& camera, const py::object& plane,
+         const FrameGraph* cell, const std::string& laser, const std::string& motion,
+         const py::object& velocity_mm_s, std::optional<std::int64_t> t0_ns,
+         const std::string& linear_record, const std::string& target_frame,
+         const std::string& robot, bool exact, int threads) {
+        triangulation::SweepOptions options;
+        if (!linear_record.empty()) {
+          if (motion != "none" && motion != "linear") {
+            ThrowInput("linear_record: a linear sweep record sets motion 'linear'; drop motion='" +
+                       motion + "'");
+          }
+          options = triangulation::ReadLinearSweepRecord(linear_record).Options();
+        } else {
+          options.motion = Motion(motion);
+          if (!velocity_mm_s.is_none()) {
+            const std::vector<double> v = ToDoubles(velocity_mm_s, "velocity_mm_s", 3);
+            options.velocity_mm_s = Eigen::Vector3d(v[0], v[1], v[2]);
+          }
+          if (t0_ns) options.t0_ns = *t0_ns;
+        }
+        options.target_frame = target_frame;
+        options.robot = robot;
+        options.path = exact ? triangulation::TriangulationPath::kExact
+                             : triangulation::TriangulationPath::kFast;
+        options.threads = threads;
+        triangulation::LaserPlaneSource source;
+        source.laser = laser;
+        if (!plane.is_none()) {
+          const std::vector<double> p = ToDoubles(plane, "laser_plane", 4);
+          source.plane = Eigen::Vector4d(p[0], p[1], p[2], p[3]);
+          source.plane_label = "laser_plane";
+        }
+        py::gil_scoped_release release;
+        const triangulation::ScanSetup setup =
+            triangulation::ScanSetupFromCell(cell, "cell", source, options);
+        const triangulation::Triangulator triangulator(camera, setup.laser_plane);
+        return std::make_shared<SweepResult>(
+            triangulation::AssembleSweep(profiles, triangulator, setup.options, cell));
+      },
+      py::arg("profiles"), py::arg("camera"), py::arg("laser_plane") = py::none(),
+      py::arg("cell") = nullptr, py::arg("laser") = "laser", py::arg("motion") = "none",
+      py::arg("velocity_mm_s") = py::none(), py::arg("t0_ns") = py::none(),
+      py::arg("linear_record") = "", py::arg("target_frame") = "", py::arg("robot") = "",
+      py::arg("exact") = false, py::arg("threads") = 1,
+      R"doc(Profiles -> a calibrated sweep, as `lasercell scan triangulate` does.
+
+laser_plane: (4,) (n, d) with n . p + d = 0 in the sensor frame, mm; None takes the plane named
+`laser` from `cell` (a FrameGraph). motion: 'none' (static sensor), 'linear' (velocity_mm_s in
+the sensor frame at t0_ns; or linear_record, a records/linear_sweep.yaml, which sets both) or
+'robot' (joints in the profiles, through the cell to target_frame). exact: mrcal per pixel
+instead of the lookup tables. Raises InputError when the profiles do not fit the camera or the
+cell has no path to target_frame.)doc");
+}
+
+}  // namespace lasercell::python
