@@ -37,6 +37,8 @@ void BindRegistration(py::module_& m);
 void BindRegistrationStages(py::module_& m);
 /// Profile files, sweeps (profiles -> points).
 void BindTriangulation(py::module_& m);
+/// Board, BoardView, detect_boards, calibrate_intrinsics.
+void BindCalibration(py::module_& m);
 /// Jobs: load, run, result.
 void BindLocalizeJob(py::module_& m);
 

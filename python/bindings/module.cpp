@@ -11,6 +11,7 @@ PYBIND11_MODULE(_lasercell, m) {
   lasercell::python::BindPointCloud(m);
   lasercell::python::BindFrameGraph(m);
   lasercell::python::BindCameraModel(m);
+  lasercell::python::BindCalibration(m);
   lasercell::python::BindTriangulation(m);
   lasercell::python::BindRegistration(m);
   lasercell::python::BindRegistrationStages(m);
