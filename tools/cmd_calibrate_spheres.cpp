@@ -83,15 +83,12 @@ void Run(SpheresArgs a) {
     a.options.sweep_unit_hint = read.unit_hint;
     run = calib::CalibrateHalfSpheresInSweep(cloud, touches, a.options, names);
   }
-  if (!run.calibrated) throw FileError(names.sweep, run.failure);
-  const calib::HalfSphereCalibrationResult& result = run.calibration;
-
   InputDigest digest;
   digest.AddFile(names.sweep);
   digest.Add(touches_text);
-  StaticEdge edge = calib::HalfSphereEdge(result, a.sweep_frame,
-                                          calib::HalfSphereProvenance(result, digest.Text()));
-  edge.sensor_response = triangulation::SensorResponseOf(run, graph, a.laser);
+  const StaticEdge edge =
+      triangulation::HalfSphereCellEdge(run, graph, a.laser, names, digest.Text());
+  const calib::HalfSphereCalibrationResult& result = run.calibration;
   json::WriteFile(a.json, calib::HalfSphereResultJson(run, names, edge));
   if (!a.report.empty()) report::WriteHtmlReport(a.report, calib::HalfSphereReport(run, names));
   graph.SetStaticEdge(edge);

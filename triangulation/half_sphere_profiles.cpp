@@ -1,5 +1,6 @@
 #include "triangulation/half_sphere_profiles.hpp"
 
+#include "core/error.hpp"
 #include "triangulation/sensor_error_field.hpp"
 #include "triangulation/triangulator.hpp"
 
@@ -32,6 +33,17 @@ std::optional<SensorModeResponse> SensorResponseOf(const calib::HalfSphereSweepR
   if (run.mode_response.cols() == 0) return std::nullopt;
   return SensorModeResponse{laser, cell.laser_planes().at(laser).provenance.input_digest,
                             run.mode_response};
+}
+
+StaticEdge HalfSphereCellEdge(const calib::HalfSphereSweepResult& run, const FrameGraph& cell,
+                              const std::string& laser, const calib::HalfSphereInputNames& names,
+                              const std::string& input_digest) {
+  if (!run.calibrated) throw FileError(names.sweep, run.failure);
+  StaticEdge edge =
+      calib::HalfSphereEdge(run.calibration, names.sweep_frame,
+                            calib::HalfSphereProvenance(run.calibration, input_digest));
+  edge.sensor_response = SensorResponseOf(run, cell, laser);
+  return edge;
 }
 
 }  // namespace lasercell::triangulation

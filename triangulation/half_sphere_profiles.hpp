@@ -43,4 +43,14 @@ std::optional<SensorModeResponse> SensorResponseOf(const calib::HalfSphereSweepR
                                                    const FrameGraph& cell,
                                                    const std::string& laser);
 
+/// The cell's new edge handling_base <- names.sweep_frame from `run`: the calibrated pose and
+/// covariance (calib::HalfSphereEdge), its provenance (calib::HalfSphereProvenance with
+/// `input_digest`, the InputDigest of the sweep and the touches) and, when the run has one, the
+/// response to the error modes of the plane `laser` of `cell` (SensorResponseOf). What
+/// `calibrate spheres` writes to the cell. Throws FileError naming names.sweep with the run's
+/// failure when it did not calibrate.
+StaticEdge HalfSphereCellEdge(const calib::HalfSphereSweepResult& run, const FrameGraph& cell,
+                              const std::string& laser, const calib::HalfSphereInputNames& names,
+                              const std::string& input_digest);
+
 }  // namespace lasercell::triangulation

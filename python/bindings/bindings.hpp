@@ -39,6 +39,10 @@ void BindRegistrationStages(py::module_& m);
 void BindTriangulation(py::module_& m);
 /// Board, BoardView, detect_boards, calibrate_intrinsics.
 void BindCalibration(py::module_& m);
+/// Laser plane calibration (heights, stripes).
+void BindLaserPlane(py::module_& m);
+/// Half-sphere sensor-to-robot calibration.
+void BindSpheres(py::module_& m);
 /// Jobs: load, run, result.
 void BindLocalizeJob(py::module_& m);
 

@@ -12,6 +12,8 @@ PYBIND11_MODULE(_lasercell, m) {
   lasercell::python::BindFrameGraph(m);
   lasercell::python::BindCameraModel(m);
   lasercell::python::BindCalibration(m);
+  lasercell::python::BindLaserPlane(m);
+  lasercell::python::BindSpheres(m);
   lasercell::python::BindTriangulation(m);
   lasercell::python::BindRegistration(m);
   lasercell::python::BindRegistrationStages(m);

@@ -80,3 +80,12 @@ def seat_sim(cli, tmp_path_factory):
         "parts: [{part: sim/models/seat.part.yaml}]\n")
     return {"root": root, "sim": sim, "plane": np.append(normal, d_mm),
             "job": str(root / "seat.job.yaml"), "cell": str(root / "cell.yaml")}
+
+
+@pytest.fixture(scope="session")
+def cell_sim(cli, tmp_path_factory):
+    """A simulated calibration capture set of the cell (`lasercell simulate cell`): board images,
+    plate and sphere sweeps, touches, the linear-axis record, and the truth."""
+    root = tmp_path_factory.mktemp("cell_sim")
+    cli("simulate", "cell", "--seed", "3", "--out", str(root / "sim"), "--quiet")
+    return root / "sim"
