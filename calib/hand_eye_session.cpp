@@ -9,6 +9,7 @@
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 #include "core/json_io.hpp"
+#include "core/provenance.hpp"
 #include "core/se3.hpp"
 
 namespace lasercell::calib {
@@ -301,6 +302,37 @@ report::HtmlReport HandEyeReport(const HandEyeResult& r, const HandEyeViews& v,
                     {"1 sigma translation (mm)", Fmt("%.4f", st.x()) + ", " + Fmt("%.4f", st.y()) +
                                                      ", " + Fmt("%.4f", st.z())}});
   return rep;
+}
+
+HandEyeSession CalibrateHandEyeFromFiles(const HandEyeInputs& inputs, const FrameGraph& cell,
+                                         const std::string& cell_name, const HandEyeLog& log) {
+  if (inputs.images.empty() == inputs.corners.empty()) {
+    throw OptionError("hand-eye inputs: give either board images or a corners file, not " +
+                      std::string(inputs.images.empty() ? "neither" : "both"));
+  }
+  const HandEyeMethod method = ParseHandEyeMethod(inputs.method);
+  const CameraModel camera = LoadCameraModel(inputs.camera);
+  const RobotPoses poses = LoadHandEyePoses(inputs.poses, cell, cell_name);
+  ChessboardDetections detections;
+  if (!inputs.corners.empty()) {
+    detections = LoadHandEyeCorners(inputs.corners, inputs.board);
+  } else {
+    if (inputs.board.empty()) throw OptionError("hand-eye inputs: images need a board spec");
+    detections = DetectHandEyeImages(inputs.images, ParseHandEyeBoard(inputs.board), poses,
+                                     inputs.poses.path, log);
+  }
+  HandEyeSession session;
+  session.views = MatchHandEyeViews(detections, poses, camera, inputs.corners, inputs.poses.path,
+                                    inputs.camera, log);
+  HandEyeOptions options;
+  options.initialisation = method;
+  options.threads = inputs.threads;
+  session.result = CalibrateHandEye(session.views.views, camera, options);
+  session.run = HandEyeRun{
+      inputs.camera, inputs.poses.path, inputs.poses.flange_frame, inputs.poses.camera_frame,
+      method,        inputs.tool,       UtcTimestampIso()};
+  session.edge = HandEyeEdge(session.result, session.views, session.run);
+  return session;
 }
 
 }  // namespace lasercell::calib

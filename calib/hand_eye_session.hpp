@@ -92,4 +92,33 @@ nlohmann::json HandEyeJson(const HandEyeResult& result, const HandEyeViews& view
 report::HtmlReport HandEyeReport(const HandEyeResult& result, const HandEyeViews& views,
                                  const HandEyeRun& run);
 
+/// What `calibrate handeye` reads: the camera, the board views (images or corner detections)
+/// and the robot poses.
+struct HandEyeInputs {
+  std::string camera;               ///< The .cameramodel file.
+  std::vector<std::string> images;  ///< Image files in pose order; or, instead, ...
+  std::string corners;  ///< ... committed corner detections (lasercell-chessboard-corners text).
+  std::string board;    ///< chessboard:COLSxROWS:SQUARE_MM; required with images.
+  HandEyePoseSource poses;
+  std::string method = "park-martin";  ///< Closed form that starts the refinement.
+  int threads = 1;                     ///< Ceres threads.
+  std::string tool;  ///< Provenance of the edge, e.g. "lasercell calibrate handeye 0.1.0".
+};
+
+/// A hand-eye calibration and what the cell and the result files need of it.
+struct HandEyeSession {
+  HandEyeResult result;
+  HandEyeViews views;
+  HandEyeRun run;
+  StaticEdge edge;  ///< HandEyeEdge: poses.flange_frame <- poses.camera_frame.
+};
+
+/// `calibrate handeye` without its files: LoadHandEyePoses (a joint record through `cell`,
+/// named `cell_name` in messages), detection of the images or the corners file,
+/// MatchHandEyeViews, CalibrateHandEye and HandEyeEdge. OptionError unless exactly one of
+/// images and corners is given, or when images come without a board; the other errors of those
+/// steps.
+HandEyeSession CalibrateHandEyeFromFiles(const HandEyeInputs& inputs, const FrameGraph& cell,
+                                         const std::string& cell_name, const HandEyeLog& log);
+
 }  // namespace lasercell::calib

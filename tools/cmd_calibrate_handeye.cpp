@@ -34,47 +34,34 @@ void Run(const HandEyeArgs& args) {
   if (args.images.empty() == args.corners.empty()) {
     throw OptionError("give exactly one of --images GLOB and --corners FILE");
   }
-  const calib::HandEyeMethod method = calib::ParseHandEyeMethod(args.method);
+  if (!args.images.empty() && args.board.empty()) {
+    throw OptionError("--board is required with --images");
+  }
   FrameGraph graph;
   std::error_code ec;
   if (std::filesystem::exists(args.cell, ec)) graph = LoadFrameGraph(args.cell);
-  const calib::CameraModel camera = calib::LoadCameraModel(args.camera);
-  const calib::RobotPoses poses = calib::LoadHandEyePoses(args.poses, graph, args.cell);
-  const calib::HandEyeLog log = [](const std::string& line) {
-    std::fprintf(stderr, "calibrate handeye: %s\n", line.c_str());
-  };
-  calib::ChessboardDetections det;
-  if (!args.corners.empty()) {
-    det = calib::LoadHandEyeCorners(args.corners, args.board);
-  } else {
-    if (args.board.empty()) throw OptionError("--board is required with --images");
-    const calib::BoardSpec board = calib::ParseHandEyeBoard(args.board);
-    det = calib::DetectHandEyeImages(io::GlobFiles(args.images, "--images"), board, poses,
-                                     args.poses.path, log);
-  }
-  const calib::HandEyeViews views =
-      calib::MatchHandEyeViews(det, poses, camera, args.corners, args.poses.path, args.camera, log);
-  calib::HandEyeOptions options;
-  options.initialisation = method;
-  options.threads = args.threads;
-  const calib::HandEyeResult r = calib::CalibrateHandEye(views.views, camera, options);
-  std::printf("%s\n", r.Summary().c_str());
+  calib::HandEyeInputs inputs;
+  inputs.camera = args.camera;
+  if (!args.images.empty()) inputs.images = io::GlobFiles(args.images, "--images");
+  inputs.corners = args.corners;
+  inputs.board = args.board;
+  inputs.poses = args.poses;
+  inputs.method = args.method;
+  inputs.threads = args.threads;
+  inputs.tool = std::string("lasercell calibrate handeye ") + LASERCELL_VERSION;
+  const calib::HandEyeSession s =
+      calib::CalibrateHandEyeFromFiles(inputs, graph, args.cell, [](const std::string& line) {
+        std::fprintf(stderr, "calibrate handeye: %s\n", line.c_str());
+      });
+  std::printf("%s\n", s.result.Summary().c_str());
   std::printf("%s_from_%s = %s\n", args.poses.flange_frame.c_str(), args.poses.camera_frame.c_str(),
-              PoseToFileNotation(r.flange_from_camera).c_str());
-  for (const auto& w : r.warnings) std::printf("warning: %s\n", w.c_str());
-
-  const calib::HandEyeRun run{args.camera,
-                              args.poses.path,
-                              args.poses.flange_frame,
-                              args.poses.camera_frame,
-                              method,
-                              std::string("lasercell calibrate handeye ") + LASERCELL_VERSION,
-                              UtcTimestampIso()};
-  graph.SetStaticEdge(calib::HandEyeEdge(r, views, run));  // only the flange -> camera edge
+              PoseToFileNotation(s.result.flange_from_camera).c_str());
+  for (const auto& w : s.result.warnings) std::printf("warning: %s\n", w.c_str());
+  graph.SetStaticEdge(s.edge);  // only the flange -> camera edge
   SaveFrameGraph(args.cell, graph);
   if (!args.report.empty())
-    report::WriteHtmlReport(args.report, calib::HandEyeReport(r, views, run));
-  json::WriteFile(args.json, calib::HandEyeJson(r, views, run));
+    report::WriteHtmlReport(args.report, calib::HandEyeReport(s.result, s.views, s.run));
+  json::WriteFile(args.json, calib::HandEyeJson(s.result, s.views, s.run));
 }
 
 }  // namespace

@@ -43,6 +43,8 @@ void BindCalibration(py::module_& m);
 void BindLaserPlane(py::module_& m);
 /// Half-sphere sensor-to-robot calibration.
 void BindSpheres(py::module_& m);
+/// Eye-in-hand calibration.
+void BindHandEye(py::module_& m);
 /// Jobs: load, run, result.
 void BindLocalizeJob(py::module_& m);
 

@@ -14,6 +14,7 @@ PYBIND11_MODULE(_lasercell, m) {
   lasercell::python::BindCalibration(m);
   lasercell::python::BindLaserPlane(m);
   lasercell::python::BindSpheres(m);
+  lasercell::python::BindHandEye(m);
   lasercell::python::BindTriangulation(m);
   lasercell::python::BindRegistration(m);
   lasercell::python::BindRegistrationStages(m);

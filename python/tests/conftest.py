@@ -89,3 +89,21 @@ def cell_sim(cli, tmp_path_factory):
     root = tmp_path_factory.mktemp("cell_sim")
     cli("simulate", "cell", "--seed", "3", "--out", str(root / "sim"), "--quiet")
     return root / "sim"
+
+
+@pytest.fixture(scope="session")
+def shared_data(source_dir):
+    """A set of the development data (../shared/data, or $LASERCELL_SHARED_DATA) by name. As in
+    the C++ tests: skipped when absent, a failure with LASERCELL_REQUIRE_SHARED_DATA=1 (CI)."""
+    root = os.environ.get("LASERCELL_SHARED_DATA") or os.path.join(source_dir, "../shared/data")
+
+    def get(name):
+        path = os.path.join(root, name)
+        if not os.path.isdir(path):
+            message = f"shared data set {name} not found under {root}"
+            if os.environ.get("LASERCELL_REQUIRE_SHARED_DATA") == "1":
+                pytest.fail(message)
+            pytest.skip(message)
+        return path
+
+    return get
