@@ -38,13 +38,8 @@ struct JointsArgs {
   bool with_handeye = false, dh_deltas = false;
 };
 
-// What both commands load (triangulation::LoadSphereSweepProblem) and the run description
-// their JSON and report carry.
-struct Inputs : triangulation::SphereSweepProblem {
-  calib::SphereSweepRun run;
-};
-
-Inputs Load(const JointsArgs& a) {
+// The problem spec with what only the CLI parses (--laser-plane, --up) filled in.
+triangulation::SphereSweepProblemSpec Spec(const JointsArgs& a) {
   triangulation::SphereSweepProblemSpec spec = a.spec;
   if (!a.laser_plane.empty()) {
     const std::vector<double> v = ParseNumberList(a.laser_plane, "--laser-plane", 4);
@@ -55,49 +50,30 @@ Inputs Load(const JointsArgs& a) {
   }
   const std::vector<double> up = ParseNumberList(a.up, "--up", 3);
   spec.up = Eigen::Vector3d(up[0], up[1], up[2]);
-  Inputs in{triangulation::LoadSphereSweepProblem(spec), {}};
-  in.run = {spec.robot,   spec.sweeps,    spec.set,   in.sweeps.size(),
-            spec.touches, a.with_handeye, a.dh_deltas};
-  return in;
+  return spec;
 }
 
 void RunJoints(const JointsArgs& a) {
-  Inputs in = Load(a);
-  in.solver.estimate_hand_eye = a.with_handeye;
-  in.solver.estimate_dh_deltas = a.dh_deltas;
-  const calib::JointIdentificationResult r =
-      calib::IdentifyRobot(in.robot.chain, in.flange_from_sensor, in.sweeps, in.solver);
-  FrameGraph updated = in.graph;
-  updated.SetRobot(a.spec.robot, r.robot);
-  if (a.with_handeye) {
-    updated.SetStaticEdge(calib::FlangeSensorEdge(
-        in.robot.flange, a.spec.sensor_frame, r.flange_from_sensor, r.flange_from_sensor_covariance,
-        "lasercell calibrate joints --with-handeye", r.rms_mm, r.points_used, in.sweeps.size()));
-  }
+  const triangulation::JointCalibration c =
+      triangulation::CalibrateJointsFromSweeps(Spec(a), a.with_handeye, a.dh_deltas);
   const std::string out = a.output.empty() ? a.spec.cell : a.output;
-  SaveFrameGraph(out, updated);
-  json::WriteFile(a.json, calib::JointCalibrationJson(r, in.run));
+  SaveFrameGraph(out, c.cell);
+  json::WriteFile(a.json, calib::JointCalibrationJson(c.result, c.run));
   if (!a.report.empty())
-    report::WriteHtmlReport(a.report, calib::JointCalibrationReport(r, in.run));
-  std::printf("%s -> %s\n", r.Summary().c_str(), out.c_str());
-  for (const auto& w : r.warnings) std::printf("warning: %s\n", w.c_str());
+    report::WriteHtmlReport(a.report, calib::JointCalibrationReport(c.result, c.run));
+  std::printf("%s -> %s\n", c.result.Summary().c_str(), out.c_str());
+  for (const auto& w : c.result.warnings) std::printf("warning: %s\n", w.c_str());
 }
 
 void RunHandEyeLaser(const JointsArgs& a) {
-  Inputs in = Load(a);
-  calib::LaserHandEyeOptions o;
-  o.solver = in.solver;
-  const calib::LaserHandEyeResult r =
-      calib::CalibrateLaserHandEye(in.robot.chain, in.flange_from_sensor, in.sweeps, o);
-  FrameGraph updated = in.graph;
-  updated.SetStaticEdge(calib::FlangeSensorEdge(
-      in.robot.flange, a.spec.sensor_frame, r.flange_from_sensor, r.covariance,
-      "lasercell calibrate handeye-laser", r.rms_mm, r.points_used, in.sweeps.size()));
+  const triangulation::LaserHandEyeCalibration c =
+      triangulation::CalibrateLaserHandEyeFromSweeps(Spec(a));
   const std::string out = a.output.empty() ? a.spec.cell : a.output;
-  SaveFrameGraph(out, updated);
-  json::WriteFile(a.json, calib::LaserHandEyeJson(r, in.run));
-  if (!a.report.empty()) report::WriteHtmlReport(a.report, calib::LaserHandEyeReport(r, in.run));
-  std::printf("%s -> %s\n", r.Summary().c_str(), out.c_str());
+  SaveFrameGraph(out, c.cell);
+  json::WriteFile(a.json, calib::LaserHandEyeJson(c.result, c.run));
+  if (!a.report.empty())
+    report::WriteHtmlReport(a.report, calib::LaserHandEyeReport(c.result, c.run));
+  std::printf("%s -> %s\n", c.result.Summary().c_str(), out.c_str());
 }
 
 // `required`: --cell, --camera and --sweeps are CLI-required (joints); handeye-laser checks them
@@ -159,9 +135,7 @@ void AddCalibrateJointsCommands(CLI::App& calibrate) {
       "Eye-in-hand laser sensor: vision_flange_from_sensor from sphere sweeps "
       "taken from several robot poses (robot model held)");
   auto ha = std::make_shared<JointsArgs>();
-  ha->spec.set = "eye_in_hand";
-  // Hand-eye has only 6 unknowns (+ spheres): every point helps, and it stays fast (~1 s).
-  ha->spec.max_points_per_sweep = 5000;
+  ha->spec = triangulation::LaserHandEyeSpecDefaults();
   AddShared(he, *ha, /*required=*/false);
   he->add_option("--set", ha->spec.set, "Sweep set in the list (default eye_in_hand)");
   auto sa = std::make_shared<HandEyeSectionArgs>();

@@ -158,4 +158,55 @@ SphereSweepProblem LoadSphereSweepProblem(const SphereSweepProblemSpec& spec) {
   return p;
 }
 
+namespace {
+
+calib::SphereSweepRun RunOf(const SphereSweepProblemSpec& spec, std::size_t sweeps,
+                            bool with_hand_eye, bool dh_deltas) {
+  return {spec.robot, spec.sweeps, spec.set, sweeps, spec.touches, with_hand_eye, dh_deltas};
+}
+
+}  // namespace
+
+JointCalibration CalibrateJointsFromSweeps(const SphereSweepProblemSpec& spec, bool with_hand_eye,
+                                           bool dh_deltas) {
+  SphereSweepProblem in = LoadSphereSweepProblem(spec);
+  in.solver.estimate_hand_eye = with_hand_eye;
+  in.solver.estimate_dh_deltas = dh_deltas;
+  JointCalibration out;
+  out.result = calib::IdentifyRobot(in.robot.chain, in.flange_from_sensor, in.sweeps, in.solver);
+  out.run = RunOf(spec, in.sweeps.size(), with_hand_eye, dh_deltas);
+  out.cell = std::move(in.graph);
+  out.cell.SetRobot(spec.robot, out.result.robot);
+  if (with_hand_eye) {
+    out.cell.SetStaticEdge(calib::FlangeSensorEdge(
+        in.robot.flange, spec.sensor_frame, out.result.flange_from_sensor,
+        out.result.flange_from_sensor_covariance, "lasercell calibrate joints --with-handeye",
+        out.result.rms_mm, out.result.points_used, in.sweeps.size()));
+  }
+  return out;
+}
+
+LaserHandEyeCalibration CalibrateLaserHandEyeFromSweeps(const SphereSweepProblemSpec& spec) {
+  SphereSweepProblem in = LoadSphereSweepProblem(spec);
+  calib::LaserHandEyeOptions options;
+  options.solver = in.solver;
+  LaserHandEyeCalibration out;
+  out.result =
+      calib::CalibrateLaserHandEye(in.robot.chain, in.flange_from_sensor, in.sweeps, options);
+  out.run = RunOf(spec, in.sweeps.size(), false, false);
+  out.cell = std::move(in.graph);
+  out.cell.SetStaticEdge(
+      calib::FlangeSensorEdge(in.robot.flange, spec.sensor_frame, out.result.flange_from_sensor,
+                              out.result.covariance, "lasercell calibrate handeye-laser",
+                              out.result.rms_mm, out.result.points_used, in.sweeps.size()));
+  return out;
+}
+
+SphereSweepProblemSpec LaserHandEyeSpecDefaults() {
+  SphereSweepProblemSpec spec;
+  spec.set = "eye_in_hand";
+  spec.max_points_per_sweep = 5000;
+  return spec;
+}
+
 }  // namespace lasercell::triangulation

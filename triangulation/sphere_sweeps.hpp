@@ -21,6 +21,8 @@
 
 #include "calib/camera_model.hpp"
 #include "calib/joint_identification.hpp"
+#include "calib/joint_report.hpp"
+#include "calib/laser_hand_eye.hpp"
 #include "calib/robot_in_cell.hpp"
 #include "core/frame_graph.hpp"
 #include "triangulation/triangulator.hpp"
@@ -98,5 +100,30 @@ struct SphereSweepProblem {
 /// Loads cell, camera, plane, sweeps and touches. Throws FileError/OptionError/InputError
 /// naming the file or field (a zero plane normal is an OptionError on `laser_plane`).
 SphereSweepProblem LoadSphereSweepProblem(const SphereSweepProblemSpec& spec);
+
+/// A joint-offset identification (calib::IdentifyRobot) on a loaded problem and the cell it
+/// gives: the spec's robot with the identified kinematics and, with `with_hand_eye`, the
+/// flange -> sensor edge estimated with it. What `calibrate joints` writes.
+struct JointCalibration {
+  calib::JointIdentificationResult result;
+  calib::SphereSweepRun run;  ///< For the result document and the report.
+  FrameGraph cell;            ///< The spec's cell, updated.
+};
+/// Loads the problem (LoadSphereSweepProblem) and identifies the robot's joint offsets (and the
+/// DH lengths with `dh_deltas`); throws what those throw.
+JointCalibration CalibrateJointsFromSweeps(const SphereSweepProblemSpec& spec, bool with_hand_eye,
+                                           bool dh_deltas);
+
+/// The laser eye-in-hand (calib::CalibrateLaserHandEye) on a loaded problem and the cell with
+/// the new flange -> sensor edge. What `calibrate handeye-laser` writes.
+struct LaserHandEyeCalibration {
+  calib::LaserHandEyeResult result;
+  calib::SphereSweepRun run;
+  FrameGraph cell;
+};
+LaserHandEyeCalibration CalibrateLaserHandEyeFromSweeps(const SphereSweepProblemSpec& spec);
+/// The spec defaults of the laser eye-in-hand: the `eye_in_hand` sweep set and up to 5000 points
+/// per sweep (6 unknowns plus the spheres: every point helps, and it stays fast, ~1 s).
+SphereSweepProblemSpec LaserHandEyeSpecDefaults();
 
 }  // namespace lasercell::triangulation

@@ -45,6 +45,8 @@ void BindLaserPlane(py::module_& m);
 void BindSpheres(py::module_& m);
 /// Eye-in-hand calibration.
 void BindHandEye(py::module_& m);
+/// Joint offsets and the laser eye-in-hand from sphere sweeps.
+void BindJoints(py::module_& m);
 /// Jobs: load, run, result.
 void BindLocalizeJob(py::module_& m);
 

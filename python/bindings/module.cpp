@@ -15,6 +15,7 @@ PYBIND11_MODULE(_lasercell, m) {
   lasercell::python::BindLaserPlane(m);
   lasercell::python::BindSpheres(m);
   lasercell::python::BindHandEye(m);
+  lasercell::python::BindJoints(m);
   lasercell::python::BindTriangulation(m);
   lasercell::python::BindRegistration(m);
   lasercell::python::BindRegistrationStages(m);
