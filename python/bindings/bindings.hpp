@@ -47,6 +47,8 @@ void BindSpheres(py::module_& m);
 void BindHandEye(py::module_& m);
 /// Joint offsets and the laser eye-in-hand from sphere sweeps.
 void BindJoints(py::module_& m);
+/// TriangleMesh, read_mesh, read_cad_model, Part.
+void BindMeshesAndParts(py::module_& m);
 /// Jobs: load, run, result.
 void BindLocalizeJob(py::module_& m);
 

@@ -19,5 +19,6 @@ PYBIND11_MODULE(_lasercell, m) {
   lasercell::python::BindTriangulation(m);
   lasercell::python::BindRegistration(m);
   lasercell::python::BindRegistrationStages(m);
+  lasercell::python::BindMeshesAndParts(m);
   lasercell::python::BindLocalizeJob(m);
 }

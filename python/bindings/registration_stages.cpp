@@ -78,6 +78,25 @@ void BindRegistrationStages(py::module_& m) {
       "The points inside the box [min_mm, max_mm] (in the frame frame_from_cloud maps to; "
       "default the cloud's own), with all their attributes.");
   m.def(
+      "remove_small_clusters",
+      [](const PointCloud& cloud, double radius_mm, std::size_t min_cluster_size) {
+        registration::ClusterFilterOptions o;
+        o.radius_mm = radius_mm;
+        o.min_cluster_size = min_cluster_size;
+        o.Check();
+        py::gil_scoped_release release;
+        const registration::ClusterFilterResult r = registration::RemoveSmallClusters(cloud, o);
+        py::gil_scoped_acquire gil;
+        return py::make_tuple(
+            py::array_t<std::int64_t>(static_cast<py::ssize_t>(r.kept.size()),
+                                      reinterpret_cast<const std::int64_t*>(r.kept.data())),
+            py::array_t<std::int32_t>(static_cast<py::ssize_t>(r.labels.size()), r.labels.data()));
+      },
+      py::arg("cloud"), py::arg("radius_mm") = 2.0, py::arg("min_cluster_size") = 50,
+      "Connected components (points closer than radius_mm; grid neighbours on an organized "
+      "cloud): (indices of the points in components of at least min_cluster_size points, "
+      "component label per point).");
+  m.def(
       "voxel_grid_downsample",
       [](const PointCloud& cloud, double voxel_size_mm, const std::string& normal_mode,
          double normal_split_angle_rad, std::size_t min_points_per_voxel) {
