@@ -4,6 +4,7 @@
 // or the cell's) + motion -> a PointCloud in the sensor, a linear sweep's or the cell's frame.
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <string>
@@ -49,11 +50,94 @@ triangulation::SweepMotion Motion(const std::string& name) {
   ThrowInput("motion: expected 'none', 'linear' or 'robot', got '" + name + "'");
 }
 
+// An (n,) integer array as int64, exactly (nanosecond clocks exceed a double's 53 bits); empty
+// for None. TypeError for a non-integer dtype, InputError for another length.
+std::vector<std::int64_t> Integers(const py::object& values, const std::string& arg,
+                                   std::size_t n) {
+  if (values.is_none()) return {};
+  const py::array a = py::array::ensure(values);
+  if (!a || (a.dtype().kind() != 'i' && a.dtype().kind() != 'u')) {
+    throw py::type_error(arg + ": expected an integer array (int64 ns / counts)");
+  }
+  if (a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n) {
+    ThrowInput(arg + ": expected " + std::to_string(n) + " values (one per profile)");
+  }
+  const auto cast = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(a);
+  return std::vector<std::int64_t>(cast.data(), cast.data() + n);
+}
+
+// A profile set from arrays: row_px (P, C) NaN where no peak; the rest optional.
+ProfilesPtr MakeProfiles(const py::handle& row_px, const py::object& intensity,
+                         const py::object& width_px, const py::object& timestamp_ns,
+                         const py::object& sequence, const py::object& joints_rad,
+                         std::uint32_t image_width, std::uint32_t image_height,
+                         std::uint32_t first_column, const std::string& robot,
+                         const std::string& metadata) {
+  const py::array rows = py::array::ensure(row_px);
+  if (!rows || rows.ndim() != 2) ThrowInput("row_px: expected shape (profiles, columns)");
+  const auto p = static_cast<std::size_t>(rows.shape(0));
+  const auto c = static_cast<std::size_t>(rows.shape(1));
+  const auto flat = [&](const py::handle& a, const std::string& arg, std::size_t per_row) {
+    return ToDoubles(py::array::ensure(a).attr("reshape")(-1), arg, p * per_row, false);
+  };
+  auto set = std::make_shared<ProfileSet>();
+  set->header.image_width = image_width;
+  set->header.image_height = image_height;
+  set->header.first_column = first_column;
+  set->header.columns = static_cast<std::uint32_t>(c);
+  set->header.robot = robot;
+  set->header.metadata = metadata;
+  std::size_t joints = 0;
+  std::vector<double> joint_values;
+  if (!joints_rad.is_none()) {
+    const py::array j = py::array::ensure(joints_rad);
+    if (!j || j.ndim() != 2) ThrowInput("joints_rad: expected shape (profiles, joints)");
+    joints = static_cast<std::size_t>(j.shape(1));
+    joint_values = flat(j, "joints_rad", joints);
+  }
+  set->header.joint_count = static_cast<std::uint32_t>(joints);
+  set->header.Check("ProfileSet");
+  const std::vector<double> r = flat(rows, "row_px", c);
+  const std::vector<double> in =
+      intensity.is_none() ? std::vector<double>(p * c, 1.0) : flat(intensity, "intensity", c);
+  const std::vector<double> w =
+      width_px.is_none() ? std::vector<double>(p * c, 2.0) : flat(width_px, "width_px", c);
+  const std::vector<std::int64_t> t = Integers(timestamp_ns, "timestamp_ns", p);
+  const std::vector<std::int64_t> q = Integers(sequence, "sequence", p);
+  for (std::size_t i = 0; i < p; ++i) {
+    triangulation::Profile profile = triangulation::Profile::Empty(
+        static_cast<std::uint32_t>(c), static_cast<std::uint32_t>(joints));
+    profile.sequence = q.empty() ? i : static_cast<std::uint64_t>(q[i]);
+    profile.timestamp_ns = t.empty() ? 0 : t[i];
+    for (std::size_t k = 0; k < joints; ++k) profile.joints_rad[k] = joint_values[i * joints + k];
+    for (std::size_t j = 0; j < c; ++j) {
+      const double row = r[i * c + j];
+      profile.row_px[j] = static_cast<float>(row);
+      const bool peak = !std::isnan(row);
+      profile.intensity[j] = peak ? static_cast<float>(in[i * c + j]) : 0.0f;
+      profile.width_px[j] = peak ? static_cast<float>(w[i * c + j]) : 0.0f;
+    }
+    triangulation::CheckProfile(set->header, profile, "profile " + std::to_string(i));
+    set->profiles.push_back(std::move(profile));
+  }
+  return set;
+}
+
 void BindProfiles(py::module_& m) {
   py::class_<ProfileSet, ProfilesPtr>(m, "ProfileSet", R"doc(
 The profiles of a .lcp file: one subpixel peak row (or NaN) per image column per exposure.
 The per-profile arrays are copies: row_px, intensity, width_px are (P, C) float32; sequence is
 (P,) uint64, timestamp_ns (P,) int64 (sensor clock), joints_rad (P, J) float64.)doc")
+      .def(py::init(&MakeProfiles), py::arg("row_px"), py::arg("intensity") = py::none(),
+           py::arg("width_px") = py::none(), py::arg("timestamp_ns") = py::none(),
+           py::arg("sequence") = py::none(), py::arg("joints_rad") = py::none(),
+           py::arg("image_width") = 1024, py::arg("image_height") = 1024,
+           py::arg("first_column") = 0, py::arg("robot") = "", py::arg("metadata") = "",
+           R"doc(Profiles from arrays (copied): row_px (P, C) subpixel peak rows, NaN where a
+column has no peak; intensity (0..1, default 1) and width_px (FWHM, default 2) per peak;
+timestamp_ns and sequence (P,) (default 0 and 0..P-1); joints_rad (P, J). The columns are image
+columns first_column .. first_column + C - 1. InputError naming the field when they disagree
+with the header.)doc")
       .def("__len__", [](const ProfileSet& s) { return s.profiles.size(); })
       .def_property_readonly("image_width",
                              [](const ProfileSet& s) { return s.header.image_width; })
@@ -105,6 +189,13 @@ The per-profile arrays are copies: row_px, intensity, width_px are (P, C) float3
                std::to_string(s.header.columns) + " columns>";
       });
 
+  m.def(
+      "write_profiles",
+      [](const std::string& path, const ProfileSet& profiles) {
+        py::gil_scoped_release release;
+        triangulation::WriteProfiles(path, profiles);
+      },
+      py::arg("path"), py::arg("profiles"), "Writes a .lcp profile file atomically.");
   m.def(
       "read_profiles",
       [](const std::string& path) {

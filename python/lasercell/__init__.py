@@ -65,5 +65,6 @@ from ._lasercell import (  # noqa: F401
     run_job,
     scan_profiles,
     voxel_grid_downsample,
+    write_profiles,
     write_point_cloud,
 )
