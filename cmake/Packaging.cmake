@@ -44,6 +44,6 @@ set(CPACK_DEBIAN_PYTHON_PACKAGE_SECTION python)
 set(CPACK_DEBIAN_PYTHON_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PYTHON_PACKAGE_DEPENDS "python3 (>= 3.9), python3-numpy")
 set(CPACK_COMPONENT_PYTHON_DESCRIPTION
-    "lasercell for Python: point clouds and cells as NumPy arrays (import lasercell)")
+    "lasercell for Python (import lasercell): clouds, cells, cameras, sweeps, calibrations, PPF localization and jobs, with NumPy arrays")
 
 include(CPack)
