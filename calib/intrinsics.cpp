@@ -331,6 +331,13 @@ void IntrinsicsOptions::Check() const {
   if (threads < 1) throw OptionError("IntrinsicsOptions.threads must be >= 1");
 }
 
+LensModelKind ParseLensModelKind(const std::string& name, const std::string& field) {
+  if (name == "opencv5") return LensModelKind::kOpenCV5;
+  if (name == "opencv8") return LensModelKind::kOpenCV8;
+  if (name == "splined") return LensModelKind::kSplined;
+  throw OptionError(field + " '" + name + "' is not one of opencv5, opencv8, splined");
+}
+
 std::string MrcalLensModelName(const IntrinsicsOptions& options, double fov_x_deg) {
   switch (options.model) {
     case LensModelKind::kOpenCV5:

@@ -165,6 +165,10 @@ struct IntrinsicsResult {
 /// calls it.
 void AssessLensInversion(IntrinsicsResult* result);
 
+/// The lens model family named `name` ("opencv5", "opencv8", "splined"); OptionError starting
+/// with `field` otherwise.
+LensModelKind ParseLensModelKind(const std::string& name, const std::string& field);
+
 /// The name mrcal uses for the lens model of `options` ("LENSMODEL_OPENCV8",
 /// "LENSMODEL_SPLINED_STEREOGRAPHIC_order=3_Nx=10_Ny=8_fov_x_deg=75", ...); `fov_x_deg` is used
 /// for splined models.

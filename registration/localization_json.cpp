@@ -31,6 +31,29 @@ nlohmann::json LocalizationCandidateJson(const LocalizationCandidate& c) {
   return j;
 }
 
+nlohmann::json LocalizationTimingsJson(const LocalizationTimings& t, double model_ms) {
+  return {{"model_build_or_load", model_ms},
+          {"preprocess", t.preprocess_ms},
+          {"normals", t.normals_ms},
+          {"subsample", t.subsample_ms},
+          {"kdtree", t.kdtree_ms},
+          {"matching", t.matching_ms},
+          {"clustering", t.clustering_ms},
+          {"verification", t.verification_ms},
+          {"icp", t.icp_ms},
+          {"total", t.total_ms}};
+}
+
+nlohmann::json LocalizationCountsJson(const LocalizationResult& r) {
+  return {{"scene_points", r.scene_points},
+          {"dropped_points", r.dropped_points},
+          {"used_points", r.used_points},
+          {"sampled_points", r.sampled_points},
+          {"reference_points", r.reference_points},
+          {"hypotheses", r.hypotheses},
+          {"clusters", r.clusters}};
+}
+
 nlohmann::json LocalizationResultJson(const LocalizationResult& r,
                                       const LocalizationInputNames& inputs, double model_ms) {
   nlohmann::json j;
@@ -46,24 +69,8 @@ nlohmann::json LocalizationResultJson(const LocalizationResult& r,
   for (const auto& c : r.candidates) j["candidates"].push_back(LocalizationCandidateJson(c));
   j["rejected"] = nlohmann::json::array();
   for (const auto& c : r.rejected) j["rejected"].push_back(LocalizationCandidateJson(c));
-  const auto& t = r.timings;
-  j["timings_ms"] = {{"model_build_or_load", model_ms},
-                     {"preprocess", t.preprocess_ms},
-                     {"normals", t.normals_ms},
-                     {"subsample", t.subsample_ms},
-                     {"kdtree", t.kdtree_ms},
-                     {"matching", t.matching_ms},
-                     {"clustering", t.clustering_ms},
-                     {"verification", t.verification_ms},
-                     {"icp", t.icp_ms},
-                     {"total", t.total_ms}};
-  j["counts"] = {{"scene_points", r.scene_points},
-                 {"dropped_points", r.dropped_points},
-                 {"used_points", r.used_points},
-                 {"sampled_points", r.sampled_points},
-                 {"reference_points", r.reference_points},
-                 {"hypotheses", r.hypotheses},
-                 {"clusters", r.clusters}};
+  j["timings_ms"] = LocalizationTimingsJson(r.timings, model_ms);
+  j["counts"] = LocalizationCountsJson(r);
   return j;
 }
 

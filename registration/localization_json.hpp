@@ -26,6 +26,12 @@ struct LocalizationInputNames {
 /// support, coarse_support, icp (or null) and rejection_reason when rejected.
 nlohmann::json LocalizationCandidateJson(const LocalizationCandidate& candidate);
 
+/// The result file's timings_ms: model_build_or_load = `model_ms`, then the stages of
+/// LocalizationTimings, ms.
+nlohmann::json LocalizationTimingsJson(const LocalizationTimings& timings, double model_ms);
+/// The result file's counts: points per stage, hypotheses, clusters.
+nlohmann::json LocalizationCountsJson(const LocalizationResult& result);
+
 /// The result file: format, version, model, scene, found (+ message), ambiguous (+ reason),
 /// candidates, rejected, timings_ms (model_build_or_load = `model_ms`, then the stages of
 /// LocalizationTimings) and counts.

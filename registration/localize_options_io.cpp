@@ -213,6 +213,15 @@ void ReadIcp(yaml::Fields& r, LocalizeOptions* o) {
 
 }  // namespace
 
+VoxelNormalMode ParseVoxelNormalMode(const std::string& name, const std::string& field) {
+  std::string known;
+  for (const auto& [mode_name, mode] : kNormalModes) {
+    if (name == mode_name) return mode;
+    known += (known.empty() ? "" : ", ") + std::string(mode_name);
+  }
+  throw OptionError(field + ": is '" + name + "'; expected one of: " + known);
+}
+
 void ReadPpfModelOptionFields(yaml::Fields& s, PpfModelOptions* m) {
   s.Read("sampling_step_relative", &m->sampling_step_relative);
   s.Read("sampling_step_mm", &m->sampling_step_mm);

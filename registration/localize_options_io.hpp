@@ -39,6 +39,10 @@ LocalizeSettings LocalizeSettingsFromFields(yaml::Fields fields);
 /// The PpfModelOptions keys of the map `fields` (an options file's `model:`, a part file's
 /// `model_options:`); unknown keys are rejected (fields.Done()).
 void ReadPpfModelOptionFields(yaml::Fields& fields, PpfModelOptions* out);
+/// The voxel normal mode named as in the options file ("average", "nearest_point", "none");
+/// OptionError starting with `field` otherwise.
+VoxelNormalMode ParseVoxelNormalMode(const std::string& name, const std::string& field);
+
 /// Every PpfModelOptions key as YAML lines, each starting with `indent`; reads back through
 /// ReadPpfModelOptionFields to the same options.
 std::string PpfModelOptionsYaml(const PpfModelOptions& options, const std::string& indent);

@@ -37,17 +37,10 @@ struct CalibrateCameraArgs {
   int threads = 1;
 };
 
-calib::LensModelKind Model(const std::string& name) {
-  if (name == "opencv5") return calib::LensModelKind::kOpenCV5;
-  if (name == "opencv8") return calib::LensModelKind::kOpenCV8;
-  if (name == "splined") return calib::LensModelKind::kSplined;
-  throw OptionError("--model '" + name + "' is not one of opencv5, opencv8, splined");
-}
-
 void Run(const CalibrateCameraArgs& args) {
   const calib::BoardSpec board = calib::ParseBoardSpec(args.board);
   calib::IntrinsicsOptions options;
-  options.model = Model(args.model);
+  options.model = calib::ParseLensModelKind(args.model, "--model");
   options.fix_aspect_ratio = args.fix_aspect;
   options.estimate_board_warp = args.warp;
   options.spline_order = args.spline_order;

@@ -61,13 +61,8 @@ calib::LaserPlaneResult FromStripes(const LaserArgs& args, const calib::CameraMo
   const calib::BoardSpec board = calib::ParseBoardSpec(args.board);
   calib::StripeOptions options;
   options.laser_color = args.laser_color;
-  std::vector<calib::StripeImage> images;
-  for (const std::string& path : io::GlobFiles(args.stripe_glob, "--stripe-images")) {
-    const std::string bytes = io::ReadFileBytes(path);
-    digest.Add(bytes);
-    images.push_back(calib::DecodeStripeImage(bytes, path));
-  }
-  return calib::CalibrateLaserPlaneFromStripes(camera, images, board, options);
+  return triangulation::CalibrateLaserPlaneFromStripeFiles(
+      camera, io::GlobFiles(args.stripe_glob, "--stripe-images"), board, options, &digest);
 }
 
 void Run(const LaserArgs& args) {

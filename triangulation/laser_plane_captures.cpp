@@ -76,4 +76,28 @@ std::vector<calib::HeightCapture> LoadHeightCaptures(const std::vector<std::stri
   return captures;
 }
 
+calib::LaserPlaneResult CalibrateLaserPlaneFromPlaneFiles(const calib::CameraModel& camera,
+                                                          const std::string& dir,
+                                                          const std::vector<double>& heights_mm,
+                                                          const calib::HeightPlaneOptions& options,
+                                                          InputDigest* digest) {
+  const std::vector<std::string> files = FindPlaneProfileFiles(dir);
+  const auto captures = LoadHeightCaptures(files, heights_mm, camera, digest);
+  return calib::CalibrateLaserPlaneFromHeights(camera, captures, options);
+}
+
+calib::LaserPlaneResult CalibrateLaserPlaneFromStripeFiles(const calib::CameraModel& camera,
+                                                           const std::vector<std::string>& paths,
+                                                           const calib::BoardSpec& board,
+                                                           const calib::StripeOptions& options,
+                                                           InputDigest* digest) {
+  std::vector<calib::StripeImage> images;
+  for (const std::string& path : paths) {
+    const std::string bytes = io::ReadFileBytes(path);
+    if (digest != nullptr) digest->Add(bytes);
+    images.push_back(calib::DecodeStripeImage(bytes, path));
+  }
+  return calib::CalibrateLaserPlaneFromStripes(camera, images, board, options);
+}
+
 }  // namespace lasercell::triangulation

@@ -32,4 +32,22 @@ std::vector<calib::HeightCapture> LoadHeightCaptures(const std::vector<std::stri
                                                      const calib::CameraModel& camera,
                                                      InputDigest* digest = nullptr);
 
+/// Method (a) of `calibrate laser` from files: the plane_<i>.lcp files of `dir`
+/// (FindPlaneProfileFiles) at heights_mm[i] (LoadHeightCaptures, their bytes added to `digest`
+/// when not null), then calib::CalibrateLaserPlaneFromHeights. Throws what those throw.
+calib::LaserPlaneResult CalibrateLaserPlaneFromPlaneFiles(const calib::CameraModel& camera,
+                                                          const std::string& dir,
+                                                          const std::vector<double>& heights_mm,
+                                                          const calib::HeightPlaneOptions& options,
+                                                          InputDigest* digest = nullptr);
+
+/// Method (b) of `calibrate laser` from image files: each read (its bytes added to `digest` when
+/// not null) and decoded (calib::DecodeStripeImage), then calib::CalibrateLaserPlaneFromStripes.
+/// FileError naming an unreadable file; otherwise what those throw.
+calib::LaserPlaneResult CalibrateLaserPlaneFromStripeFiles(const calib::CameraModel& camera,
+                                                           const std::vector<std::string>& paths,
+                                                           const calib::BoardSpec& board,
+                                                           const calib::StripeOptions& options,
+                                                           InputDigest* digest = nullptr);
+
 }  // namespace lasercell::triangulation

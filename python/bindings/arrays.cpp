@@ -175,6 +175,16 @@ std::vector<std::int32_t> ToInt32s(const py::handle& array, const std::string& a
   return out;
 }
 
+Eigen::Vector3d ToVector3(const py::handle& values, const std::string& arg) {
+  const std::vector<double> v = ToDoubles(values, arg, 3);
+  return {v[0], v[1], v[2]};
+}
+
+Eigen::Vector4d ToVector4(const py::handle& values, const std::string& arg) {
+  const std::vector<double> v = ToDoubles(values, arg, 4);
+  return {v[0], v[1], v[2], v[3]};
+}
+
 Eigen::Isometry3d ToIsometry(const py::handle& array, const std::string& arg) {
   const py::array a = RealArray(array, arg, false);
   if (a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4) {

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <nlohmann/json.hpp>
@@ -84,11 +85,23 @@ std::vector<float> ToFloats(const py::handle& array, const std::string& arg,
                             std::size_t expected_size);
 std::vector<std::int32_t> ToInt32s(const py::handle& array, const std::string& arg,
                                    std::size_t expected_size);
+/// Exactly 3 (or 4) real values, finite, as a vector; InputError naming `arg` otherwise.
+Eigen::Vector3d ToVector3(const py::handle& values, const std::string& arg);
+Eigen::Vector4d ToVector4(const py::handle& values, const std::string& arg);
 /// A 4x4 homogeneous rigid transform -> Isometry3d; InputError unless the last row is
 /// [0 0 0 1] and the rotation block is orthonormal within 1e-9.
 Eigen::Isometry3d ToIsometry(const py::handle& array, const std::string& arg);
 /// Isometry3d -> a new 4x4 float64 array.
 py::array_t<double> FromIsometry(const Eigen::Isometry3d& pose);
+
+/// A new (N, D) array holding a copy of N fixed-size Eigen vectors (pixels, points, faces).
+template <typename Scalar, int D>
+py::array_t<Scalar> RowsArray(const std::vector<Eigen::Matrix<Scalar, D, 1>>& rows) {
+  py::array_t<Scalar> out({static_cast<py::ssize_t>(rows.size()), py::ssize_t{D}});
+  Scalar* data = out.mutable_data();
+  for (const auto& row : rows) data = std::copy(row.data(), row.data() + D, data);
+  return out;
+}
 
 /// A read-only NumPy view of `rows` x `cols` values at `data` (row-major, contiguous) whose
 /// lifetime is tied to `owner` (the Python object that holds the C++ storage).
@@ -103,6 +116,13 @@ py::array ReadOnlyView(const T* data, std::size_t rows, std::size_t cols, py::ha
   py::array view(py::dtype::of<T>(), shape, strides, data, owner);
   py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return view;
+}
+
+/// A read-only (N, 3) float64 view of `rows` (Vector3d is three packed doubles), kept alive by
+/// `owner`; no copy.
+inline py::object Vector3View(const std::vector<Eigen::Vector3d>& rows, const py::object& owner) {
+  static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double));
+  return ReadOnlyView(rows.empty() ? nullptr : rows.front().data(), rows.size(), 3, owner);
 }
 
 }  // namespace lasercell::python

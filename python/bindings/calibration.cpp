@@ -23,23 +23,6 @@ using calib::BoardView;
 using calib::CalibrationImages;
 using calib::IntrinsicsResult;
 
-calib::LensModelKind ModelKind(const std::string& name) {
-  if (name == "opencv5") return calib::LensModelKind::kOpenCV5;
-  if (name == "opencv8") return calib::LensModelKind::kOpenCV8;
-  if (name == "splined") return calib::LensModelKind::kSplined;
-  ThrowInput("model: expected 'opencv5', 'opencv8' or 'splined', got '" + name + "'");
-}
-
-py::array_t<double> Pixels(const std::vector<Eigen::Vector2d>& corners) {
-  py::array_t<double> out({static_cast<py::ssize_t>(corners.size()), py::ssize_t{2}});
-  auto view = out.mutable_unchecked<2>();
-  for (std::size_t i = 0; i < corners.size(); ++i) {
-    view(static_cast<py::ssize_t>(i), 0) = corners[i].x();
-    view(static_cast<py::ssize_t>(i), 1) = corners[i].y();
-  }
-  return out;
-}
-
 BoardView MakeView(const std::string& name, const py::handle& corners_px,
                    const py::handle& corner_ids) {
   BoardView view;
@@ -64,13 +47,7 @@ void BindBoard(py::module_& m) {
            "'chessboard:COLSxROWS:SQUARE_MM' (inner corners) or "
            "'charuco:SXxSY:SQUARE_MM:MARKER_MM[:DICT]' (squares), as --board takes it.")
       .def_property_readonly(
-          "corners_mm",
-          [](const BoardSpec& b) {
-            const std::vector<Eigen::Vector3d> c = b.Corners();
-            py::array_t<double> out({static_cast<py::ssize_t>(c.size()), py::ssize_t{3}});
-            std::copy(c.front().data(), c.front().data() + 3 * c.size(), out.mutable_data());
-            return out;
-          },
+          "corners_mm", [](const BoardSpec& b) { return RowsArray(b.Corners()); },
           "(K, 3) corner positions in the board frame by id, mm (z = 0).")
       .def_property_readonly("num_corners", &BoardSpec::NumCorners)
       .def("__str__", &BoardSpec::ToString)
@@ -80,7 +57,8 @@ void BindBoard(py::module_& m) {
       .def(py::init(&MakeView), py::arg("name"), py::arg("corners_px"), py::arg("corner_ids"),
            "corners_px (K, 2), px; corner_ids (K,): the Board's corner id of each.")
       .def_readonly("name", &BoardView::name)
-      .def_property_readonly("corners_px", [](const BoardView& v) { return Pixels(v.corners_px); })
+      .def_property_readonly("corners_px",
+                             [](const BoardView& v) { return RowsArray(v.corners_px); })
       .def_property_readonly("corner_ids", [](const BoardView& v) {
         return py::array_t<int>(static_cast<py::ssize_t>(v.corner_ids.size()), v.corner_ids.data());
       });
@@ -144,7 +122,7 @@ void BindCalibration(py::module_& m) {
          const std::string& model, bool fix_aspect, bool board_warp, bool fall_back_to_opencv5,
          double outlier_sigma, int threads) {
         calib::IntrinsicsOptions options;
-        options.model = ModelKind(model);
+        options.model = calib::ParseLensModelKind(model, "model");
         options.fix_aspect_ratio = fix_aspect;
         options.estimate_board_warp = board_warp;
         options.outlier_threshold_sigma = outlier_sigma;

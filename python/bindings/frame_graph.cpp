@@ -113,12 +113,10 @@ for unknown or unconnected frames, or missing joint values.)doc")
           "set_laser_plane",
           [](FrameGraph& g, const std::string& name, const py::handle& normal,
              const py::handle& point_mm, const std::string& frame) {
-            const std::vector<double> n = ToDoubles(normal, "normal", 3);
-            const std::vector<double> p = ToDoubles(point_mm, "point_mm", 3);
             LaserPlaneEntry plane;
             plane.frame = frame;
-            plane.normal = Eigen::Vector3d(n[0], n[1], n[2]);
-            plane.point_mm = Eigen::Vector3d(p[0], p[1], p[2]);
+            plane.normal = ToVector3(normal, "normal");
+            plane.point_mm = ToVector3(point_mm, "point_mm");
             g.SetLaserPlane(name, plane);
           },
           py::arg("name"), py::arg("normal"), py::arg("point_mm"), py::arg("frame") = "sensor",

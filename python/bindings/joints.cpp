@@ -32,11 +32,9 @@ triangulation::SphereSweepProblemSpec Spec(triangulation::SphereSweepProblemSpec
   spec.robot = robot;
   spec.touches = touches;
   if (!laser_plane.is_none()) {
-    const std::vector<double> p = ToDoubles(laser_plane, "laser_plane", 4);
-    spec.laser_plane = Eigen::Vector4d(p[0], p[1], p[2], p[3]);
+    spec.laser_plane = ToVector4(laser_plane, "laser_plane");
   }
-  const std::vector<double> u = ToDoubles(up, "up", 3);
-  spec.up = Eigen::Vector3d(u[0], u[1], u[2]);
+  spec.up = ToVector3(up, "up");
   return spec;
 }
 

@@ -15,7 +15,6 @@
 #include "calib/board.hpp"
 #include "calib/camera_model.hpp"
 #include "calib/laser_plane_report.hpp"
-#include "core/io/file_util.hpp"
 #include "core/provenance.hpp"
 #include "python/bindings/bindings.hpp"
 #include "triangulation/laser_plane_captures.hpp"
@@ -33,26 +32,21 @@ struct LaserPlaneCalibration {
 };
 using CalibrationPtr = std::shared_ptr<LaserPlaneCalibration>;
 
-Eigen::Vector3d Vector3(const py::handle& values, const std::string& arg) {
-  const std::vector<double> v = ToDoubles(values, arg, 3);
-  return {v[0], v[1], v[2]};
-}
-
 CalibrationPtr FromHeights(const calib::CameraModel& camera, const std::string& planes,
                            const py::handle& heights_mm, const py::handle& plate_normal,
                            std::optional<double> plate_distance_mm, bool estimate_plate_tilt) {
   calib::HeightPlaneOptions options;
-  options.plate_normal_in_sensor = Vector3(plate_normal, "plate_normal");
+  options.plate_normal_in_sensor = ToVector3(plate_normal, "plate_normal");
   options.zero_distance_mm = plate_distance_mm;
   options.estimate_plate_tilt = estimate_plate_tilt;
   const std::vector<double> heights =
       ToDoubles(heights_mm, "heights_mm", static_cast<std::size_t>(-1));
   py::gil_scoped_release release;
   InputDigest digest;
-  const std::vector<std::string> files = triangulation::FindPlaneProfileFiles(planes);
-  const auto captures = triangulation::LoadHeightCaptures(files, heights, camera, &digest);
-  return std::make_shared<LaserPlaneCalibration>(LaserPlaneCalibration{
-      calib::CalibrateLaserPlaneFromHeights(camera, captures, options), digest.Text()});
+  calib::LaserPlaneResult result =
+      triangulation::CalibrateLaserPlaneFromPlaneFiles(camera, planes, heights, options, &digest);
+  return std::make_shared<LaserPlaneCalibration>(
+      LaserPlaneCalibration{std::move(result), digest.Text()});
 }
 
 CalibrationPtr FromStripes(const calib::CameraModel& camera,
@@ -62,14 +56,10 @@ CalibrationPtr FromStripes(const calib::CameraModel& camera,
   options.laser_color = laser_color;
   py::gil_scoped_release release;
   InputDigest digest;
-  std::vector<calib::StripeImage> images;
-  for (const std::string& path : image_paths) {
-    const std::string bytes = io::ReadFileBytes(path);
-    digest.Add(bytes);
-    images.push_back(calib::DecodeStripeImage(bytes, path));
-  }
-  return std::make_shared<LaserPlaneCalibration>(LaserPlaneCalibration{
-      calib::CalibrateLaserPlaneFromStripes(camera, images, board, options), digest.Text()});
+  calib::LaserPlaneResult result = triangulation::CalibrateLaserPlaneFromStripeFiles(
+      camera, image_paths, board, options, &digest);
+  return std::make_shared<LaserPlaneCalibration>(
+      LaserPlaneCalibration{std::move(result), digest.Text()});
 }
 
 }  // namespace

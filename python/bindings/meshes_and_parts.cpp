@@ -16,15 +16,6 @@ namespace {
 
 using MeshPtr = std::shared_ptr<TriangleMesh>;
 
-py::array_t<std::int32_t> Faces(const std::vector<Eigen::Vector3i>& faces) {
-  py::array_t<std::int32_t> out({static_cast<py::ssize_t>(faces.size()), py::ssize_t{3}});
-  auto view = out.mutable_unchecked<2>();
-  for (std::size_t i = 0; i < faces.size(); ++i) {
-    for (int c = 0; c < 3; ++c) view(static_cast<py::ssize_t>(i), c) = faces[i][c];
-  }
-  return out;
-}
-
 void BindMesh(py::module_& m) {
   py::class_<TriangleMesh, MeshPtr>(m, "TriangleMesh", "A triangle mesh in mm.")
       .def_property_readonly(
@@ -32,7 +23,7 @@ void BindMesh(py::module_& m) {
           [](const MeshPtr& mesh) { return std::shared_ptr<PointCloud>(mesh, &mesh->vertices); },
           "The vertices as a PointCloud (positions, and normals when known).")
       .def_property_readonly(
-          "faces", [](const TriangleMesh& mesh) { return Faces(mesh.faces); },
+          "faces", [](const TriangleMesh& mesh) { return RowsArray(mesh.faces); },
           "(M, 3) int32 vertex indices, counter-clockwise seen from outside.")
       .def("__repr__", [](const TriangleMesh& mesh) {
         return "<lasercell.TriangleMesh " + std::to_string(mesh.vertices.size()) + " vertices, " +

@@ -66,10 +66,7 @@ py::object View(const std::vector<T>& values, const py::object& owner) {
 }
 
 py::object RowsView(const std::vector<Eigen::Vector3d>& rows, const py::object& owner) {
-  if (rows.empty()) return py::none();
-  // Vector3d is three packed doubles: the vector's memory is an (N, 3) row-major array.
-  static_assert(sizeof(Eigen::Vector3d) == 3 * sizeof(double));
-  return ReadOnlyView(rows.front().data(), rows.size(), 3, owner);
+  return rows.empty() ? py::none() : Vector3View(rows, owner);
 }
 
 io::PlyEncoding Encoding(const std::string& name) {

@@ -41,10 +41,6 @@ registration::LocalizeSettings Settings(const py::object& options) {
   return SettingsFromDict(options, "options");
 }
 
-py::object Rows(const std::vector<Eigen::Vector3d>& rows, const py::object& owner) {
-  return ReadOnlyView(rows.empty() ? nullptr : rows.front().data(), rows.size(), 3, owner);
-}
-
 void BindModel(py::module_& m) {
   py::class_<PpfModel, ModelPtr>(m, "PpfModel", R"doc(
 A PPF model (Drost et al. 2010): the subsampled oriented model points and their pair table.
@@ -91,16 +87,20 @@ Stored geometry is in the model's centred frame: p_model = model_from_centered @
       .def_property_readonly("key_count", &PpfModel::key_count)
       .def_property_readonly(
           "points",
-          [](const py::object& self) { return Rows(self.cast<const PpfModel&>().points(), self); },
+          [](const py::object& self) {
+            return Vector3View(self.cast<const PpfModel&>().points(), self);
+          },
           "(M, 3) sampled points, centred frame, mm (read-only view).")
       .def_property_readonly(
           "normals",
-          [](const py::object& self) { return Rows(self.cast<const PpfModel&>().normals(), self); },
+          [](const py::object& self) {
+            return Vector3View(self.cast<const PpfModel&>().normals(), self);
+          },
           "(M, 3) unit normals of points.")
       .def_property_readonly(
           "refinement_points",
           [](const py::object& self) {
-            return Rows(self.cast<const PpfModel&>().refinement_points(), self);
+            return Vector3View(self.cast<const PpfModel&>().refinement_points(), self);
           },
           "(R, 3) denser points for verification and ICP, centred frame, mm.")
       .def_property_readonly(
@@ -170,13 +170,13 @@ void BindResult(py::module_& m) {
       .def_property_readonly(
           "timings_ms",
           [](const LocalizationResult& r) {
-            return JsonToPython(registration::LocalizationResultJson(r, {}, 0.0)["timings_ms"]);
+            return JsonToPython(registration::LocalizationTimingsJson(r.timings, 0.0));
           },
           "Wall time per stage, ms (model_build_or_load is 0 here).")
       .def_property_readonly(
           "counts",
           [](const LocalizationResult& r) {
-            return JsonToPython(registration::LocalizationResultJson(r, {}, 0.0)["counts"]);
+            return JsonToPython(registration::LocalizationCountsJson(r));
           },
           "Points per stage, pairs, votes, hypotheses, clusters.")
       .def("summary", &LocalizationResult::Summary)

@@ -11,6 +11,7 @@
 #include "registration/filters.hpp"
 #include "registration/icp.hpp"
 #include "registration/kdtree.hpp"
+#include "registration/localize_options_io.hpp"
 #include "registration/normals.hpp"
 
 namespace lasercell::python {
@@ -26,17 +27,9 @@ registration::LocalizeOptions Section(const char* key, const py::object& options
   return SettingsFromDict(wrapped, "options").localize;
 }
 
-registration::VoxelNormalMode NormalMode(const std::string& name) {
-  if (name == "average") return registration::VoxelNormalMode::kAverage;
-  if (name == "nearest_point") return registration::VoxelNormalMode::kNearestPoint;
-  if (name == "none") return registration::VoxelNormalMode::kNone;
-  ThrowInput("normal_mode: expected 'average', 'nearest_point' or 'none', got '" + name + "'");
-}
-
 registration::Viewpoint ViewpointArg(const py::object& viewpoint_mm) {
   if (viewpoint_mm.is_none()) return {};
-  const std::vector<double> v = ToDoubles(viewpoint_mm, "viewpoint_mm", 3);
-  return registration::Viewpoint::AtPoint(Eigen::Vector3d(v[0], v[1], v[2]));
+  return registration::Viewpoint::AtPoint(ToVector3(viewpoint_mm, "viewpoint_mm"));
 }
 
 }  // namespace
@@ -62,11 +55,9 @@ void BindRegistrationStages(py::module_& m) {
       "crop_box",
       [](const PointCloud& cloud, const py::handle& min_mm, const py::handle& max_mm,
          const py::object& frame_from_cloud) {
-        const std::vector<double> lo = ToDoubles(min_mm, "min_mm", 3);
-        const std::vector<double> hi = ToDoubles(max_mm, "max_mm", 3);
         BoundingBox box;
-        box.min = Eigen::Vector3d(lo[0], lo[1], lo[2]);
-        box.max = Eigen::Vector3d(hi[0], hi[1], hi[2]);
+        box.min = ToVector3(min_mm, "min_mm");
+        box.max = ToVector3(max_mm, "max_mm");
         const Eigen::Isometry3d pose = frame_from_cloud.is_none()
                                            ? Eigen::Isometry3d::Identity()
                                            : ToIsometry(frame_from_cloud, "frame_from_cloud");
@@ -102,7 +93,7 @@ void BindRegistrationStages(py::module_& m) {
          double normal_split_angle_rad, std::size_t min_points_per_voxel) {
         registration::VoxelGridOptions o;
         o.voxel_size_mm = voxel_size_mm;
-        o.normal_mode = NormalMode(normal_mode);
+        o.normal_mode = registration::ParseVoxelNormalMode(normal_mode, "normal_mode");
         o.normal_split_angle_rad = normal_split_angle_rad;
         o.min_points_per_voxel = min_points_per_voxel;
         o.Check();

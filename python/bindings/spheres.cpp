@@ -43,14 +43,12 @@ SpheresPtr Calibrate(const FrameGraph& cell, const calib::CameraModel& camera,
           "velocity_mm_s: give the linear sweep's velocity (sensor frame at t0, mm/s) or "
           "linear_record");
     }
-    const std::vector<double> v = ToDoubles(velocity_mm_s, "velocity_mm_s", 3);
     sweep.motion = triangulation::SweepMotion::kLinear;
-    sweep.velocity_mm_s = Eigen::Vector3d(v[0], v[1], v[2]);
+    sweep.velocity_mm_s = ToVector3(velocity_mm_s, "velocity_mm_s");
     if (t0_ns) sweep.t0_ns = *t0_ns;
   }
   calib::HalfSphereSweepOptions options;
-  const std::vector<double> u = ToDoubles(up, "up", 3);
-  options.up_in_handling_base = Eigen::Vector3d(u[0], u[1], u[2]);
+  options.up_in_handling_base = ToVector3(up, "up");
   options.radius_mm = radius_mm;
   py::gil_scoped_release release;
   const std::string touches_text = io::ReadFileBytes(touches_path);

@@ -273,8 +273,7 @@ void BindTriangulation(py::module_& m) {
         } else {
           options.motion = Motion(motion);
           if (!velocity_mm_s.is_none()) {
-            const std::vector<double> v = ToDoubles(velocity_mm_s, "velocity_mm_s", 3);
-            options.velocity_mm_s = Eigen::Vector3d(v[0], v[1], v[2]);
+            options.velocity_mm_s = ToVector3(velocity_mm_s, "velocity_mm_s");
           }
           if (t0_ns) options.t0_ns = *t0_ns;
         }
@@ -286,8 +285,7 @@ void BindTriangulation(py::module_& m) {
         triangulation::LaserPlaneSource source;
         source.laser = laser;
         if (!plane.is_none()) {
-          const std::vector<double> p = ToDoubles(plane, "laser_plane", 4);
-          source.plane = Eigen::Vector4d(p[0], p[1], p[2], p[3]);
+          source.plane = ToVector4(plane, "laser_plane");
           source.plane_label = "laser_plane";
         }
         py::gil_scoped_release release;
