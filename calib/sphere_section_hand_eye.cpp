@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "calib/cost_functions/kinematic_sphere_cost.hpp"
+#include "calib/robot_in_cell.hpp"
 #include "core/error.hpp"
 
 namespace lasercell::calib {
@@ -382,6 +383,15 @@ SphereSectionHandEyeResult CalibrateHandEyeFromSphereSections(
   if (o.leave_one_out) LeaveOneOut(profiles, sol, o, &r);
   if (!r.converged) r.warnings.push_back("the refinement did not converge");
   return r;
+}
+
+StaticEdge SphereSectionEdge(const FrameGraph& cell, const std::string& cell_name,
+                             const std::string& robot, const std::string& sensor_frame,
+                             const SphereSectionHandEyeResult& result) {
+  const RobotInCell found = FindRobot(cell, robot, cell_name);
+  return FlangeSensorEdge(found.flange, sensor_frame, result.flange_from_sensor, result.covariance,
+                          "lasercell calibrate handeye-laser --profiles", result.spread_rms_mm,
+                          result.sections_used, result.sections_used);
 }
 
 }  // namespace lasercell::calib

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "calib/circle_fit.hpp"
+#include "core/frame_graph.hpp"
 #include "core/se3.hpp"
 
 namespace lasercell::calib {
@@ -82,17 +83,17 @@ struct SphereSection {
 
 /// Outcome of CalibrateHandEyeFromSphereSections.
 struct SphereSectionHandEyeResult {
-  bool converged = false;
-  int iterations = 0;
+  bool converged = false;  ///< The refinement converged.
+  int iterations = 0;      ///< Gauss-Newton iterations.
   Eigen::Isometry3d flange_from_sensor = Eigen::Isometry3d::Identity();
   /// 6x6 over [rotation vector rad; translation mm], left perturbation.
   Matrix6d covariance = Matrix6d::Zero();
   Eigen::Vector3d sphere_centre_in_base = Eigen::Vector3d::Zero();  ///< mm.
   Eigen::Matrix3d sphere_centre_covariance = Eigen::Matrix3d::Zero();
-  double radius_mm = 0;
+  double radius_mm = 0;                 ///< Sphere radius used (fitted with estimate_radius).
   double radius_sigma_mm = 0;           ///< 0 when held at the nominal radius.
   std::vector<SphereSection> sections;  ///< One per input profile, input order.
-  std::size_t sections_used = 0;
+  std::size_t sections_used = 0;        ///< Sections in the solution.
   double spread_rms_mm = 0;  ///< RMS distance of the used sections' centres from their mean.
   double spread_max_mm = 0;  ///< Largest such distance.
   double loo_rms_mm = std::numeric_limits<double>::quiet_NaN();  ///< RMS of loo_distance_mm.
@@ -100,8 +101,8 @@ struct SphereSectionHandEyeResult {
   /// Largest change of the hand-eye translation (mm) / rotation (deg) when one pose is left out.
   double loo_translation_change_max_mm = std::numeric_limits<double>::quiet_NaN();
   double loo_rotation_change_max_deg = std::numeric_limits<double>::quiet_NaN();
-  double rotation_span_deg = 0;  ///< Largest angle between two used poses' flange rotations.
-  std::vector<std::string> warnings;
+  double rotation_span_deg = 0;       ///< Largest angle between two used poses' flange rotations.
+  std::vector<std::string> warnings;  ///< Singular covariance, no convergence.
   /// One line: sections used, spread, leave-one-out, 1-sigma.
   std::string Summary() const;
 };
@@ -114,5 +115,12 @@ struct SphereSectionHandEyeResult {
 /// not determined: add poses tilted about two axes).
 SphereSectionHandEyeResult CalibrateHandEyeFromSphereSections(
     const std::vector<SphereSectionProfile>& profiles, const SphereSectionHandEyeOptions& options);
+
+/// The flange -> sensor edge of `result` for the robot `robot` of `cell` (`cell_name` names the
+/// file in errors), with covariance and provenance
+/// (`calibrate handeye-laser --profiles`, the centre spread over the sections used).
+StaticEdge SphereSectionEdge(const FrameGraph& cell, const std::string& cell_name,
+                             const std::string& robot, const std::string& sensor_frame,
+                             const SphereSectionHandEyeResult& result);
 
 }  // namespace lasercell::calib

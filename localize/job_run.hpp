@@ -87,6 +87,8 @@ class JobRunner {
   const Job& job() const { return job_; }
   /// The loaded part models, in job order.
   const std::vector<PartModel>& models() const { return *models_; }
+  /// The same, shared (the runner's results hold it too).
+  std::shared_ptr<const std::vector<PartModel>> shared_models() const { return models_; }
 
  private:
   Job job_;

@@ -2,8 +2,6 @@
 
 #include <cstdio>
 
-#include "calib/pose_io.hpp"
-#include "calib/robot_in_cell.hpp"
 #include "calib/sphere_section_hand_eye.hpp"
 #include "calib/sphere_section_report.hpp"
 #include "core/error.hpp"
@@ -55,17 +53,8 @@ void RunHandEyeSections(const HandEyeSectionArgs& a) {
     throw OptionError(
         "calibrate handeye-laser: give --cell (the edge is updated) and/or --json (the result)");
   }
-  const calib::RobotPoses poses = calib::LoadRobotPoses(a.poses, a.pose_format);
-  if (poses.base_from_flange.size() != a.profiles.size()) {
-    throw OptionError("calibrate handeye-laser: " + std::to_string(a.profiles.size()) +
-                      " profiles but " + std::to_string(poses.base_from_flange.size()) +
-                      " poses in " + a.poses + "; give one profile per pose, in pose order");
-  }
-  std::vector<calib::SphereSectionProfile> profiles;
-  for (std::size_t i = 0; i < a.profiles.size(); ++i) {
-    profiles.push_back({a.profiles[i], poses.base_from_flange[i],
-                        triangulation::ReadScanLineProfile(a.profiles[i]).points_in_sensor});
-  }
+  const std::vector<calib::SphereSectionProfile> profiles =
+      triangulation::LoadSphereSections(a.profiles, a.poses, a.pose_format);
   calib::SphereSectionRun run{a.poses, a.pose_format, a.profiles, {}};
   run.options.sphere_radius_mm = a.radius_mm;
   run.options.estimate_radius = a.estimate_radius;
@@ -79,11 +68,7 @@ void RunHandEyeSections(const HandEyeSectionArgs& a) {
   std::string written = a.json;
   if (!a.cell.empty()) {
     FrameGraph graph = LoadFrameGraph(a.cell);
-    const calib::RobotInCell robot = calib::FindRobot(graph, a.robot, a.cell);
-    graph.SetStaticEdge(calib::FlangeSensorEdge(robot.flange, a.sensor_frame, r.flange_from_sensor,
-                                                r.covariance,
-                                                "lasercell calibrate handeye-laser --profiles",
-                                                r.spread_rms_mm, r.sections_used, r.sections_used));
+    graph.SetStaticEdge(calib::SphereSectionEdge(graph, a.cell, a.robot, a.sensor_frame, r));
     written = a.output.empty() ? a.cell : a.output;
     SaveFrameGraph(written, graph);
   }

@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,7 +27,6 @@
 #include "core/io/file_util.hpp"
 #include "core/io/point_cloud_io.hpp"
 #include "core/json_io.hpp"
-#include "core/provenance.hpp"
 #include "tools/commands.hpp"
 #include "triangulation/half_sphere_profiles.hpp"
 #include "triangulation/profile_io.hpp"
@@ -48,9 +48,6 @@ struct SpheresArgs {
 void Run(SpheresArgs a) {
   FrameGraph graph = LoadFrameGraph(a.cell);
   FrameGraph().AddFrame(a.sweep_frame);  // throws for a name that is not lower snake case
-  calib::CheckHalfSphereEdgeFits(graph, a.sweep_frame, a.cell);
-  const std::string touches_text = io::ReadFileBytes(a.touches);
-  const calib::SphereTouches touches = calib::ParseTouchesYaml(touches_text, a.touches);
   if (a.up.size() != 3) throw InputError("--up: expected X,Y,Z");
   a.options.up_in_handling_base = Eigen::Vector3d(a.up[0], a.up[1], a.up[2]);
   if (a.sweep.empty() == a.profiles.empty()) {
@@ -63,31 +60,31 @@ void Run(SpheresArgs a) {
   }
   const calib::HalfSphereInputNames names{a.cell, a.sweep.empty() ? a.profiles : a.sweep, a.touches,
                                           a.sweep_frame};
-
-  calib::HalfSphereSweepResult run;
-  bool modes = false;
-  if (a.sweep.empty()) {
-    // From profiles: triangulated here through the cell's plane, with its error modes.
-    triangulation::SweepOptions sweep;
-    sweep.motion = triangulation::SweepMotion::kLinear;
-    sweep.velocity_mm_s = Eigen::Vector3d(a.velocity[0], a.velocity[1], a.velocity[2]);
-    if (a.have_t0) sweep.t0_ns = a.t0_ns;
-    triangulation::HalfSphereFromProfiles out = triangulation::CalibrateHalfSpheresFromProfiles(
-        graph, a.cell, calib::LoadCameraModel(a.camera), triangulation::ReadProfiles(a.profiles),
-        sweep, a.laser, touches, a.options, names);
-    run = std::move(out.run);
-    modes = out.modes_propagated;
+  triangulation::SpheresSweep sweep;
+  sweep.laser = a.laser;
+  sweep.file = names.sweep;
+  PointCloud cloud;
+  triangulation::ProfileSet profiles;
+  std::optional<calib::CameraModel> camera;
+  if (a.sweep.empty()) {  // triangulated through the cell's plane, with its error modes
+    sweep.motion.motion = triangulation::SweepMotion::kLinear;
+    sweep.motion.velocity_mm_s = Eigen::Vector3d(a.velocity[0], a.velocity[1], a.velocity[2]);
+    if (a.have_t0) sweep.motion.t0_ns = a.t0_ns;
+    camera = calib::LoadCameraModel(a.camera);
+    profiles = triangulation::ReadProfiles(a.profiles);
+    sweep.camera = &*camera;
+    sweep.profiles = &profiles;
   } else {
     io::ReadReport read;
-    const PointCloud cloud = io::ReadPointCloud(a.sweep, &read);
+    cloud = io::ReadPointCloud(a.sweep, &read);
     a.options.sweep_unit_hint = read.unit_hint;
-    run = calib::CalibrateHalfSpheresInSweep(cloud, touches, a.options, names);
+    sweep.cloud = &cloud;
   }
-  InputDigest digest;
-  digest.AddFile(names.sweep);
-  digest.Add(touches_text);
-  const StaticEdge edge =
-      triangulation::HalfSphereCellEdge(run, graph, a.laser, names, digest.Text());
+  const triangulation::SpheresInCell out = triangulation::CalibrateSpheresInCell(
+      graph, sweep, io::ReadFileBytes(a.touches), a.options, names);
+  const calib::HalfSphereSweepResult& run = out.run;
+  const StaticEdge& edge = out.edge;
+  const bool modes = out.modes_propagated;
   const calib::HalfSphereCalibrationResult& result = run.calibration;
   json::WriteFile(a.json, calib::HalfSphereResultJson(run, names, edge));
   if (!a.report.empty()) report::WriteHtmlReport(a.report, calib::HalfSphereReport(run, names));

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <opencv2/core.hpp>
 
+#include "calib/pose_io.hpp"
 #include "core/error.hpp"
 #include "core/io/file_util.hpp"
 
@@ -91,6 +92,23 @@ ScanLineProfile ReadScanLineProfile(const std::string& path) {
                                                  " columns are NaN (the sensor saw no peak)");
   }
   return out;
+}
+
+std::vector<calib::SphereSectionProfile> LoadSphereSections(
+    const std::vector<std::string>& profile_paths, const std::string& poses_path,
+    const std::string& pose_format) {
+  const calib::RobotPoses poses = calib::LoadRobotPoses(poses_path, pose_format);
+  if (poses.base_from_flange.size() != profile_paths.size()) {
+    throw OptionError(std::to_string(profile_paths.size()) + " profiles but " +
+                      std::to_string(poses.base_from_flange.size()) + " poses in " + poses_path +
+                      "; give one profile per pose, in pose order");
+  }
+  std::vector<calib::SphereSectionProfile> sections;
+  for (std::size_t i = 0; i < profile_paths.size(); ++i) {
+    sections.push_back({profile_paths[i], poses.base_from_flange[i],
+                        ReadScanLineProfile(profile_paths[i]).points_in_sensor});
+  }
+  return sections;
 }
 
 }  // namespace lasercell::triangulation

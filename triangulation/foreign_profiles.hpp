@@ -21,6 +21,8 @@
 #include <string>
 #include <vector>
 
+#include "calib/sphere_section_hand_eye.hpp"
+
 namespace lasercell::triangulation {
 
 /// A finite point of a scan_line profile with |y| above this (mm) is not in the laser plane.
@@ -39,5 +41,13 @@ struct ScanLineProfile {
 /// a flat sequence of numbers or its length is not a multiple of 3, a value is infinite, a
 /// finite point has |y| > kScanLinePlaneTolerance, or no point is finite.
 ScanLineProfile ReadScanLineProfile(const std::string& path);
+
+/// One section per scan_line file, with its robot pose from `poses_path` (calib/pose_io.hpp in
+/// `pose_format`: Euler files do not say their convention, so "auto" is refused for them), in
+/// pose order: the input of calib::CalibrateHandEyeFromSphereSections. Throws OptionError when
+/// the numbers of profiles and poses differ, and as ReadScanLineProfile and LoadRobotPoses.
+std::vector<calib::SphereSectionProfile> LoadSphereSections(
+    const std::vector<std::string>& profile_paths, const std::string& poses_path,
+    const std::string& pose_format);
 
 }  // namespace lasercell::triangulation

@@ -1,6 +1,9 @@
 #include "triangulation/half_sphere_profiles.hpp"
 
 #include "core/error.hpp"
+#include "core/io/file_util.hpp"
+#include "core/provenance.hpp"
+#include "triangulation/profile_io.hpp"
 #include "triangulation/sensor_error_field.hpp"
 #include "triangulation/triangulator.hpp"
 
@@ -44,6 +47,41 @@ StaticEdge HalfSphereCellEdge(const calib::HalfSphereSweepResult& run, const Fra
                             calib::HalfSphereProvenance(run.calibration, input_digest));
   edge.sensor_response = SensorResponseOf(run, cell, laser);
   return edge;
+}
+
+SpheresInCell CalibrateSpheresInCell(const FrameGraph& cell, const SpheresSweep& sweep,
+                                     const std::string& touches_text,
+                                     const calib::HalfSphereSweepOptions& options,
+                                     const calib::HalfSphereInputNames& names) {
+  if ((sweep.cloud == nullptr) == (sweep.profiles == nullptr)) {
+    throw InputError("calibrate spheres: give the sweep as a cloud or as profiles (one of them)");
+  }
+  if (sweep.profiles && !sweep.camera) {
+    throw InputError("calibrate spheres: profiles need the camera model that triangulates them");
+  }
+  calib::CheckHalfSphereEdgeFits(cell, names.sweep_frame, names.cell);
+  const calib::SphereTouches touches = calib::ParseTouchesYaml(touches_text, names.touches);
+  SpheresInCell out;
+  InputDigest digest;
+  if (sweep.profiles) {
+    HalfSphereFromProfiles run =
+        CalibrateHalfSpheresFromProfiles(cell, names.cell, *sweep.camera, *sweep.profiles,
+                                         sweep.motion, sweep.laser, touches, options, names);
+    out.run = std::move(run.run);
+    out.modes_propagated = run.modes_propagated;
+    if (sweep.file.empty()) digest.Add(EncodeProfiles(*sweep.profiles));
+  } else {
+    out.run = calib::CalibrateHalfSpheresInSweep(*sweep.cloud, touches, options, names);
+    if (sweep.file.empty()) {
+      const auto& p = sweep.cloud->positions;
+      digest.Add(
+          std::string(reinterpret_cast<const char*>(p.data()), p.size() * sizeof(Eigen::Vector3d)));
+    }
+  }
+  if (!sweep.file.empty()) digest.AddFile(sweep.file);
+  digest.Add(touches_text);
+  out.edge = HalfSphereCellEdge(out.run, cell, sweep.laser, names, digest.Text());
+  return out;
 }
 
 }  // namespace lasercell::triangulation

@@ -53,4 +53,36 @@ StaticEdge HalfSphereCellEdge(const calib::HalfSphereSweepResult& run, const Fra
                               const std::string& laser, const calib::HalfSphereInputNames& names,
                               const std::string& input_digest);
 
+/// The sphere sweep CalibrateSpheresInCell starts from: a cloud in the sweep frame, or the
+/// profiles with the camera and the linear sweep that triangulate them through the cell's
+/// laser plane (the edge then keeps its response to the plane's error modes).
+struct SpheresSweep {
+  const PointCloud* cloud = nullptr;     ///< In names.sweep_frame, mm; not owned.
+  const ProfileSet* profiles = nullptr;  ///< Or these (not owned), with camera and motion.
+  const calib::CameraModel* camera = nullptr;
+  SweepOptions motion;
+  std::string laser = "laser";  ///< The cell's laser plane.
+  /// The file the sweep came from: the provenance digests its bytes ("" = the data: the
+  /// encoded profiles or the cloud's positions).
+  std::string file;
+};
+
+/// What CalibrateSpheresInCell produced: the run and the edge for the cell.
+struct SpheresInCell {
+  calib::HalfSphereSweepResult run;
+  StaticEdge edge;
+  bool modes_propagated = false;  ///< As HalfSphereFromProfiles (false for a cloud).
+};
+
+/// `calibrate spheres` between reading its inputs and writing the cell: checks that the edge
+/// handling_base <- names.sweep_frame fits `cell` (names.cell names it), parses the touches
+/// (`touches_text`, named names.touches), calibrates from the cloud or the profiles and builds
+/// the edge (HalfSphereCellEdge) with the digest of the sweep and the touches. Throws
+/// InputError when the sweep gives neither or both of cloud and profiles, or profiles without
+/// a camera, and what those steps throw.
+SpheresInCell CalibrateSpheresInCell(const FrameGraph& cell, const SpheresSweep& sweep,
+                                     const std::string& touches_text,
+                                     const calib::HalfSphereSweepOptions& options,
+                                     const calib::HalfSphereInputNames& names);
+
 }  // namespace lasercell::triangulation

@@ -48,5 +48,9 @@ TriangleMesh ReadStlMesh(const std::string& path);
 /// format and face count (PLY: everything ReadPlyMesh reports). Throws FileError naming the file
 /// for an unknown extension or unreadable content.
 TriangleMesh ReadMesh(const std::string& path, ReadReport* report = nullptr);
+/// Writes a mesh by extension (case-insensitive), atomically: .stl (binary) or .ply. Throws
+/// FileError naming the file for another extension or when it cannot be written, InputError for
+/// a face index out of range.
+void WriteMesh(const std::string& path, const TriangleMesh& mesh);
 
 }  // namespace lasercell::io

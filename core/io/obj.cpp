@@ -154,4 +154,15 @@ TriangleMesh ReadMesh(const std::string& path, ReadReport* report) {
   return mesh;
 }
 
+void WriteMesh(const std::string& path, const TriangleMesh& mesh) {
+  const std::string ext = LowerExtension(path);
+  if (ext == ".stl") {
+    WriteStlMesh(path, mesh);
+  } else if (ext == ".ply") {
+    WritePlyMesh(path, mesh);
+  } else {
+    throw FileError(path, "cannot write a mesh as '" + ext + "': give an .stl or .ply path");
+  }
+}
+
 }  // namespace lasercell::io

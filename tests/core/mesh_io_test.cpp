@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <filesystem>
 #include <string>
 
 #include "core/error.hpp"
@@ -155,6 +156,26 @@ TEST(MeshIo, ReadMeshDispatchesOnTheExtension) {
             std::string::npos);
   EXPECT_NE(ErrorOf([&] { ReadMesh(dir.File("missing.stl")); }).find("missing.stl"),
             std::string::npos);
+}
+
+// WriteMesh picks the format by extension as ReadMesh reads it: STL stores float32 corners,
+// PLY the vertices as written; other extensions are refused, naming the file, and not written.
+TEST(MeshIo, WriteMeshDispatchesOnTheExtension) {
+  const test::TestDir dir("mesh_write");
+  const TriangleMesh mesh = Box();
+  WriteMesh(dir.File("b.Stl"), mesh);
+  WriteMesh(dir.File("b.ply"), mesh);
+  const TriangleMesh stl = ReadMesh(dir.File("b.Stl"));
+  const TriangleMesh ply = ReadMesh(dir.File("b.ply"));
+  ASSERT_EQ(stl.faces.size(), 12u);
+  ASSERT_EQ(ply.faces.size(), 12u);
+  EXPECT_LT(WorstVertexError(mesh, stl), 1e-5);
+  EXPECT_GT(WorstVertexError(mesh, stl), 0.0);  // float32: 10.1 is not representable
+  EXPECT_LT(WorstVertexError(mesh, ply), 1e-5);
+  const std::string error = ErrorOf([&] { WriteMesh(dir.File("b.obj"), mesh); });
+  EXPECT_NE(error.find("b.obj"), std::string::npos) << error;
+  EXPECT_NE(error.find(".stl or .ply"), std::string::npos) << error;
+  EXPECT_FALSE(std::filesystem::exists(dir.File("b.obj")));
 }
 
 }  // namespace
