@@ -36,7 +36,7 @@ struct BoardSpec {
   /// Inner corners per row / column (chessboard: cols/rows; ChArUco: squares - 1).
   int CornersX() const;
   int CornersY() const;
-  int NumCorners() const { return CornersX() * CornersY(); }
+  int NumCorners() const { return CornersX() * CornersY(); }  ///< Inner corners in all.
   /// Corner `id` in the board frame, mm.
   Eigen::Vector3d Corner(int id) const;
   /// All corners, by id.

@@ -39,8 +39,8 @@ class CameraModel {
   const std::string& lensmodel() const { return lensmodel_; }
   /// fx fy cx cy then distortion, in mrcal's order for the model.
   const std::vector<double>& intrinsics() const { return intrinsics_; }
-  int width_px() const { return width_px_; }
-  int height_px() const { return height_px_; }
+  int width_px() const { return width_px_; }    ///< Imager width, px.
+  int height_px() const { return height_px_; }  ///< Imager height, px.
   /// Number of intrinsics for this model.
   int NumIntrinsics() const { return static_cast<int>(intrinsics_.size()); }
   /// True when mrcal provides gradients for the model (everything but CAHVORE).

@@ -120,7 +120,7 @@ struct HalfSphereCalibrationResult {
   double runner_up_match_rms_mm = 0;         ///< Of the second best (0 when there is none).
   std::vector<std::size_t> unmatched_swept;  ///< Swept spheres without a touch.
   std::vector<int> unmatched_touches;        ///< Touch labels without a swept sphere.
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings;         ///< Unmatched spheres, no convergence.
 
   /// One line: rms over N spheres, 1-sigma.
   std::string Summary() const;

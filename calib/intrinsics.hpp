@@ -114,15 +114,15 @@ struct ViewResult {
 
 struct IntrinsicsResult {
   std::optional<CameraModel> camera;  ///< Set whenever a solve ran.
-  bool converged = false;
-  std::string termination;  ///< Ceres's message of the last solve.
-  int iterations = 0;       ///< Over all solves.
+  bool converged = false;             ///< The last solve converged.
+  std::string termination;            ///< Ceres's message of the last solve.
+  int iterations = 0;                 ///< Over all solves.
   int outlier_rounds = 0;
   double rms_px = 0;             ///< Inliers, OpenCV definition (see header).
   double residual_sigma_px = 0;  ///< Per-coordinate sigma, sqrt(SSR / (2N - P)).
   int num_corners = 0;           ///< Inlier corners.
-  int num_outliers = 0;
-  int num_parameters = 0;  ///< Optimised (intrinsics + poses + warp).
+  int num_outliers = 0;          ///< Corners rejected as outliers.
+  int num_parameters = 0;        ///< Optimised (intrinsics + poses + warp).
   std::vector<ViewResult> views;
   std::vector<CornerResidual> corners;       ///< Every corner of the used views.
   std::vector<std::string> intrinsic_names;  ///< fx fy cx cy k1 ... (mrcal order).
@@ -148,12 +148,12 @@ struct IntrinsicsResult {
   /// 1-sigma projection uncertainty (worst direction, px) over the image, rows = grid y.
   Eigen::MatrixXd uncertainty_px;
   double uncertainty_range_mm = 0;
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings;  ///< Weak views, focal length, lens inversion, ...
   /// Set by CalibrateIntrinsicsFallingBackToOpencv5 when this is its OPENCV5 refit: why the
   /// OPENCV8 fit was not kept ("" otherwise).
   std::string refitted_because;
 
-  std::string Summary() const;
+  std::string Summary() const;  ///< One line: model, RMS, views, outliers, fx +- sigma, problems.
   /// Why this calibration must not be used as a measuring camera ("" when it may): no model,
   /// not converged, focal length unobservable or a lens model that is not invertible; every
   /// reason that holds, joined by "; ".

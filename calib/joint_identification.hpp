@@ -107,7 +107,7 @@ struct PositioningUncertainty {
 
 /// Outcome of IdentifyRobot.
 struct JointIdentificationResult {
-  bool converged = false;
+  bool converged = false;   ///< The solver converged.
   std::string termination;  ///< Ceres' termination message.
   int iterations = 0;       ///< Ceres iterations (all passes).
   DhChain robot;            ///< The identified chain (input with corrections applied).
@@ -140,7 +140,7 @@ struct JointIdentificationResult {
   /// poses, from the covariance of the robot parameters and hand-eye that were estimated
   /// (PositioningAtSweeps).
   PositioningUncertainty positioning;
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings;  ///< Observability changed, sweep residuals, no convergence.
   /// One line: converged, RMS, offsets, fixed parameters.
   std::string Summary() const;
 };

@@ -26,14 +26,14 @@ struct LaserHandEyeOptions {
 
 /// Outcome of CalibrateLaserHandEye.
 struct LaserHandEyeResult {
-  bool converged = false;
+  bool converged = false;  ///< The solver converged.
   Eigen::Isometry3d flange_from_sensor = Eigen::Isometry3d::Identity();
   /// 6x6 over [rotation vector rad; translation mm], left perturbation.
   Matrix6d covariance = Matrix6d::Zero();
   std::vector<Eigen::Vector3d> sphere_centres_in_base;  ///< mm.
   std::vector<Eigen::Vector3d> sphere_centre_sigmas;    ///< 1-sigma per coordinate, mm.
   double radius_mm = 0, radius_sigma_mm = 0;
-  double rms_mm = 0;
+  double rms_mm = 0;  ///< RMS point-to-sphere distance over the points used.
   std::size_t points_used = 0;
   std::vector<SweepResidual> sweeps;
   std::vector<double> residuals_mm;
@@ -42,7 +42,7 @@ struct LaserHandEyeResult {
   /// the hand-eye covariance alone: the robot model is held as exact, so its own uncertainty
   /// is not in it (calibrate it jointly with `IdentifyRobot` and estimate_hand_eye for that).
   PositioningUncertainty positioning;
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings;  ///< Those of the underlying joint identification.
   /// One line: converged, RMS, translation and rotation 1-sigma.
   std::string Summary() const;
 };

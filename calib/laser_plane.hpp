@@ -169,8 +169,8 @@ struct LaserPlaneResidual {
 
 /// The fitted laser plane and how good it is.
 struct LaserPlaneResult {
-  std::string method;  ///< "heights" or "stripe_chessboard".
-  bool converged = false;
+  std::string method;       ///< "heights" or "stripe_chessboard".
+  bool converged = false;   ///< The solver converged.
   std::string termination;  ///< Ceres termination message.
   int iterations = 0;
   Eigen::Vector3d normal = Eigen::Vector3d::UnitY();   ///< Unit, oriented so offset <= 0.
@@ -207,7 +207,7 @@ struct LaserPlaneResult {
   /// when there are too few items to refit without one.
   double loo_max_normal_change_deg = 0;
   double loo_max_offset_change_mm = 0;
-  std::vector<std::string> warnings;
+  std::vector<std::string> warnings;  ///< Ill-conditioned, no covariance, no convergence, ...
 
   /// One line: method, plane, sigmas, RMS, points, flags.
   std::string Summary() const;

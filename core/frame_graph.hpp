@@ -61,8 +61,6 @@ struct EdgeProvenance {
   std::string residual_summary;  ///< One line, e.g. "rms 0.021 mm over 4 spheres".
 };
 
-/// A fixed transform between two frames, parent_from_child (p_in_parent = T * p_in_child),
-/// stored as the cell file holds it.
 /// How a calibrated edge moved with each error mode of the laser-triangulation sensor whose
 /// points it was calibrated from (LaserPlaneEntry::error_modes): a consumer that measures
 /// through the same sensor counts that shared error once, with its sign, instead of as two
@@ -77,6 +75,8 @@ struct SensorModeResponse {
   Eigen::Matrix<double, 6, Eigen::Dynamic> columns;
 };
 
+/// A fixed transform between two frames, parent_from_child (p_in_parent = T * p_in_child),
+/// stored as the cell file holds it.
 struct StaticEdge {
   std::string parent;  ///< Frame the pose maps into.
   std::string child;   ///< Frame the pose maps from.
@@ -187,7 +187,7 @@ class FrameGraph {
   /// Adds a frame (no-op when present). Throws InputError for names that are not lower snake
   /// case ([a-z][a-z0-9_]*).
   void AddFrame(const std::string& name);
-  bool HasFrame(const std::string& name) const;
+  bool HasFrame(const std::string& name) const;  ///< The frame exists.
   /// All frames in sorted order.
   std::vector<std::string> Frames() const;
 

@@ -61,20 +61,20 @@ struct SupportPlane {
 
 /// Everything a job file says, paths resolved.
 struct Job {
-  std::string file;    ///< The job file ("" when built in memory).
-  std::string cell;    ///< cell.yaml.
-  std::string camera;  ///< .cameramodel.
-  std::string laser = "laser";
+  std::string file;               ///< The job file ("" when built in memory).
+  std::string cell;               ///< cell.yaml.
+  std::string camera;             ///< .cameramodel.
+  std::string laser = "laser";    ///< The laser plane's name in the cell.
   std::string profiles;           ///< source.file: a .lcp profile file.
   std::string linear_record;      ///< trajectory.linear ("" for a robot trajectory).
   bool robot_trajectory = false;  ///< trajectory.robot given.
   std::string robot;              ///< trajectory.robot ("" = the profile file's robot).
-  std::string target_frame = "handling_base";
+  std::string target_frame = "handling_base";  ///< Frame of the sweep and every pose.
   bool use_roi = false;
   BoundingBox roi;  ///< In the target frame, mm.
   SupportPlane support;
   std::vector<JobPart> parts;
-  double grasp_tolerance_mm = 10.0;
+  double grasp_tolerance_mm = 10.0;  ///< mm; graspable when 3 sigma of a grasp is within.
   double scan_noise_mm = 0.1;
   double max_rmse_factor = 5.0;
   int threads = 0;

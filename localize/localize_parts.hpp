@@ -106,19 +106,19 @@ struct PartInstance {
   bool covariance_valid = false;           ///< False when ICP gave none.
   PoseCovarianceTerms covariance_terms;    ///< What `covariance` is made of.
   std::vector<GraspPose> grasps;
-  bool graspable = false;
+  bool graspable = false;            ///< Unambiguous, ICP fits, every grasp within the tolerance.
   std::string not_graspable_reason;  ///< Empty when graspable.
-  bool ambiguous = false;
-  std::string ambiguity_reason;
+  bool ambiguous = false;            ///< Flat or symmetric: the pose is not determined.
+  std::string ambiguity_reason;      ///< Why (empty when not ambiguous).
   registration::LocalizationCandidate candidate;  ///< Votes, support, ICP (pose in target).
   double search_ms = 0.0;                         ///< This search, all stages.
 };
 
 /// One part's searches.
 struct PartSearch {
-  std::string part;
-  int requested = 0;
-  int found = 0;
+  std::string part;     ///< Part name.
+  int requested = 0;    ///< Instances asked for.
+  int found = 0;        ///< Instances found.
   std::string message;  ///< Why fewer than requested were found ("" when all were).
   registration::LocalizationTimings timings;                  ///< Summed over this part's searches.
   std::vector<registration::LocalizationCandidate> rejected;  ///< Of the last search.
@@ -136,9 +136,9 @@ struct LocalizePartsTimings {
 struct LocalizePartsResult {
   std::vector<PartInstance> instances;  ///< In the order found.
   std::vector<PartSearch> searches;     ///< One per requested part, in request order.
-  std::size_t sweep_points = 0;
-  std::size_t roi_points = 0;     ///< Inside the ROI.
-  std::size_t normal_points = 0;  ///< With a normal (searched).
+  std::size_t sweep_points = 0;         ///< In the scene given.
+  std::size_t roi_points = 0;           ///< Inside the ROI.
+  std::size_t normal_points = 0;        ///< With a normal (searched).
   LocalizePartsTimings timings;
   /// Every requested instance found.
   bool AllFound() const;

@@ -35,7 +35,7 @@ struct PartModelOptions {
 
 /// A loaded part.
 struct PartModel {
-  PartDefinition part;
+  PartDefinition part;  ///< The part file.
   registration::PpfModel ppf;
   TriangleMesh mesh;        ///< Part frame, mm (empty when not loaded).
   std::string digest;       ///< "fnv1a64:..." of the model inputs (see the file comment).

@@ -132,7 +132,7 @@ struct LocalizationCandidate {
   std::size_t cluster = 0;                 ///< Index into the (score-ordered) clustering output.
   VerificationResult coarse_verification;  ///< Before ICP.
   VerificationResult verification;         ///< After ICP (the coarse one when ICP did not run).
-  bool icp_run = false;
+  bool icp_run = false;                    ///< ICP refined the pose (LocalizeOptions::icp).
   IcpResult icp;  ///< Last ICP round (iterations summed over rounds); valid when icp_run.
   /// Covariance of scene_from_model over [rotation vector (rad); translation (mm)], left
   /// perturbation in the scene frame (scene_from_model_true = Exp(xi) * scene_from_model): the
@@ -164,8 +164,8 @@ struct LocalizationResult {
   std::vector<LocalizationCandidate> candidates;  ///< Accepted, best first, <= max_instances.
   std::vector<LocalizationCandidate> rejected;    ///< Examined and rejected, with reasons.
   bool ambiguous = false;                         ///< Planar/symmetric: see ambiguity_reason.
-  std::string ambiguity_reason;
-  std::string message;  ///< Why nothing was found (when !found).
+  std::string ambiguity_reason;                   ///< Why (empty when not ambiguous).
+  std::string message;                            ///< Why nothing was found (when !found).
   LocalizationTimings timings;
   std::size_t scene_points = 0;    ///< Input points.
   std::size_t dropped_points = 0;  ///< Non-finite positions/normals or zero normals.

@@ -66,9 +66,8 @@ struct PeakDetectionOptions {
   /// Drop saturated columns instead of reporting them (their row comes from the centre of
   /// gravity of the clipped plateau, whatever the estimator, since a clipped top has no shape).
   bool reject_saturated = false;
-  /// First and last row searched (ROI; -1: the whole column).
-  int first_row = -1;
-  int last_row = -1;
+  int first_row = -1;  ///< First row searched (ROI; -1: from the top).
+  int last_row = -1;   ///< Last row searched (ROI; -1: to the bottom).
   /// The stripe runs along the image columns (a vertical line, e.g. a camera turned by 90 deg):
   /// detect one peak per image ROW instead. The result's "columns" are then image rows and its
   /// row_px are image columns (sub-pixel); first_row/last_row bound the searched image columns.
