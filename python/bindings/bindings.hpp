@@ -38,6 +38,8 @@ void BindRegistration(py::module_& m);
 void BindRegistrationStages(py::module_& m);
 /// Profile files, sweeps (profiles -> points).
 void BindTriangulation(py::module_& m);
+/// detect_peaks: laser peaks from stripe images.
+void BindPeaks(py::module_& m);
 /// Board, BoardView, detect_boards, calibrate_intrinsics.
 void BindCalibration(py::module_& m);
 /// Laser plane calibration (heights, stripes).
@@ -48,8 +50,12 @@ void BindSpheres(py::module_& m);
 void BindHandEye(py::module_& m);
 /// Joint offsets and the laser eye-in-hand from sphere sweeps.
 void BindJoints(py::module_& m);
+/// scan_line profiles, robot pose files, the laser eye-in-hand from sphere sections.
+void BindSections(py::module_& m);
 /// TriangleMesh, read_mesh, read_cad_model, Part.
 void BindMeshesAndParts(py::module_& m);
+/// PartModel, load_part_model, localize_parts, lines_of_sight.
+void BindLocalizeParts(py::module_& m);
 /// Jobs: load, run, result.
 void BindLocalizeJob(py::module_& m);
 

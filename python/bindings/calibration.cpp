@@ -13,6 +13,7 @@
 #include "calib/board.hpp"
 #include "calib/camera_calibration.hpp"
 #include "calib/intrinsics.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 
 namespace lasercell::python {
@@ -42,34 +43,40 @@ BoardView MakeView(const std::string& name, const py::handle& corners_px,
 }
 
 void BindBoard(py::module_& m) {
-  py::class_<BoardSpec>(m, "Board", "A calibration board: chessboard or ChArUco, mm.")
+  py::class_<BoardSpec>(m, "Board", LC_DOC(calib_BoardSpec))
       .def(py::init(&calib::ParseBoardSpec), py::arg("spec"),
            "'chessboard:COLSxROWS:SQUARE_MM' (inner corners) or "
            "'charuco:SXxSY:SQUARE_MM:MARKER_MM[:DICT]' (squares), as --board takes it.")
       .def_property_readonly(
           "corners_mm", [](const BoardSpec& b) { return RowsArray(b.Corners()); },
           "(K, 3) corner positions in the board frame by id, mm (z = 0).")
-      .def_property_readonly("num_corners", &BoardSpec::NumCorners)
-      .def("__str__", &BoardSpec::ToString)
+      .def_property_readonly("num_corners", &BoardSpec::NumCorners,
+                             LC_DOC(calib_BoardSpec_NumCorners))
+      .def("__str__", &BoardSpec::ToString, LC_DOC(calib_BoardSpec_ToString))
       .def("__repr__", [](const BoardSpec& b) { return "<lasercell.Board " + b.ToString() + ">"; });
 
-  py::class_<BoardView>(m, "BoardView", "The board's corners found in one image.")
+  py::class_<BoardView>(m, "BoardView", LC_DOC(calib_BoardView))
       .def(py::init(&MakeView), py::arg("name"), py::arg("corners_px"), py::arg("corner_ids"),
            "corners_px (K, 2), px; corner_ids (K,): the Board's corner id of each.")
-      .def_readonly("name", &BoardView::name)
-      .def_property_readonly("corners_px",
-                             [](const BoardView& v) { return RowsArray(v.corners_px); })
-      .def_property_readonly("corner_ids", [](const BoardView& v) {
-        return py::array_t<int>(static_cast<py::ssize_t>(v.corner_ids.size()), v.corner_ids.data());
-      });
+      .def_readonly("name", &BoardView::name, LC_DOC(calib_BoardView_name))
+      .def_property_readonly(
+          "corners_px", [](const BoardView& v) { return RowsArray(v.corners_px); },
+          "(K, 2): " LC_DOC(calib_BoardView_corners_px))
+      .def_property_readonly(
+          "corner_ids",
+          [](const BoardView& v) {
+            return py::array_t<int>(static_cast<py::ssize_t>(v.corner_ids.size()),
+                                    v.corner_ids.data());
+          },
+          "(K,): " LC_DOC(calib_BoardView_corner_ids));
 }
 
 void BindDetections(py::module_& m) {
   py::class_<CalibrationImages, std::shared_ptr<CalibrationImages>>(
       m, "BoardDetections", "The board found (or not) in each image file.")
       .def_readonly("views", &CalibrationImages::views, "One BoardView per usable image.")
-      .def_readonly("width", &CalibrationImages::width)
-      .def_readonly("height", &CalibrationImages::height)
+      .def_readonly("width", &CalibrationImages::width, LC_DOC(calib_CalibrationImages_width))
+      .def_readonly("height", &CalibrationImages::height, LC_DOC(calib_CalibrationImages_height))
       .def_property_readonly(
           "images",
           [](const CalibrationImages& c) {
@@ -96,18 +103,25 @@ void BindDetections(py::module_& m) {
 void BindResult(py::module_& m) {
   py::class_<IntrinsicsResult, std::shared_ptr<IntrinsicsResult>>(m, "IntrinsicsResult",
                                                                   "A camera calibration.")
-      .def_readonly("camera", &IntrinsicsResult::camera, "The CameraModel (None if no solve).")
-      .def_readonly("converged", &IntrinsicsResult::converged)
-      .def_readonly("rms_px", &IntrinsicsResult::rms_px, "Inlier RMS reprojection error, px.")
-      .def_readonly("residual_sigma_px", &IntrinsicsResult::residual_sigma_px)
-      .def_readonly("num_corners", &IntrinsicsResult::num_corners)
-      .def_readonly("num_outliers", &IntrinsicsResult::num_outliers)
-      .def_readonly("intrinsic_names", &IntrinsicsResult::intrinsic_names)
-      .def_readonly("intrinsics_sigma", &IntrinsicsResult::intrinsics_sigma)
-      .def_readonly("warnings", &IntrinsicsResult::warnings)
-      .def("summary", &IntrinsicsResult::Summary)
+      .def_readonly("camera", &IntrinsicsResult::camera, LC_DOC(calib_IntrinsicsResult_camera))
+      .def_readonly("converged", &IntrinsicsResult::converged,
+                    LC_DOC(calib_IntrinsicsResult_converged))
+      .def_readonly("rms_px", &IntrinsicsResult::rms_px, LC_DOC(calib_IntrinsicsResult_rms_px))
+      .def_readonly("residual_sigma_px", &IntrinsicsResult::residual_sigma_px,
+                    LC_DOC(calib_IntrinsicsResult_residual_sigma_px))
+      .def_readonly("num_corners", &IntrinsicsResult::num_corners,
+                    LC_DOC(calib_IntrinsicsResult_num_corners))
+      .def_readonly("num_outliers", &IntrinsicsResult::num_outliers,
+                    LC_DOC(calib_IntrinsicsResult_num_outliers))
+      .def_readonly("intrinsic_names", &IntrinsicsResult::intrinsic_names,
+                    LC_DOC(calib_IntrinsicsResult_intrinsic_names))
+      .def_readonly("intrinsics_sigma", &IntrinsicsResult::intrinsics_sigma,
+                    LC_DOC(calib_IntrinsicsResult_intrinsics_sigma))
+      .def_readonly("warnings", &IntrinsicsResult::warnings,
+                    LC_DOC(calib_IntrinsicsResult_warnings))
+      .def("summary", &IntrinsicsResult::Summary, LC_DOC(calib_IntrinsicsResult_Summary))
       .def("rejection_reason", &IntrinsicsResult::RejectionReason,
-           "Why this camera must not be used for measuring ('' when it may).");
+           LC_DOC(calib_IntrinsicsResult_RejectionReason));
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 
 namespace lasercell::python {
@@ -114,11 +115,9 @@ the centre of the top-left pixel is (0, 0). Points in mm, pixels in px.)doc")
            py::arg("lensmodel"), py::arg("intrinsics"), py::arg("width"), py::arg("height"),
            "Raises lasercell.InputError for an unknown lens model, a wrong number of intrinsics, "
            "a non-finite value or a non-positive imager size.")
-      .def_static("load", &calib::LoadCameraModel, py::arg("path"),
-                  "Reads a .cameramodel (written by mrcal or lasercell); FileError when mrcal "
-                  "cannot read it.")
+      .def_static("load", &calib::LoadCameraModel, py::arg("path"), LC_DOC(calib_LoadCameraModel))
       .def_static("from_text", &calib::ParseCameraModel, py::arg("text"),
-                  py::arg("name") = "camera model", "Parses .cameramodel text.")
+                  py::arg("name") = "camera model", LC_DOC(calib_ParseCameraModel))
       .def(
           "save",
           [](const CameraModel& c, const std::string& path, const std::string& comment) {
@@ -132,7 +131,7 @@ the centre of the top-left pixel is (0, 0). Points in mm, pixels in px.)doc")
           },
           py::arg("comment") = "", "The .cameramodel text.")
       .def_property_readonly("lensmodel", &CameraModel::lensmodel,
-                             "mrcal's model name, e.g. 'LENSMODEL_OPENCV8'.")
+                             LC_DOC(calib_CameraModel_lensmodel))
       .def_property_readonly(
           "intrinsics",
           [](const CameraModel& c) {
@@ -140,8 +139,8 @@ the centre of the top-left pixel is (0, 0). Points in mm, pixels in px.)doc")
                                        c.intrinsics().data());
           },
           "(K,) float64 copy: fx fy cx cy, then distortion.")
-      .def_property_readonly("width", &CameraModel::width_px, "Imager columns, px.")
-      .def_property_readonly("height", &CameraModel::height_px, "Imager rows, px.")
+      .def_property_readonly("width", &CameraModel::width_px, LC_DOC(calib_CameraModel_width_px))
+      .def_property_readonly("height", &CameraModel::height_px, LC_DOC(calib_CameraModel_height_px))
       .def_property_readonly(
           "intrinsics_covariance",
           [](const CameraModel& c) -> py::object {
@@ -164,9 +163,7 @@ values, as in mrcal.)doc")
       .def("unproject", &Unproject, py::arg("pixels"),
            "Unit ray directions (N, 3) in the camera frame of pixels (N, 2) (or (3,) of one (2,)).")
       .def("lens_inversion_problem", &calib::LensInversionProblem, py::arg("grid") = 129,
-           py::arg("tolerance_px") = 0.01,
-           "'' when every pixel of the imager has a ray that projects back within tolerance_px; "
-           "otherwise what fails and where.")
+           py::arg("tolerance_px") = 0.01, LC_DOC(calib_LensInversionProblem))
       .def("__repr__", [](const CameraModel& c) {
         return "<lasercell.CameraModel " + c.lensmodel() + " " + std::to_string(c.width_px()) +
                "x" + std::to_string(c.height_px()) + ">";

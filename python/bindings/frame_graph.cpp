@@ -7,8 +7,11 @@
 
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "core/kinematics.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 
 namespace lasercell::python {
@@ -28,12 +31,86 @@ JointValues ToJoints(const py::object& joints) {
   return out;
 }
 
+DhConvention Convention(const std::string& name) {
+  if (name == "standard") return DhConvention::kStandard;
+  if (name == "modified") return DhConvention::kModified;
+  ThrowInput("convention: expected 'standard' or 'modified', got '" + name + "'");
+}
+
+// DH rows [a_mm, alpha_rad, d_mm, theta_offset_rad (, joint_offset_rad)] from a (J, 4) or
+// (J, 5) array.
+std::vector<DhJoint> DhRows(const py::handle& dh) {
+  const py::array a = py::array::ensure(dh);
+  if (!a || a.ndim() != 2 || (a.shape(1) != 4 && a.shape(1) != 5) || a.shape(0) == 0) {
+    ThrowInput(
+        "dh: expected a (J, 4) or (J, 5) array of [a_mm, alpha_rad, d_mm, "
+        "theta_offset_rad(, joint_offset_rad)] rows");
+  }
+  const auto cols = static_cast<std::size_t>(a.shape(1));
+  const std::vector<double> v = ToDoubles(a.attr("reshape")(-1), "dh", a.shape(0) * cols);
+  std::vector<DhJoint> joints(static_cast<std::size_t>(a.shape(0)));
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    const double* row = &v[j * cols];
+    joints[j] = {row[0], row[1], row[2], row[3], cols == 5 ? row[4] : 0.0};
+  }
+  return joints;
+}
+
+// Robot kinematics: a DH robot between two frames, and its table back.
+void BindRobots(py::class_<FrameGraph>& graph) {
+  graph.def(
+      "set_dh_robot",
+      [](FrameGraph& g, const std::string& robot, const std::string& base,
+         const std::string& flange, const py::handle& dh, const std::string& convention,
+         const py::object& base_from_chain, const py::object& chain_from_flange) {
+        const Eigen::Isometry3d mount_base = base_from_chain.is_none()
+                                                 ? Eigen::Isometry3d::Identity()
+                                                 : ToIsometry(base_from_chain, "base_from_chain");
+        const Eigen::Isometry3d mount_flange =
+            chain_from_flange.is_none() ? Eigen::Isometry3d::Identity()
+                                        : ToIsometry(chain_from_flange, "chain_from_flange");
+        const DhChain chain(Convention(convention), DhRows(dh), mount_base, mount_flange);
+        FrameGraph changed = g;  // a refused edge leaves the graph as it was
+        changed.SetRobot(robot, chain);
+        changed.SetDynamicEdge({base, flange, robot});
+        g = std::move(changed);
+      },
+      py::arg("robot"), py::arg("base"), py::arg("flange"), py::arg("dh"),
+      py::arg("convention") = "standard", py::arg("base_from_chain") = py::none(),
+      py::arg("chain_from_flange") = py::none(),
+      R"doc(Adds or replaces a robot given by its DH table and the dynamic edge base -> flange
+that its joints drive. dh: (J, 4) or (J, 5) rows [a_mm, alpha_rad, d_mm, theta_offset_rad(,
+joint_offset_rad)]; convention 'standard' (A = Rz(theta) Tz(d) Tx(a) Rx(alpha)) or 'modified'
+(Craig); mounts 4x4, mm. InputError for a non-finite value or an edge closing a cycle.)doc");
+  graph.def(
+      "robot_dh",
+      [](const FrameGraph& g, const std::string& robot) {
+        const auto* chain = dynamic_cast<const DhChain*>(&g.Robot(robot));
+        if (!chain) ThrowInput("robot '" + robot + "' is not a DH chain");
+        std::vector<Eigen::Matrix<double, 5, 1>> rows;
+        for (const DhJoint& j : chain->joints()) {
+          rows.push_back((Eigen::Matrix<double, 5, 1>() << j.a_mm, j.alpha_rad, j.d_mm,
+                          j.theta_offset_rad, j.joint_offset_rad)
+                             .finished());
+        }
+        py::dict out;
+        out["convention"] =
+            chain->convention() == DhConvention::kStandard ? "standard" : "modified";
+        out["dh"] = RowsArray(rows);
+        out["base_from_chain"] = FromIsometry(chain->base_from_chain());
+        out["chain_from_flange"] = FromIsometry(chain->chain_from_flange());
+        return out;
+      },
+      py::arg("robot"),
+      "{convention, dh: (J, 5) [a_mm, alpha_rad, d_mm, theta_offset_rad, joint_offset_rad], "
+      "base_from_chain, chain_from_flange} of a DH robot; InputError for an unknown robot.");
+}
+
 }  // namespace
 
 void BindFrameGraph(py::module_& m) {
-  py::class_<TransformWithCovarianceResult>(
-      m, "TransformWithCovariance",
-      "A transform with its first-order covariance and what that covariance leaves out.")
+  py::class_<TransformWithCovarianceResult>(m, "TransformWithCovariance",
+                                            LC_DOC(core_TransformWithCovarianceResult))
       .def_property_readonly(
           "to_from_from",
           [](const TransformWithCovarianceResult& r) { return FromIsometry(r.to_from_from); },
@@ -44,29 +121,34 @@ void BindFrameGraph(py::module_& m) {
           "6x6 over [rotation vector (rad); translation (mm)], left "
           "perturbation in the `to` frame.")
       .def_readonly("edges_without_covariance",
-                    &TransformWithCovarianceResult::edges_without_covariance)
-      .def_readonly("crosses_dynamic_edge", &TransformWithCovarianceResult::crosses_dynamic_edge)
-      .def_readonly("robots_on_path", &TransformWithCovarianceResult::robots_on_path)
-      .def_property_readonly("complete", &TransformWithCovarianceResult::Complete)
-      .def("summary", &TransformWithCovarianceResult::Summary);
+                    &TransformWithCovarianceResult::edges_without_covariance,
+                    LC_DOC(core_TransformWithCovarianceResult_edges_without_covariance))
+      .def_readonly("crosses_dynamic_edge", &TransformWithCovarianceResult::crosses_dynamic_edge,
+                    LC_DOC(core_TransformWithCovarianceResult_crosses_dynamic_edge))
+      .def_readonly("robots_on_path", &TransformWithCovarianceResult::robots_on_path,
+                    LC_DOC(core_TransformWithCovarianceResult_robots_on_path))
+      .def_property_readonly("complete", &TransformWithCovarianceResult::Complete,
+                             LC_DOC(core_TransformWithCovarianceResult_Complete))
+      .def("summary", &TransformWithCovarianceResult::Summary,
+           LC_DOC(core_TransformWithCovarianceResult_Summary));
 
-  py::class_<FrameGraph>(m, "FrameGraph",
-                         "The cell's named frames joined by static and robot "
-                         "edges (cell.yaml).")
-      .def(py::init<>())
-      .def_static("load", &LoadFrameGraph, py::arg("path"),
-                  "Reads cell.yaml; raises lasercell.FileError naming the problem.")
+  py::class_<FrameGraph> graph(m, "FrameGraph", LC_DOC(core_FrameGraph));
+  BindRobots(graph);
+  graph.def(py::init<>())
+      .def_static("load", &LoadFrameGraph, py::arg("path"), LC_DOC(core_LoadFrameGraph))
       .def_static("from_yaml", &FrameGraphFromYaml, py::arg("text"), py::arg("name") = "cell.yaml",
-                  "Parses cell.yaml text.")
+                  LC_DOC(core_FrameGraphFromYaml))
       .def(
           "save", [](const FrameGraph& g, const std::string& path) { SaveFrameGraph(path, g); },
           py::arg("path"), "Writes cell.yaml atomically.")
-      .def("to_yaml", &FrameGraphToYaml)
-      .def_property_readonly("frames", &FrameGraph::Frames)
-      .def_property_readonly("robots", &FrameGraph::Robots)
-      .def("has_frame", &FrameGraph::HasFrame, py::arg("name"))
-      .def("connected", &FrameGraph::Connected, py::arg("a"), py::arg("b"))
-      .def("robots_on_path", &FrameGraph::RobotsOnPath, py::arg("to"), py::arg("from_"))
+      .def("to_yaml", &FrameGraphToYaml, LC_DOC(core_FrameGraphToYaml))
+      .def_property_readonly("frames", &FrameGraph::Frames, LC_DOC(core_FrameGraph_Frames))
+      .def_property_readonly("robots", &FrameGraph::Robots, LC_DOC(core_FrameGraph_Robots))
+      .def("has_frame", &FrameGraph::HasFrame, py::arg("name"), LC_DOC(core_FrameGraph_HasFrame))
+      .def("connected", &FrameGraph::Connected, py::arg("a"), py::arg("b"),
+           LC_DOC(core_FrameGraph_Connected))
+      .def("robots_on_path", &FrameGraph::RobotsOnPath, py::arg("to"), py::arg("from_"),
+           LC_DOC(core_FrameGraph_RobotsOnPath))
       .def(
           "transform",
           [](const FrameGraph& g, const std::string& to, const std::string& from,
@@ -108,7 +190,7 @@ for unknown or unconnected frames, or missing joint values.)doc")
           "Adds or replaces a static edge (4x4, mm; covariance 6x6 over [rotation vector (rad); "
           "translation (mm)] or None). InputError when it would close a cycle.")
       .def("remove_edge", &FrameGraph::RemoveEdge, py::arg("a"), py::arg("b"),
-           "Removes the edge between a and b; False when there was none.")
+           LC_DOC(core_FrameGraph_RemoveEdge))
       .def(
           "set_laser_plane",
           [](FrameGraph& g, const std::string& name, const py::handle& normal,

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "calib/hand_eye_session.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 
 namespace lasercell::python {
@@ -45,8 +46,7 @@ SessionPtr Calibrate(const std::string& camera, const std::string& poses,
 }  // namespace
 
 void BindHandEye(py::module_& m) {
-  py::class_<calib::HandEyeSession, SessionPtr>(
-      m, "HandEyeResult", "The camera on the robot flange (eye-in-hand), with its uncertainty.")
+  py::class_<calib::HandEyeSession, SessionPtr>(m, "HandEyeResult", LC_DOC(calib_HandEyeSession))
       .def_property_readonly(
           "flange_from_camera",
           [](const calib::HandEyeSession& s) { return FromIsometry(s.result.flange_from_camera); },
@@ -58,9 +58,12 @@ void BindHandEye(py::module_& m) {
       .def_property_readonly(
           "views", [](const calib::HandEyeSession& s) { return s.views.images; },
           "The images (or corner-file entries) used, in pose order.")
-      .def_property_readonly("warnings",
-                             [](const calib::HandEyeSession& s) { return s.result.warnings; })
-      .def("summary", [](const calib::HandEyeSession& s) { return s.result.Summary(); })
+      .def_property_readonly(
+          "warnings", [](const calib::HandEyeSession& s) { return s.result.warnings; },
+          LC_DOC(calib_HandEyeResult_warnings))
+      .def(
+          "summary", [](const calib::HandEyeSession& s) { return s.result.Summary(); },
+          LC_DOC(calib_HandEyeResult_Summary))
       .def(
           "to_dict",
           [](const calib::HandEyeSession& s) {

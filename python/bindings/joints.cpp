@@ -10,6 +10,7 @@
 #include <string>
 
 #include "calib/joint_report.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 #include "triangulation/sphere_sweeps.hpp"
 
@@ -62,13 +63,19 @@ void BindJoints(py::module_& m) {
             return out;
           },
           "{parameter: (identified - nominal, 1 sigma)} of the estimated parameters (rad, mm).")
-      .def_property_readonly("rms_mm", [](const JointCalibration& c) { return c.result.rms_mm; })
-      .def_property_readonly("converged",
-                             [](const JointCalibration& c) { return c.result.converged; })
-      .def_property_readonly("warnings",
-                             [](const JointCalibration& c) { return c.result.warnings; })
-      .def_readonly("cell", &JointCalibration::cell, "The cell with the identified robot.")
-      .def("summary", [](const JointCalibration& c) { return c.result.Summary(); })
+      .def_property_readonly(
+          "rms_mm", [](const JointCalibration& c) { return c.result.rms_mm; },
+          LC_DOC(calib_JointIdentificationResult_rms_mm))
+      .def_property_readonly(
+          "converged", [](const JointCalibration& c) { return c.result.converged; },
+          LC_DOC(calib_JointIdentificationResult_converged))
+      .def_property_readonly(
+          "warnings", [](const JointCalibration& c) { return c.result.warnings; },
+          LC_DOC(calib_JointIdentificationResult_warnings))
+      .def_readonly("cell", &JointCalibration::cell, LC_DOC(triangulation_JointCalibration_cell))
+      .def(
+          "summary", [](const JointCalibration& c) { return c.result.Summary(); },
+          LC_DOC(calib_JointIdentificationResult_Summary))
       .def(
           "to_dict",
           [](const JointCalibration& c) {
@@ -86,11 +93,15 @@ void BindJoints(py::module_& m) {
           "4x4, mm.")
       .def_property_readonly(
           "covariance",
-          [](const LaserHandEyeCalibration& c) { return FromMatrix(c.result.covariance); })
-      .def_property_readonly("rms_mm",
-                             [](const LaserHandEyeCalibration& c) { return c.result.rms_mm; })
+          [](const LaserHandEyeCalibration& c) { return FromMatrix(c.result.covariance); },
+          LC_DOC(calib_LaserHandEyeResult_covariance))
+      .def_property_readonly(
+          "rms_mm", [](const LaserHandEyeCalibration& c) { return c.result.rms_mm; },
+          LC_DOC(calib_LaserHandEyeResult_rms_mm))
       .def_readonly("cell", &LaserHandEyeCalibration::cell, "The cell with the new edge.")
-      .def("summary", [](const LaserHandEyeCalibration& c) { return c.result.Summary(); })
+      .def(
+          "summary", [](const LaserHandEyeCalibration& c) { return c.result.Summary(); },
+          LC_DOC(calib_LaserHandEyeResult_Summary))
       .def(
           "to_dict",
           [](const LaserHandEyeCalibration& c) {

@@ -16,6 +16,7 @@
 #include "calib/camera_model.hpp"
 #include "calib/laser_plane_report.hpp"
 #include "core/provenance.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 #include "triangulation/laser_plane_captures.hpp"
 
@@ -81,19 +82,27 @@ void BindLaserPlane(py::module_& m) {
           "4x4 over [n; d].")
       .def_property_readonly(
           "normal_sigma_deg",
-          [](const LaserPlaneCalibration& c) { return c.result.normal_sigma_deg; })
+          [](const LaserPlaneCalibration& c) { return c.result.normal_sigma_deg; },
+          LC_DOC(calib_LaserPlaneResult_normal_sigma_deg))
       .def_property_readonly(
           "offset_sigma_mm",
-          [](const LaserPlaneCalibration& c) { return c.result.offset_sigma_mm; })
-      .def_property_readonly("rms_mm",
-                             [](const LaserPlaneCalibration& c) { return c.result.rms_mm; })
-      .def_property_readonly("points",
-                             [](const LaserPlaneCalibration& c) { return c.result.points; })
-      .def_property_readonly("converged",
-                             [](const LaserPlaneCalibration& c) { return c.result.converged; })
-      .def_property_readonly("warnings",
-                             [](const LaserPlaneCalibration& c) { return c.result.warnings; })
-      .def("summary", [](const LaserPlaneCalibration& c) { return c.result.Summary(); })
+          [](const LaserPlaneCalibration& c) { return c.result.offset_sigma_mm; },
+          LC_DOC(calib_LaserPlaneResult_offset_sigma_mm))
+      .def_property_readonly(
+          "rms_mm", [](const LaserPlaneCalibration& c) { return c.result.rms_mm; },
+          LC_DOC(calib_LaserPlaneResult_rms_mm))
+      .def_property_readonly(
+          "points", [](const LaserPlaneCalibration& c) { return c.result.points; },
+          LC_DOC(calib_LaserPlaneResult_points))
+      .def_property_readonly(
+          "converged", [](const LaserPlaneCalibration& c) { return c.result.converged; },
+          LC_DOC(calib_LaserPlaneResult_converged))
+      .def_property_readonly(
+          "warnings", [](const LaserPlaneCalibration& c) { return c.result.warnings; },
+          LC_DOC(calib_LaserPlaneResult_warnings))
+      .def(
+          "summary", [](const LaserPlaneCalibration& c) { return c.result.Summary(); },
+          LC_DOC(calib_LaserPlaneResult_Summary))
       .def(
           "refusal_reason", [](const LaserPlaneCalibration& c) { return c.result.RefusalReason(); },
           "Why this plane must not be written to a cell ('' when it may).")

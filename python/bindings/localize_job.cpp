@@ -7,7 +7,9 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "localize/job.hpp"
 #include "localize/job_run.hpp"
 #include "python/bindings/bindings.hpp"
@@ -29,17 +31,16 @@ localize::JobRunOptions RunOptions(int threads, bool load_meshes, const py::obje
 }
 
 void BindJob(py::module_& m) {
-  py::class_<Job>(m, "Job", "A job file: cell, camera, sweep source, target frame, parts.")
-      .def_static("load", &localize::ReadJobFile, py::arg("path"),
-                  "Reads a job file (format lasercell.job) and the part files it names; paths in "
-                  "it are resolved against its folder. OptionError names the file and field.")
-      .def_readonly("file", &Job::file)
-      .def_readonly("cell", &Job::cell, "cell.yaml, resolved.")
-      .def_readonly("camera", &Job::camera, ".cameramodel, resolved.")
-      .def_readonly("laser", &Job::laser, "Laser plane name in the cell.")
-      .def_readonly("profiles", &Job::profiles, "The .lcp profile file, resolved.")
-      .def_readonly("target_frame", &Job::target_frame)
-      .def_readonly("grasp_tolerance_mm", &Job::grasp_tolerance_mm)
+  py::class_<Job>(m, "Job", LC_DOC(localize_Job))
+      .def_static("load", &localize::ReadJobFile, py::arg("path"), LC_DOC(localize_ReadJobFile))
+      .def_readonly("file", &Job::file, LC_DOC(localize_Job_file))
+      .def_readonly("cell", &Job::cell, LC_DOC(localize_Job_cell))
+      .def_readonly("camera", &Job::camera, LC_DOC(localize_Job_camera))
+      .def_readonly("laser", &Job::laser, LC_DOC(localize_Job_laser))
+      .def_readonly("profiles", &Job::profiles, LC_DOC(localize_Job_profiles))
+      .def_readonly("target_frame", &Job::target_frame, LC_DOC(localize_Job_target_frame))
+      .def_readonly("grasp_tolerance_mm", &Job::grasp_tolerance_mm,
+                    LC_DOC(localize_Job_grasp_tolerance_mm))
       .def_property_readonly(
           "parts",
           [](const Job& job) {
@@ -57,9 +58,9 @@ void BindJob(py::module_& m) {
 }
 
 void BindInstance(py::module_& m) {
-  py::class_<PartInstance>(m, "PartInstance", "A found part and its grasps, in the target frame.")
-      .def_readonly("part", &PartInstance::part)
-      .def_readonly("frame", &PartInstance::frame, "'<part>_<k>', k from 1 in order found.")
+  py::class_<PartInstance>(m, "PartInstance", LC_DOC(localize_PartInstance))
+      .def_readonly("part", &PartInstance::part, LC_DOC(localize_PartInstance_part))
+      .def_readonly("frame", &PartInstance::frame, LC_DOC(localize_PartInstance_frame))
       .def_property_readonly(
           "target_from_part",
           [](const PartInstance& i) { return FromIsometry(i.target_from_part); }, "4x4, mm.")
@@ -67,7 +68,8 @@ void BindInstance(py::module_& m) {
           "covariance", [](const PartInstance& i) { return FromMatrix(i.covariance); },
           "6x6 over [rotation vector (rad); translation (mm)]: the calibrated edges on the path "
           "and the fit; meaningful when covariance_valid.")
-      .def_readonly("covariance_valid", &PartInstance::covariance_valid)
+      .def_readonly("covariance_valid", &PartInstance::covariance_valid,
+                    LC_DOC(localize_PartInstance_covariance_valid))
       .def_property_readonly(
           "grasps",
           [](const PartInstance& i) {
@@ -78,14 +80,15 @@ void BindInstance(py::module_& m) {
             return grasps;
           },
           "{grasp name: 4x4 target_from_grasp} (the handling robot's gripper_tcp target).")
-      .def_readonly("graspable", &PartInstance::graspable)
-      .def_readonly("not_graspable_reason", &PartInstance::not_graspable_reason)
-      .def_readonly("ambiguous", &PartInstance::ambiguous)
-      .def_readonly("candidate", &PartInstance::candidate, "Votes, support, ICP of the search.");
+      .def_readonly("graspable", &PartInstance::graspable, LC_DOC(localize_PartInstance_graspable))
+      .def_readonly("not_graspable_reason", &PartInstance::not_graspable_reason,
+                    LC_DOC(localize_PartInstance_not_graspable_reason))
+      .def_readonly("ambiguous", &PartInstance::ambiguous, LC_DOC(localize_PartInstance_ambiguous))
+      .def_readonly("candidate", &PartInstance::candidate, LC_DOC(localize_PartInstance_candidate));
 }
 
 void BindResult(py::module_& m) {
-  py::class_<JobResult, ResultPtr>(m, "JobResult", "What one run of a job found.")
+  py::class_<JobResult, ResultPtr>(m, "JobResult", LC_DOC(localize_JobResult))
       .def_property_readonly(
           "instances", [](const JobResult& r) { return r.parts.instances; },
           "Found instances (PartInstance), in the order found.")
@@ -98,8 +101,8 @@ void BindResult(py::module_& m) {
             return std::shared_ptr<triangulation::SweepResult>(r, &r->sweep);
           },
           "The sweep in the target frame (Sweep).")
-      .def_readonly("notes", &JobResult::notes)
-      .def("summary", &JobResult::Summary)
+      .def_readonly("notes", &JobResult::notes, LC_DOC(localize_JobResult_notes))
+      .def("summary", &JobResult::Summary, LC_DOC(localize_JobResult_Summary))
       .def(
           "to_dict", [](const JobResult& r) { return JsonToPython(localize::JobResultJson(r)); },
           "The result file (format lasercell.localization_job) as a dict, as `lasercell job "
@@ -115,10 +118,7 @@ void BindResult(py::module_& m) {
 }
 
 void BindRunner(py::module_& m) {
-  py::class_<localize::JobRunner>(
-      m, "JobRunner",
-      "A job loaded once (cell, camera, lookup tables, part models) and run on sweep after "
-      "sweep, as a cell does while profiles arrive.")
+  py::class_<localize::JobRunner>(m, "JobRunner", LC_DOC(localize_JobRunner))
       .def(py::init([](const Job& job, int threads, bool load_meshes, const py::object& progress) {
              const localize::JobRunOptions options = RunOptions(threads, load_meshes, progress);
              py::gil_scoped_release release;
@@ -134,7 +134,18 @@ void BindRunner(py::module_& m) {
             return std::make_shared<JobResult>(runner.Run(profiles, source_name));
           },
           py::arg("profiles"), py::arg("source_name") = "python",
-          "Localizes the job's parts in one sweep (a ProfileSet).");
+          "Localizes the job's parts in one sweep (a ProfileSet).")
+      .def_property_readonly(
+          "models",
+          [](const localize::JobRunner& runner) {
+            // Each shares the runner's models (read-only from Python: no setter is bound).
+            const auto all =
+                std::const_pointer_cast<std::vector<localize::PartModel>>(runner.shared_models());
+            std::vector<std::shared_ptr<localize::PartModel>> models;
+            for (localize::PartModel& model : *all) models.emplace_back(all, &model);
+            return models;
+          },
+          "The loaded part models (PartModel), in job order.");
 }
 
 }  // namespace

@@ -16,9 +16,12 @@ PYBIND11_MODULE(_lasercell, m) {
   lasercell::python::BindSpheres(m);
   lasercell::python::BindHandEye(m);
   lasercell::python::BindJoints(m);
+  lasercell::python::BindSections(m);
   lasercell::python::BindTriangulation(m);
+  lasercell::python::BindPeaks(m);
   lasercell::python::BindRegistration(m);
   lasercell::python::BindRegistrationStages(m);
   lasercell::python::BindMeshesAndParts(m);
+  lasercell::python::BindLocalizeParts(m);
   lasercell::python::BindLocalizeJob(m);
 }

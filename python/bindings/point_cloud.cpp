@@ -11,6 +11,7 @@
 #include <string>
 
 #include "core/io/point_cloud_io.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 
 namespace lasercell::python {
@@ -79,30 +80,33 @@ io::PlyEncoding Encoding(const std::string& name) {
 }
 
 void BindReadReport(py::module_& m) {
-  py::class_<io::ReadReport>(m, "ReadReport", "What a reader found in a file beyond the cloud.")
-      .def_readonly("format", &io::ReadReport::format, "e.g. 'ply binary_little_endian'")
-      .def_readonly("points_in_file", &io::ReadReport::points_in_file)
+  py::class_<io::ReadReport>(m, "ReadReport", LC_DOC(io_ReadReport))
+      .def_readonly("format", &io::ReadReport::format, LC_DOC(io_ReadReport_format))
+      .def_readonly("points_in_file", &io::ReadReport::points_in_file,
+                    LC_DOC(io_ReadReport_points_in_file))
       .def_readonly("dropped_non_finite", &io::ReadReport::dropped_non_finite,
-                    "Points dropped: NaN/inf position, NaN/inf or zero-length normal.")
-      .def_readonly("faces", &io::ReadReport::faces)
-      .def_readonly("dropped_faces", &io::ReadReport::dropped_faces)
-      .def_readonly("fields_in_file", &io::ReadReport::fields_in_file)
-      .def_readonly("ignored_fields", &io::ReadReport::ignored_fields)
-      .def_readonly("lasercell_format_version", &io::ReadReport::lasercell_format_version)
-      .def_readonly("unit_hint", &io::ReadReport::unit_hint,
-                    "Non-empty when the extent suggests metres.")
-      .def_readonly("notes", &io::ReadReport::notes);
+                    LC_DOC(io_ReadReport_dropped_non_finite))
+      .def_readonly("faces", &io::ReadReport::faces, LC_DOC(io_ReadReport_faces))
+      .def_readonly("dropped_faces", &io::ReadReport::dropped_faces,
+                    LC_DOC(io_ReadReport_dropped_faces))
+      .def_readonly("fields_in_file", &io::ReadReport::fields_in_file,
+                    LC_DOC(io_ReadReport_fields_in_file))
+      .def_readonly("ignored_fields", &io::ReadReport::ignored_fields,
+                    LC_DOC(io_ReadReport_ignored_fields))
+      .def_readonly("lasercell_format_version", &io::ReadReport::lasercell_format_version,
+                    LC_DOC(io_ReadReport_lasercell_format_version))
+      .def_readonly("unit_hint", &io::ReadReport::unit_hint, LC_DOC(io_ReadReport_unit_hint))
+      .def_readonly("notes", &io::ReadReport::notes, LC_DOC(io_ReadReport_notes));
 }
 
 }  // namespace
 
 void BindPointCloud(py::module_& m) {
   BindReadReport(m);
-  py::class_<PointCloud, CloudPtr>(m, "PointCloud", R"doc(
-A point cloud in millimetres: positions (N, 3) and optional per-point attributes.
+  py::class_<PointCloud, CloudPtr>(m, "PointCloud", LC_DOC(core_PointCloud) R"doc(
 
-Arrays are read-only views into lasercell's storage (no copy); absent attributes are None.
-Construct from arrays of any real dtype and memory order (they are copied).)doc")
+In Python: arrays are read-only views into lasercell's storage (no copy); absent attributes
+are None. Construct from arrays of any real dtype and memory order (they are copied).)doc")
       .def(py::init(&MakeCloud), py::arg("positions"), py::arg("normals") = py::none(),
            py::arg("intensity") = py::none(), py::arg("profile") = py::none(),
            py::arg("column") = py::none(), py::arg("timestamp_s") = py::none(),
@@ -113,7 +117,7 @@ positions: (N, 3), mm, finite. normals: (N, 3) unit vectors. intensity, timestam
 profile, column: (N,) integers, the grid cell of each point of an organized sweep, with
 grid=(rows, cols). Raises TypeError for a non-numeric array, lasercell.InputError for a wrong
 shape or a NaN/inf value, lasercell.UnitError when the extent (under 10) suggests metres.)doc")
-      .def("__len__", &PointCloud::size)
+      .def("__len__", &PointCloud::size, LC_DOC(core_PointCloud_size))
       .def_property_readonly(
           "positions",
           [](const py::object& self) {
@@ -153,8 +157,10 @@ shape or a NaN/inf value, lasercell.UnitError when the extent (under 10) suggest
             return py::make_tuple(c.grid_rows, c.grid_cols);
           },
           "(rows, cols) of an organized cloud, or None.")
-      .def_property_readonly("is_organized", &PointCloud::IsOrganized)
-      .def_property_readonly("field_names", &PointCloud::FieldNames)
+      .def_property_readonly("is_organized", &PointCloud::IsOrganized,
+                             LC_DOC(core_PointCloud_IsOrganized))
+      .def_property_readonly("field_names", &PointCloud::FieldNames,
+                             LC_DOC(core_PointCloud_FieldNames))
       .def(
           "transformed",
           [](const PointCloud& c, const py::handle& target_from_source) {

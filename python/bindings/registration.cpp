@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/error.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 #include "registration/localization_json.hpp"
 #include "registration/localize_in_cloud.hpp"
@@ -42,8 +43,8 @@ registration::LocalizeSettings Settings(const py::object& options) {
 }
 
 void BindModel(py::module_& m) {
-  py::class_<PpfModel, ModelPtr>(m, "PpfModel", R"doc(
-A PPF model (Drost et al. 2010): the subsampled oriented model points and their pair table.
+  py::class_<PpfModel, ModelPtr>(m, "PpfModel", LC_DOC(registration_PpfModel) R"doc(
+
 Build it once from a model cloud with normals (or load a .ppfm) and localize it in many scenes.
 Stored geometry is in the model's centred frame: p_model = model_from_centered @ p_centered.)doc")
       .def_static(
@@ -79,12 +80,18 @@ Stored geometry is in the model's centred frame: p_model = model_from_centered @
             model.Save(path);
           },
           py::arg("path"), "Writes a .ppfm atomically.")
-      .def_property_readonly("diameter_mm", &PpfModel::diameter_mm)
-      .def_property_readonly("sampling_step_mm", &PpfModel::sampling_step_mm)
-      .def_property_readonly("distance_step_mm", &PpfModel::distance_step_mm)
-      .def_property_readonly("angle_step_rad", &PpfModel::angle_step_rad)
-      .def_property_readonly("pair_count", &PpfModel::pair_count)
-      .def_property_readonly("key_count", &PpfModel::key_count)
+      .def_property_readonly("diameter_mm", &PpfModel::diameter_mm,
+                             LC_DOC(registration_PpfModel_diameter_mm))
+      .def_property_readonly("sampling_step_mm", &PpfModel::sampling_step_mm,
+                             LC_DOC(registration_PpfModel_sampling_step_mm))
+      .def_property_readonly("distance_step_mm", &PpfModel::distance_step_mm,
+                             LC_DOC(registration_PpfModel_distance_step_mm))
+      .def_property_readonly("angle_step_rad", &PpfModel::angle_step_rad,
+                             LC_DOC(registration_PpfModel_angle_step_rad))
+      .def_property_readonly("pair_count", &PpfModel::pair_count,
+                             LC_DOC(registration_PpfModel_pair_count))
+      .def_property_readonly("key_count", &PpfModel::key_count,
+                             LC_DOC(registration_PpfModel_key_count))
       .def_property_readonly(
           "points",
           [](const py::object& self) {
@@ -105,7 +112,8 @@ Stored geometry is in the model's centred frame: p_model = model_from_centered @
           "(R, 3) denser points for verification and ICP, centred frame, mm.")
       .def_property_readonly(
           "model_from_centered",
-          [](const PpfModel& model) { return FromIsometry(model.model_from_centered()); })
+          [](const PpfModel& model) { return FromIsometry(model.model_from_centered()); },
+          "4x4: " LC_DOC(registration_PpfModel_model_from_centered))
       .def_property_readonly(
           "principal_variances",
           [](const PpfModel& model) {
@@ -113,15 +121,16 @@ Stored geometry is in the model's centred frame: p_model = model_from_centered @
             return py::array_t<double>(3, v.data());
           },
           "(3,) variances of the sampled points along their principal axes, mm^2, descending.")
-      .def("summary", &PpfModel::Summary)
+      .def("summary", &PpfModel::Summary, LC_DOC(registration_PpfModel_Summary))
       .def("__repr__",
            [](const PpfModel& model) { return "<lasercell.PpfModel " + model.Summary() + ">"; });
 }
 
 void BindCandidate(py::module_& m) {
   py::class_<LocalizationCandidate>(m, "LocalizationCandidate",
-                                    "One pose of the model in the scene and the evidence for it.")
-      .def_readonly("rank", &LocalizationCandidate::rank, "1 = best; 0 for rejected candidates.")
+                                    LC_DOC(registration_LocalizationCandidate))
+      .def_readonly("rank", &LocalizationCandidate::rank,
+                    LC_DOC(registration_LocalizationCandidate_rank))
       .def_property_readonly(
           "scene_from_model",
           [](const LocalizationCandidate& c) { return FromIsometry(c.scene_from_model); },
@@ -134,22 +143,31 @@ void BindCandidate(py::module_& m) {
           "covariance", [](const LocalizationCandidate& c) { return FromMatrix(c.covariance); },
           "6x6 over [rotation vector (rad); translation (mm)], left perturbation in the scene "
           "frame; meaningful only when covariance_valid.")
-      .def_readonly("covariance_valid", &LocalizationCandidate::covariance_valid)
-      .def_readonly("votes", &LocalizationCandidate::votes)
-      .def_readonly("score", &LocalizationCandidate::score)
-      .def_readonly("cluster_members", &LocalizationCandidate::cluster_members)
+      .def_readonly("covariance_valid", &LocalizationCandidate::covariance_valid,
+                    LC_DOC(registration_LocalizationCandidate_covariance_valid))
+      .def_readonly("votes", &LocalizationCandidate::votes,
+                    LC_DOC(registration_LocalizationCandidate_votes))
+      .def_readonly("score", &LocalizationCandidate::score,
+                    LC_DOC(registration_LocalizationCandidate_score))
+      .def_readonly("cluster_members", &LocalizationCandidate::cluster_members,
+                    LC_DOC(registration_LocalizationCandidate_cluster_members))
       .def_property_readonly(
           "support", [](const LocalizationCandidate& c) { return c.verification.support; },
           "Fraction of the visible model cells with scene points nearby, after ICP.")
       .def_property_readonly(
           "coarse_support",
-          [](const LocalizationCandidate& c) { return c.coarse_verification.support; })
-      .def_readonly("icp_run", &LocalizationCandidate::icp_run)
-      .def_property_readonly("icp_rmse_mm",
-                             [](const LocalizationCandidate& c) { return c.icp.rmse_mm; })
-      .def_property_readonly("icp_iterations",
-                             [](const LocalizationCandidate& c) { return c.icp.iterations; })
-      .def_readonly("rejection_reason", &LocalizationCandidate::rejection_reason)
+          [](const LocalizationCandidate& c) { return c.coarse_verification.support; },
+          LC_DOC(registration_VerificationResult_support))
+      .def_readonly("icp_run", &LocalizationCandidate::icp_run,
+                    LC_DOC(registration_LocalizationCandidate_icp_run))
+      .def_property_readonly(
+          "icp_rmse_mm", [](const LocalizationCandidate& c) { return c.icp.rmse_mm; },
+          LC_DOC(registration_IcpResult_rmse_mm))
+      .def_property_readonly(
+          "icp_iterations", [](const LocalizationCandidate& c) { return c.icp.iterations; },
+          LC_DOC(registration_IcpResult_iterations))
+      .def_readonly("rejection_reason", &LocalizationCandidate::rejection_reason,
+                    LC_DOC(registration_LocalizationCandidate_rejection_reason))
       .def(
           "to_dict",
           [](const LocalizationCandidate& c) {
@@ -160,13 +178,19 @@ void BindCandidate(py::module_& m) {
 
 void BindResult(py::module_& m) {
   py::class_<LocalizationResult, ResultPtr>(m, "LocalizationResult",
-                                            "Everything localize_in_cloud found.")
-      .def_readonly("found", &LocalizationResult::found)
-      .def_readonly("candidates", &LocalizationResult::candidates, "Accepted, best first.")
-      .def_readonly("rejected", &LocalizationResult::rejected, "Examined and rejected.")
-      .def_readonly("ambiguous", &LocalizationResult::ambiguous)
-      .def_readonly("ambiguity_reason", &LocalizationResult::ambiguity_reason)
-      .def_readonly("message", &LocalizationResult::message, "Why nothing was found.")
+                                            LC_DOC(registration_LocalizationResult))
+      .def_readonly("found", &LocalizationResult::found,
+                    LC_DOC(registration_LocalizationResult_found))
+      .def_readonly("candidates", &LocalizationResult::candidates,
+                    LC_DOC(registration_LocalizationResult_candidates))
+      .def_readonly("rejected", &LocalizationResult::rejected,
+                    LC_DOC(registration_LocalizationResult_rejected))
+      .def_readonly("ambiguous", &LocalizationResult::ambiguous,
+                    LC_DOC(registration_LocalizationResult_ambiguous))
+      .def_readonly("ambiguity_reason", &LocalizationResult::ambiguity_reason,
+                    LC_DOC(registration_LocalizationResult_ambiguity_reason))
+      .def_readonly("message", &LocalizationResult::message,
+                    LC_DOC(registration_LocalizationResult_message))
       .def_property_readonly(
           "timings_ms",
           [](const LocalizationResult& r) {
@@ -179,7 +203,7 @@ void BindResult(py::module_& m) {
             return JsonToPython(registration::LocalizationCountsJson(r));
           },
           "Points per stage, pairs, votes, hypotheses, clusters.")
-      .def("summary", &LocalizationResult::Summary)
+      .def("summary", &LocalizationResult::Summary, LC_DOC(registration_LocalizationResult_Summary))
       .def(
           "to_dict",
           [](const LocalizationResult& r, const std::string& model, const std::string& scene,

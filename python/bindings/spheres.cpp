@@ -2,7 +2,8 @@
 // runs it (triangulation/half_sphere_profiles.hpp): the sphere sweep's profiles triangulated
 // through the calibrated camera and the cell's laser plane, the half spheres found and matched
 // to the pointing tool's touches, and the edge handling_base <- sensor with its covariance and
-// its response to the plane's error modes, ready to be written into the cell.
+// its response to the plane's error modes, ready to be written into the cell; or, as
+// `calibrate spheres --sweep`, from a cloud already in the sweep frame.
 #include <pybind11/stl.h>
 
 #include <memory>
@@ -12,7 +13,7 @@
 #include "calib/half_sphere_calibration.hpp"
 #include "calib/half_sphere_report.hpp"
 #include "core/io/file_util.hpp"
-#include "core/provenance.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 #include "triangulation/half_sphere_profiles.hpp"
 #include "triangulation/linear_sweep.hpp"
@@ -29,40 +30,46 @@ struct SpheresCalibration {
 };
 using SpheresPtr = std::shared_ptr<SpheresCalibration>;
 
-SpheresPtr Calibrate(const FrameGraph& cell, const calib::CameraModel& camera,
-                     const triangulation::ProfileSet& profiles, const std::string& touches_path,
+triangulation::SweepOptions Motion(const std::string& linear_record,
+                                   const py::object& velocity_mm_s,
+                                   std::optional<std::int64_t> t0_ns) {
+  if (!linear_record.empty()) return triangulation::ReadLinearSweepRecord(linear_record).Options();
+  if (velocity_mm_s.is_none()) {
+    ThrowInput(
+        "velocity_mm_s: give the linear sweep's velocity (sensor frame at t0, mm/s) or "
+        "linear_record");
+  }
+  triangulation::SweepOptions sweep;
+  sweep.motion = triangulation::SweepMotion::kLinear;
+  sweep.velocity_mm_s = ToVector3(velocity_mm_s, "velocity_mm_s");
+  if (t0_ns) sweep.t0_ns = *t0_ns;
+  return sweep;
+}
+
+SpheresPtr Calibrate(const FrameGraph& cell, const calib::CameraModel* camera,
+                     const triangulation::ProfileSet* profiles, const std::string& touches_path,
                      const std::string& linear_record, const py::object& velocity_mm_s,
                      std::optional<std::int64_t> t0_ns, const std::string& laser,
-                     const py::handle& up, double radius_mm) {
-  triangulation::SweepOptions sweep;
-  if (!linear_record.empty()) {
-    sweep = triangulation::ReadLinearSweepRecord(linear_record).Options();
-  } else {
-    if (velocity_mm_s.is_none()) {
-      ThrowInput(
-          "velocity_mm_s: give the linear sweep's velocity (sensor frame at t0, mm/s) or "
-          "linear_record");
-    }
-    sweep.motion = triangulation::SweepMotion::kLinear;
-    sweep.velocity_mm_s = ToVector3(velocity_mm_s, "velocity_mm_s");
-    if (t0_ns) sweep.t0_ns = *t0_ns;
-  }
+                     const py::handle& up, double radius_mm, const PointCloud* cloud,
+                     const std::string& sweep_frame) {
+  if (touches_path.empty()) ThrowInput("touches: give the touches file (touches.yaml)");
+  triangulation::SpheresSweep sweep;
+  sweep.cloud = cloud;
+  sweep.profiles = profiles;
+  sweep.camera = camera;
+  sweep.laser = laser;
+  if (profiles) sweep.motion = Motion(linear_record, velocity_mm_s, t0_ns);
   calib::HalfSphereSweepOptions options;
   options.up_in_handling_base = ToVector3(up, "up");
   options.radius_mm = radius_mm;
-  py::gil_scoped_release release;
-  const std::string touches_text = io::ReadFileBytes(touches_path);
-  const calib::SphereTouches touches = calib::ParseTouchesYaml(touches_text, touches_path);
   auto out = std::make_shared<SpheresCalibration>();
-  out->names = calib::HalfSphereInputNames{"cell", "profiles", touches_path, "sensor"};
-  calib::CheckHalfSphereEdgeFits(cell, "sensor", "cell");
-  out->run = triangulation::CalibrateHalfSpheresFromProfiles(cell, "cell", camera, profiles, sweep,
-                                                             laser, touches, options, out->names)
-                 .run;
-  InputDigest digest;
-  digest.Add(triangulation::EncodeProfiles(profiles));
-  digest.Add(touches_text);
-  out->edge = triangulation::HalfSphereCellEdge(out->run, cell, laser, out->names, digest.Text());
+  out->names =
+      calib::HalfSphereInputNames{"cell", cloud ? "cloud" : "profiles", touches_path, sweep_frame};
+  py::gil_scoped_release release;
+  triangulation::SpheresInCell run = triangulation::CalibrateSpheresInCell(
+      cell, sweep, io::ReadFileBytes(touches_path), options, out->names);
+  out->run = std::move(run.run);
+  out->edge = std::move(run.edge);
   return out;
 }
 
@@ -83,9 +90,12 @@ void BindSpheres(py::module_& m) {
           "sensor_modes_propagated",
           [](const SpheresCalibration& s) { return s.edge.sensor_response.has_value(); },
           "The edge carries its response to the laser plane's error modes.")
-      .def_property_readonly("warnings",
-                             [](const SpheresCalibration& s) { return s.run.calibration.warnings; })
-      .def("summary", [](const SpheresCalibration& s) { return s.run.calibration.Summary(); })
+      .def_property_readonly(
+          "warnings", [](const SpheresCalibration& s) { return s.run.calibration.warnings; },
+          LC_DOC(calib_HalfSphereCalibrationResult_warnings))
+      .def(
+          "summary", [](const SpheresCalibration& s) { return s.run.calibration.Summary(); },
+          LC_DOC(calib_HalfSphereCalibrationResult_Summary))
       .def(
           "to_dict",
           [](const SpheresCalibration& s) {
@@ -97,16 +107,19 @@ void BindSpheres(py::module_& m) {
           [](const SpheresCalibration& s, FrameGraph& cell) { cell.SetStaticEdge(s.edge); },
           py::arg("cell"), "Writes the edge handling_base <- sensor into cell (a FrameGraph).");
 
-  m.def("calibrate_spheres", &Calibrate, py::arg("cell"), py::arg("camera"), py::arg("profiles"),
-        py::arg("touches"), py::arg("linear_record") = "", py::arg("velocity_mm_s") = py::none(),
-        py::arg("t0_ns") = py::none(), py::arg("laser") = "laser",
-        py::arg("up") = std::vector<double>{0.0, 0.0, 1.0}, py::arg("radius_mm") = 0.0,
+  m.def("calibrate_spheres", &Calibrate, py::arg("cell"), py::arg("camera") = nullptr,
+        py::arg("profiles") = nullptr, py::arg("touches") = "", py::arg("linear_record") = "",
+        py::arg("velocity_mm_s") = py::none(), py::arg("t0_ns") = py::none(),
+        py::arg("laser") = "laser", py::arg("up") = std::vector<double>{0.0, 0.0, 1.0},
+        py::arg("radius_mm") = 0.0, py::arg("cloud") = nullptr, py::arg("sweep_frame") = "sensor",
         R"doc(Sensor -> handling-robot base from half spheres (Skotheim et al. 2012, sec. III).
 
-cell: a FrameGraph with the calibrated laser plane `laser`; profiles: the sphere sweep
-(ProfileSet), a linear sweep given by linear_record (records/linear_sweep.yaml) or by
-velocity_mm_s and t0_ns; touches: the pointing tool's touches file (touches.yaml). As
-`calibrate spheres --profiles`. FileError naming the sweep when no sphere is found.)doc");
+The sphere sweep is either profiles (a ProfileSet) triangulated through camera and the cell's
+calibrated laser plane `laser` (a linear sweep given by linear_record, records/linear_sweep.yaml,
+or by velocity_mm_s and t0_ns; the edge then keeps its response to the plane's error modes),
+or cloud, a PointCloud already in sweep_frame (mm). touches: the pointing tool's touches file
+(touches.yaml). As `calibrate spheres --profiles` / `--sweep`. InputError unless exactly one of
+profiles and cloud is given; FileError naming the sweep when no sphere is found.)doc");
 }
 
 }  // namespace lasercell::python

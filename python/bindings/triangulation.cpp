@@ -11,6 +11,7 @@
 
 #include "calib/camera_model.hpp"
 #include "core/frame_graph.hpp"
+#include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
 #include "triangulation/linear_sweep.hpp"
 #include "triangulation/profile_io.hpp"
@@ -124,10 +125,7 @@ ProfilesPtr MakeProfiles(const py::handle& row_px, const py::object& intensity,
 }
 
 void BindProfiles(py::module_& m) {
-  py::class_<ProfileSet, ProfilesPtr>(m, "ProfileSet", R"doc(
-The profiles of a .lcp file: one subpixel peak row (or NaN) per image column per exposure.
-The per-profile arrays are copies: row_px, intensity, width_px are (P, C) float32; sequence is
-(P,) uint64, timestamp_ns (P,) int64 (sensor clock), joints_rad (P, J) float64.)doc")
+  py::class_<ProfileSet, ProfilesPtr>(m, "ProfileSet", LC_DOC(triangulation_ProfileSet))
       .def(py::init(&MakeProfiles), py::arg("row_px"), py::arg("intensity") = py::none(),
            py::arg("width_px") = py::none(), py::arg("timestamp_ns") = py::none(),
            py::arg("sequence") = py::none(), py::arg("joints_rad") = py::none(),
@@ -139,51 +137,66 @@ timestamp_ns and sequence (P,) (default 0 and 0..P-1); joints_rad (P, J). The co
 columns first_column .. first_column + C - 1. InputError naming the field when they disagree
 with the header.)doc")
       .def("__len__", [](const ProfileSet& s) { return s.profiles.size(); })
-      .def_property_readonly("image_width",
-                             [](const ProfileSet& s) { return s.header.image_width; })
-      .def_property_readonly("image_height",
-                             [](const ProfileSet& s) { return s.header.image_height; })
-      .def_property_readonly("first_column",
-                             [](const ProfileSet& s) { return s.header.first_column; })
-      .def_property_readonly("columns", [](const ProfileSet& s) { return s.header.columns; })
-      .def_property_readonly("robot", [](const ProfileSet& s) { return s.header.robot; })
-      .def_property_readonly("metadata", [](const ProfileSet& s) { return s.header.metadata; })
-      .def_property_readonly("sequence",
-                             [](const ProfileSet& s) {
-                               return Stack<std::uint64_t>(
-                                   s, 0, false,
-                                   [](const auto& p, auto* out) { *out = p.sequence; });
-                             })
-      .def_property_readonly("timestamp_ns",
-                             [](const ProfileSet& s) {
-                               return Stack<std::int64_t>(
-                                   s, 0, false,
-                                   [](const auto& p, auto* out) { *out = p.timestamp_ns; });
-                             })
-      .def_property_readonly("joints_rad",
-                             [](const ProfileSet& s) {
-                               return Stack<double>(
-                                   s, s.header.joint_count, true,
-                                   [](const auto& p, auto* out) { CopyRow(p.joints_rad, out); });
-                             })
-      .def_property_readonly("row_px",
-                             [](const ProfileSet& s) {
-                               return Stack<float>(
-                                   s, s.header.columns, true,
-                                   [](const auto& p, auto* out) { CopyRow(p.row_px, out); });
-                             })
-      .def_property_readonly("intensity",
-                             [](const ProfileSet& s) {
-                               return Stack<float>(
-                                   s, s.header.columns, true,
-                                   [](const auto& p, auto* out) { CopyRow(p.intensity, out); });
-                             })
-      .def_property_readonly("width_px",
-                             [](const ProfileSet& s) {
-                               return Stack<float>(
-                                   s, s.header.columns, true,
-                                   [](const auto& p, auto* out) { CopyRow(p.width_px, out); });
-                             })
+      .def_property_readonly(
+          "image_width", [](const ProfileSet& s) { return s.header.image_width; },
+          LC_DOC(triangulation_ProfileHeader_image_width))
+      .def_property_readonly(
+          "image_height", [](const ProfileSet& s) { return s.header.image_height; },
+          LC_DOC(triangulation_ProfileHeader_image_height))
+      .def_property_readonly(
+          "first_column", [](const ProfileSet& s) { return s.header.first_column; },
+          LC_DOC(triangulation_ProfileHeader_first_column))
+      .def_property_readonly(
+          "columns", [](const ProfileSet& s) { return s.header.columns; },
+          LC_DOC(triangulation_ProfileHeader_columns))
+      .def_property_readonly(
+          "robot", [](const ProfileSet& s) { return s.header.robot; },
+          LC_DOC(triangulation_ProfileHeader_robot))
+      .def_property_readonly(
+          "metadata", [](const ProfileSet& s) { return s.header.metadata; },
+          LC_DOC(triangulation_ProfileHeader_metadata))
+      .def_property_readonly(
+          "sequence",
+          [](const ProfileSet& s) {
+            return Stack<std::uint64_t>(s, 0, false,
+                                        [](const auto& p, auto* out) { *out = p.sequence; });
+          },
+          "(P,): " LC_DOC(triangulation_Profile_sequence))
+      .def_property_readonly(
+          "timestamp_ns",
+          [](const ProfileSet& s) {
+            return Stack<std::int64_t>(s, 0, false,
+                                       [](const auto& p, auto* out) { *out = p.timestamp_ns; });
+          },
+          "(P,): " LC_DOC(triangulation_Profile_timestamp_ns))
+      .def_property_readonly(
+          "joints_rad",
+          [](const ProfileSet& s) {
+            return Stack<double>(s, s.header.joint_count, true,
+                                 [](const auto& p, auto* out) { CopyRow(p.joints_rad, out); });
+          },
+          "(P, J), one row per profile: " LC_DOC(triangulation_Profile_joints_rad))
+      .def_property_readonly(
+          "row_px",
+          [](const ProfileSet& s) {
+            return Stack<float>(s, s.header.columns, true,
+                                [](const auto& p, auto* out) { CopyRow(p.row_px, out); });
+          },
+          "(P, C), one row per profile: " LC_DOC(triangulation_Profile_row_px))
+      .def_property_readonly(
+          "intensity",
+          [](const ProfileSet& s) {
+            return Stack<float>(s, s.header.columns, true,
+                                [](const auto& p, auto* out) { CopyRow(p.intensity, out); });
+          },
+          "(P, C), one row per profile: " LC_DOC(triangulation_Profile_intensity))
+      .def_property_readonly(
+          "width_px",
+          [](const ProfileSet& s) {
+            return Stack<float>(s, s.header.columns, true,
+                                [](const auto& p, auto* out) { CopyRow(p.width_px, out); });
+          },
+          "(P, C), one row per profile: " LC_DOC(triangulation_Profile_width_px))
       .def("__repr__", [](const ProfileSet& s) {
         return "<lasercell.ProfileSet " + std::to_string(s.profiles.size()) + " profiles x " +
                std::to_string(s.header.columns) + " columns>";
@@ -215,9 +228,10 @@ void BindSweep(py::module_& m) {
             return std::shared_ptr<PointCloud>(s, &s->cloud);
           },
           "The points (organized: grid = (profiles, columns)), mm, in `frame`.")
-      .def_readonly("frame", &SweepResult::frame, "'sensor' or the target frame.")
-      .def_readonly("profiles", &SweepResult::profiles)
-      .def_readonly("sequence_gaps", &SweepResult::sequence_gaps)
+      .def_readonly("frame", &SweepResult::frame, LC_DOC(triangulation_SweepResult_frame))
+      .def_readonly("profiles", &SweepResult::profiles, LC_DOC(triangulation_SweepResult_profiles))
+      .def_readonly("sequence_gaps", &SweepResult::sequence_gaps,
+                    LC_DOC(triangulation_SweepResult_sequence_gaps))
       .def_property_readonly(
           "counts",
           [](const SweepResult& s) {
@@ -246,7 +260,7 @@ void BindSweep(py::module_& m) {
             return out;
           },
           "(P, 4, 4): the sensor pose of each profile in the sweep frame.")
-      .def("summary", &SweepResult::Summary)
+      .def("summary", &SweepResult::Summary, LC_DOC(triangulation_SweepResult_Summary))
       .def("__repr__",
            [](const SweepResult& s) { return "<lasercell.Sweep " + s.Summary() + ">"; });
 }

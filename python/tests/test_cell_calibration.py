@@ -92,6 +92,36 @@ def test_the_spheres_edge_is_the_clis_and_near_the_truth(laser, camera, cell_sim
     assert np.linalg.norm(result.handling_base_from_sensor[:3, 3] - truth) < 1.0
 
 
+def test_the_spheres_from_a_cloud_are_the_clis(cli, camera, cell_sim, cli_cell, tmp_path):
+    """The sweep triangulated first (scan_profiles through the cell's plane), then the spheres
+    fitted in that cloud, as `calibrate spheres --sweep` does with the cloud's file."""
+    profiles = lasercell.read_profiles(str(cell_sim / "profiles/spheres.lcp"))
+    sweep = lasercell.scan_profiles(profiles, camera, cell=cli_cell["laser_only"],
+                                    motion="linear",
+                                    linear_record=str(cell_sim / "records/linear_sweep.yaml"))
+    cloud_path = str(tmp_path / "spheres.ply")
+    lasercell.write_point_cloud(cloud_path, sweep.cloud)
+    cloud = lasercell.read_point_cloud(cloud_path)
+    touches = str(cell_sim / "records/touches.yaml")
+    result = lasercell.calibrate_spheres(cli_cell["laser_only"], cloud=cloud, touches=touches)
+    assert not result.sensor_modes_propagated  # a cloud carries no error modes
+    cell_path = str(tmp_path / "cell.yaml")
+    cli_cell["laser_only"].save(cell_path)
+    cli("calibrate", "spheres", "--cell", cell_path, "--sweep", cloud_path, "--touches", touches)
+    theirs = lasercell.FrameGraph.load(cell_path).transform("handling_base", "sensor")
+    np.testing.assert_allclose(result.handling_base_from_sensor, theirs, atol=1e-9)
+    # The same points as the profile variant: the same edge up to the cloud file's rounding.
+    np.testing.assert_allclose(result.handling_base_from_sensor[:3, 3],
+                               cli_cell["cell"].transform("handling_base", "sensor")[:3, 3],
+                               atol=0.01)
+    with pytest.raises(lasercell.InputError, match="one of them"):
+        lasercell.calibrate_spheres(cli_cell["laser_only"], camera, profiles, touches,
+                                    linear_record=str(cell_sim / "records/linear_sweep.yaml"),
+                                    cloud=cloud)
+    with pytest.raises(lasercell.InputError, match="touches"):
+        lasercell.calibrate_spheres(cli_cell["laser_only"], cloud=cloud)
+
+
 def test_bad_input(camera, cell_sim, laser, tmp_path):
     with pytest.raises(lasercell.InputError):  # one height per file
         lasercell.calibrate_laser_plane_from_heights(camera, str(cell_sim), [150.0, 250.0])

@@ -86,3 +86,59 @@ def test_a_non_rigid_matrix_is_refused():
         cloud.transformed(shear)
     with pytest.raises(lasercell.InputError, match="4x4"):
         cloud.transformed(np.eye(3))
+
+
+def dh_standard(a, alpha, d, theta):
+    """Denavit-Hartenberg (standard): A = Rz(theta) Tz(d) Tx(a) Rx(alpha)."""
+    ct, st, ca, sa = np.cos(theta), np.sin(theta), np.cos(alpha), np.sin(alpha)
+    return np.array([[ct, -st * ca, st * sa, a * ct], [st, ct * ca, -ct * sa, a * st],
+                     [0, sa, ca, d], [0, 0, 0, 1]])
+
+
+def test_a_dh_robot_from_python_moves_as_its_table_says(tmp_path, demo_cell):
+    dh = np.array([[0.0, np.pi / 2, 89.2, 0.0], [-425.0, 0.0, 0.0, 0.0],
+                   [-392.0, 0.0, 0.0, 0.0], [0.0, np.pi / 2, 109.3, 0.0],
+                   [0.0, -np.pi / 2, 94.75, 0.0], [0.0, 0.0, 82.5, 0.0]])
+    mount = np.eye(4)
+    mount[:3, 3] = [10.0, -5.0, 400.0]
+    cell = lasercell.FrameGraph()
+    cell.set_dh_robot("arm", "arm_base", "arm_flange", dh, base_from_chain=mount)
+    expected = mount.copy()
+    for row, q in zip(dh, JOINTS):
+        expected = expected @ dh_standard(row[0], row[1], row[2], row[3] + q)
+    got = cell.transform("arm_base", "arm_flange", joints={"arm": JOINTS})
+    np.testing.assert_allclose(got, expected, atol=1e-9)
+    path = str(tmp_path / "cell.yaml")
+    cell.save(path)
+    back = lasercell.FrameGraph.load(path)
+    table = back.robot_dh("arm")
+    assert table["convention"] == "standard"
+    np.testing.assert_allclose(table["dh"][:, :4], dh, atol=1e-12)
+    np.testing.assert_allclose(table["base_from_chain"], mount, atol=1e-12)
+    np.testing.assert_allclose(back.transform("arm_base", "arm_flange", joints={"arm": JOINTS}),
+                               expected, atol=1e-9)
+    # The demo cell's robot copied through its table moves the same.
+    demo = lasercell.FrameGraph.load(demo_cell)
+    table = demo.robot_dh("vision_robot")
+    copy = lasercell.FrameGraph()
+    copy.set_dh_robot("vision_robot", "vision_base", "vision_flange", table["dh"],
+                      table["convention"], table["base_from_chain"], table["chain_from_flange"])
+    joints = {"vision_robot": JOINTS}
+    np.testing.assert_allclose(copy.transform("vision_base", "vision_flange", joints=joints),
+                               demo.transform("vision_base", "vision_flange", joints=joints),
+                               atol=1e-9)
+
+
+def test_bad_robots_are_refused(demo_cell):
+    cell = lasercell.FrameGraph.load(demo_cell)
+    with pytest.raises(lasercell.InputError, match="dh"):
+        cell.set_dh_robot("arm", "a_base", "a_flange", np.zeros((3, 3)))
+    with pytest.raises(lasercell.InputError, match="convention"):
+        cell.set_dh_robot("arm", "a_base", "a_flange", np.zeros((3, 4)), convention="craig")
+    with pytest.raises(lasercell.InputError, match="dh"):
+        cell.set_dh_robot("arm", "a_base", "a_flange", np.full((3, 4), np.nan))
+    with pytest.raises(lasercell.InputError):  # vision_base and camera are already joined
+        cell.set_dh_robot("arm", "vision_base", "camera", np.zeros((3, 4)))
+    assert cell.robots == ["vision_robot"]  # unchanged by the refused calls
+    with pytest.raises(lasercell.InputError, match="nobody"):
+        cell.robot_dh("nobody")

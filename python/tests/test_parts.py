@@ -70,3 +70,82 @@ def test_small_clusters_are_removed():
     assert labels[0] != labels[400]
     with pytest.raises(lasercell.OptionError, match="radius_mm"):
         lasercell.remove_small_clusters(cloud, radius_mm=-1.0)
+
+
+def cube(half=10.0):
+    """An axis-aligned cube, 8 corners and 12 triangles wound counter-clockwise from outside."""
+    corners = np.array([[x, y, z] for x in (-half, half) for y in (-half, half)
+                        for z in (-half, half)])
+    faces = []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            on = [i for i, c in enumerate(corners) if c[axis] * sign > 0]
+            a, b = [(axis + 1) % 3, (axis + 2) % 3]
+            centre = corners[on].mean(axis=0)
+            ring = sorted(on, key=lambda i: np.arctan2(corners[i][b] - centre[b],
+                                                       corners[i][a] - centre[a]))
+            if sign < 0:
+                ring = ring[::-1]
+            faces += [[ring[0], ring[1], ring[2]], [ring[0], ring[2], ring[3]]]
+    return corners, np.array(faces)
+
+
+def test_a_mesh_from_arrays_writes_and_reads_back(tmp_path):
+    corners, faces = cube()
+    mesh = lasercell.TriangleMesh(corners, faces)
+    for name in ("cube.stl", "cube.ply"):
+        lasercell.write_mesh(str(tmp_path / name), mesh)
+        back = lasercell.read_mesh(str(tmp_path / name))
+        triangles = np.sort(back.vertices.positions[back.faces].reshape(-1, 3), axis=0)
+        np.testing.assert_array_equal(triangles,
+                                      np.sort(corners[faces].reshape(-1, 3), axis=0))
+    with pytest.raises(lasercell.FileError, match="cube.obj"):
+        lasercell.write_mesh(str(tmp_path / "cube.obj"), mesh)
+    with pytest.raises(lasercell.InputError, match="faces: row 0 names vertex 8"):
+        lasercell.TriangleMesh(corners, np.array([[0, 1, 8]]))
+    with pytest.raises(lasercell.InputError, match="faces"):
+        lasercell.TriangleMesh(corners, np.array([0, 1, 2]))
+    with pytest.raises(TypeError, match="integer"):
+        lasercell.TriangleMesh(corners, faces.astype(float))
+
+
+def test_vertex_normals_are_the_area_weighted_face_normals():
+    corners, faces = cube()
+    extra = np.vstack([corners, [[0.0, 0.0, 100.0]]])  # a vertex no face uses
+    mesh = lasercell.TriangleMesh(extra, faces)
+    # NumPy: sum of the face normals (cross product = 2 x area x unit normal) per vertex.
+    cross = np.cross(extra[faces[:, 1]] - extra[faces[:, 0]], extra[faces[:, 2]] - extra[faces[:, 0]])
+    summed = np.zeros_like(extra)
+    for k in range(3):
+        np.add.at(summed, faces[:, k], cross)
+    expected = summed[:8] / np.linalg.norm(summed[:8], axis=1, keepdims=True)
+    normals = lasercell.mesh_vertex_normals(mesh)
+    np.testing.assert_allclose(normals[:8], expected, atol=1e-12)
+    assert np.all(np.sum(normals[:8] * corners, axis=1) > 0)  # outward
+    np.testing.assert_array_equal(normals[8], 0.0)
+    cloud, dropped = lasercell.with_mesh_normals(mesh)
+    assert dropped == 1 and len(cloud) == 8
+    np.testing.assert_allclose(cloud.normals, expected, atol=1e-12)
+
+
+def test_a_part_file_written_from_python_reads_back(pallet, tmp_path):
+    part = lasercell.Part.load(str(pallet / "armrest.part.yaml"))
+    grip = np.eye(4)
+    grip[:3, 3] = [5.0, -2.0, 12.5]
+    grip[:3, :3] = [[0, -1, 0], [1, 0, 0], [0, 0, 1]]
+    part.set_grasp("side_grip", grip, "fingers on the side")
+    path = tmp_path / "armrest.part.yaml"
+    (tmp_path / "armrest.step").write_bytes((pallet / "armrest.step").read_bytes())
+    part.save(str(path))
+    back = lasercell.Part.load(str(path))
+    assert set(back.grasps) == {"post_hole", "side_grip"}
+    np.testing.assert_allclose(back.grasps["side_grip"], grip, atol=1e-12)
+    np.testing.assert_allclose(back.grasps["post_hole"], part.grasps["post_hole"], atol=1e-12)
+    assert back.to_yaml() == part.to_yaml()
+    again = lasercell.Part.from_yaml(path.read_text(), str(path))
+    assert again.to_yaml() == part.to_yaml()
+    with pytest.raises(lasercell.InputError, match="Bad Name"):
+        part.set_grasp("Bad Name", grip)
+    assert set(part.grasps) == {"post_hole", "side_grip"}  # unchanged by the refused call
+    with pytest.raises(lasercell.InputError, match="part_from_grasp"):
+        part.set_grasp("skewed", np.diag([2.0, 1.0, 1.0, 1.0]))
