@@ -137,8 +137,10 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene, const py::list& parts
                                   const py::object& progress) {
   localize::LocalizePartsOptions o;
   if (!roi.is_none()) {
-    const py::tuple box = roi.cast<py::tuple>();
-    if (box.size() != 2) ThrowInput("roi: expected (min_xyz, max_xyz) in mm");
+    if (!py::isinstance<py::sequence>(roi) || py::len(roi) != 2) {
+      ThrowInput("roi: expected (min_xyz, max_xyz) in mm");
+    }
+    const py::sequence box = roi.cast<py::sequence>();
     o.use_roi = true;
     o.roi = BoundingBox{ToVector3(box[0], "roi[0]"), ToVector3(box[1], "roi[1]")};
   }

@@ -34,6 +34,13 @@ def test_the_poses_are_the_jobs(job_run):
     assert seat.covariance_valid
     np.testing.assert_allclose(seat.covariance, theirs.covariance, rtol=1e-9, atol=1e-15)
     assert mine.sweep_points == len(sweep.cloud) and mine.searches[0].found == 1
+    # An ROI around the seat (a list or a tuple) keeps the same pose and fewer points.
+    centre = seat.target_from_part[:3, 3]
+    boxed = lasercell.localize_parts(sweep.cloud, [runner.models[0]],
+                                     line_of_sight=lasercell.lines_of_sight(sweep), threads=1,
+                                     roi=[centre - 400.0, centre + 400.0])
+    assert boxed.roi_points < boxed.sweep_points and boxed.all_found
+    np.testing.assert_allclose(boxed.instances[0].target_from_part[:3, 3], centre, atol=0.5)
     assert stages and stages[-1].startswith("seat")
 
 
