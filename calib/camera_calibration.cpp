@@ -13,7 +13,8 @@ namespace lasercell::calib {
 
 CalibrationImages DetectCalibrationImages(const std::vector<std::string>& paths,
                                           const BoardSpec& board,
-                                          const std::function<void(const std::string&)>& log) {
+                                          const std::function<void(const std::string&)>& log,
+                                          const ProgressCallback& progress) {
   CalibrationImages out;
   for (const std::string& path : paths) {
     CalibrationImage e;
@@ -27,6 +28,7 @@ CalibrationImages DetectCalibrationImages(const std::vector<std::string>& paths,
     if (!e.detection.found()) e.rejection = e.detection.message;
     if (log) log(path + ": " + e.detection.message);
     out.images.push_back(std::move(e));
+    ReportProgress(progress, "detect", static_cast<double>(out.images.size()) / paths.size());
   }
   for (const CalibrationImage& e : out.images) {
     if (e.detection.found()) {

@@ -13,6 +13,7 @@
 #include "calib/board.hpp"
 #include "calib/intrinsics.hpp"
 #include "calib/target_detection.hpp"
+#include "core/progress.hpp"
 
 namespace lasercell::calib {
 
@@ -32,10 +33,12 @@ struct CalibrationImages {
 };
 
 /// Detects `board` in every file. An unreadable file is kept as kUnreadable with the reason;
-/// `log` (optional) receives "path: message" per image.
+/// `log` (optional) receives "path: message" per image, `progress` ("detect", fraction) after
+/// each image.
 CalibrationImages DetectCalibrationImages(const std::vector<std::string>& paths,
                                           const BoardSpec& board,
-                                          const std::function<void(const std::string&)>& log);
+                                          const std::function<void(const std::string&)>& log,
+                                          const ProgressCallback& progress = {});
 
 /// Throws InputError when fewer than `min_views` views are usable; the message names the glob
 /// `images`, the board and the first three rejections.

@@ -91,7 +91,8 @@ RobotPoses LoadHandEyePoses(const HandEyePoseSource& source, const FrameGraph& g
 
 ChessboardDetections DetectHandEyeImages(const std::vector<std::string>& files,
                                          const BoardSpec& board, const RobotPoses& poses,
-                                         const std::string& poses_path, const HandEyeLog& log) {
+                                         const std::string& poses_path, const HandEyeLog& log,
+                                         const ProgressCallback& progress) {
   if (files.size() != poses.base_from_flange.size()) {
     throw InputError("--images matches " + std::to_string(files.size()) + " images but --poses " +
                      poses_path + " has " + std::to_string(poses.base_from_flange.size()) +
@@ -108,6 +109,7 @@ ChessboardDetections DetectHandEyeImages(const std::vector<std::string>& files,
     det.images.push_back(fs::path(f).filename().string());
     det.corners_px.push_back(d.found() ? d.corners_px : std::vector<Eigen::Vector2d>{});
     if (!d.found()) Log(log, f + ": " + d.message);
+    ReportProgress(progress, "detect", static_cast<double>(det.images.size()) / files.size());
   }
   return det;
 }
@@ -319,7 +321,7 @@ HandEyeSession CalibrateHandEyeFromFiles(const HandEyeInputs& inputs, const Fram
   } else {
     if (inputs.board.empty()) throw OptionError("hand-eye inputs: images need a board spec");
     detections = DetectHandEyeImages(inputs.images, ParseHandEyeBoard(inputs.board), poses,
-                                     inputs.poses.path, log);
+                                     inputs.poses.path, log, inputs.progress);
   }
   HandEyeSession session;
   session.views = MatchHandEyeViews(detections, poses, camera, inputs.corners, inputs.poses.path,
@@ -332,6 +334,7 @@ HandEyeSession CalibrateHandEyeFromFiles(const HandEyeInputs& inputs, const Fram
       inputs.camera, inputs.poses.path, inputs.poses.flange_frame, inputs.poses.camera_frame,
       method,        inputs.tool,       UtcTimestampIso()};
   session.edge = HandEyeEdge(session.result, session.views, session.run);
+  ReportProgress(inputs.progress, "solve", 1.0);
   return session;
 }
 

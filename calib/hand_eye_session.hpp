@@ -17,6 +17,7 @@
 #include "calib/pose_io.hpp"
 #include "core/frame_graph.hpp"
 #include "core/html_report.hpp"
+#include "core/progress.hpp"
 
 namespace lasercell::calib {
 
@@ -52,7 +53,8 @@ RobotPoses LoadHandEyePoses(const HandEyePoseSource& source, const FrameGraph& g
 /// empty corner list (and a `log` line).
 ChessboardDetections DetectHandEyeImages(const std::vector<std::string>& files,
                                          const BoardSpec& board, const RobotPoses& poses,
-                                         const std::string& poses_path, const HandEyeLog& log);
+                                         const std::string& poses_path, const HandEyeLog& log,
+                                         const ProgressCallback& progress = {});
 
 /// Reads committed corner detections; `board_spec` (optional) must match their board.
 ChessboardDetections LoadHandEyeCorners(const std::string& path, const std::string& board_spec);
@@ -102,7 +104,8 @@ struct HandEyeInputs {
   HandEyePoseSource poses;
   std::string method = "park-martin";  ///< Closed form that starts the refinement.
   int threads = 1;                     ///< Ceres threads.
-  std::string tool;  ///< Provenance of the edge, e.g. "lasercell calibrate handeye 0.1.0".
+  std::string tool;           ///< Provenance of the edge, e.g. "lasercell calibrate handeye 0.1.0".
+  ProgressCallback progress;  ///< ("detect", fraction) after each image, ("solve", 1) at the end.
 };
 
 /// A hand-eye calibration and what the cell and the result files need of it.

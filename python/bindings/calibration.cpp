@@ -90,14 +90,16 @@ void BindDetections(py::module_& m) {
           "[(path, found, detector, message)] per image file.");
   m.def(
       "detect_boards",
-      [](const std::vector<std::string>& paths, const BoardSpec& board) {
+      [](const std::vector<std::string>& paths, const BoardSpec& board,
+         const py::object& progress) {
+        const ProgressCallback report = ToProgress(progress);
         py::gil_scoped_release release;
         return std::make_shared<CalibrationImages>(
-            calib::DetectCalibrationImages(paths, board, nullptr));
+            calib::DetectCalibrationImages(paths, board, nullptr, report));
       },
-      py::arg("paths"), py::arg("board"),
-      "Detects the board in every image file (OpenCV's detectors, the full cascade); an "
-      "unreadable file is reported in .images, not raised.");
+      py::arg("paths"), py::arg("board"), py::arg("progress") = py::none(),
+      LC_DOC(calib_DetectCalibrationImages) " In Python: unreadable files are reported in "
+      ".images, not raised; progress(stage, fraction) may raise to stop.");
 }
 
 void BindResult(py::module_& m) {

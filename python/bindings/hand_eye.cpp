@@ -23,7 +23,7 @@ SessionPtr Calibrate(const std::string& camera, const std::string& poses,
                      const std::string& board, const std::string& pose_format,
                      const std::string& method, const std::string& flange_frame,
                      const std::string& camera_frame, const std::string& robot,
-                     const FrameGraph* cell, int threads) {
+                     const FrameGraph* cell, int threads, const py::object& progress) {
   calib::HandEyeInputs inputs;
   inputs.camera = camera;
   inputs.images = images;
@@ -37,6 +37,7 @@ SessionPtr Calibrate(const std::string& camera, const std::string& poses,
   inputs.method = method;
   inputs.threads = threads;
   inputs.tool = std::string("lasercell python ") + LASERCELL_VERSION;
+  inputs.progress = ToProgress(progress);
   const FrameGraph empty;
   py::gil_scoped_release release;
   return std::make_shared<calib::HandEyeSession>(
@@ -80,13 +81,15 @@ void BindHandEye(py::module_& m) {
         py::arg("board") = "", py::arg("pose_format") = "auto", py::arg("method") = "park-martin",
         py::arg("flange_frame") = "vision_flange", py::arg("camera_frame") = "sensor",
         py::arg("robot") = "", py::arg("cell") = nullptr, py::arg("threads") = 1,
+        py::arg("progress") = py::none(),
         R"doc(Eye-in-hand: the camera on the robot flange from views of a fixed chessboard.
 
 camera: .cameramodel path; poses: the robot's base_from_flange per view (pose_format auto, kuka
 (4x4, metres), yaml (mm), xyzwpr (Fanuc, deg), xyzabc (KUKA, deg) or record: joints through
 cell); images in pose order with board ('chessboard:COLSxROWS:SQUARE_MM'), or corners (a
 corners file). method: the closed form that starts the refinement (tsai-lenz, park-martin,
-daniilidis). As `calibrate handeye`; the same errors, naming the file.)doc");
+daniilidis). progress(stage, fraction): "detect" after each image, "solve" at the end; raising
+in it stops the call. As `calibrate handeye`; the same errors, naming the file.)doc");
 }
 
 }  // namespace lasercell::python

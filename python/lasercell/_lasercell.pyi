@@ -386,7 +386,8 @@ class BoardDetections:
     @property
     def images(self) -> list[Tuple[str, bool, str, str]]: ...
 
-def detect_boards(paths: Sequence[str], board: Board) -> BoardDetections: ...
+def detect_boards(paths: Sequence[str], board: Board,
+                  progress: Progress = None) -> BoardDetections: ...
 
 class IntrinsicsResult:
     @property
@@ -533,7 +534,7 @@ def calibrate_handeye(camera: str, poses: str, images: Sequence[str] = ..., corn
                       board: str = "", pose_format: str = "auto", method: str = "park-martin",
                       flange_frame: str = "vision_flange", camera_frame: str = "sensor",
                       robot: str = "", cell: Optional[FrameGraph] = None,
-                      threads: int = 1) -> HandEyeResult: ...
+                      threads: int = 1, progress: Progress = None) -> HandEyeResult: ...
 
 class JointsResult:
     @property

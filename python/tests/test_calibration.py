@@ -60,7 +60,10 @@ def test_bad_input(images, tmp_path):
     board = lasercell.Board("chessboard:9x6:25")
     with pytest.raises(lasercell.InputError):
         lasercell.Board("chessboard:9x6")
-    detections = lasercell.detect_boards(images[:2] + [str(tmp_path / "missing.jpg")], board)
+    seen = []
+    detections = lasercell.detect_boards(images[:2] + [str(tmp_path / "missing.jpg")], board,
+                                         progress=lambda stage, f: seen.append((stage, f)))
+    assert seen == [("detect", 1 / 3), ("detect", 2 / 3), ("detect", 1.0)]
     assert len(detections.views) == 2
     path, found, _, message = detections.images[2]
     assert path.endswith("missing.jpg") and not found and message
@@ -70,3 +73,9 @@ def test_bad_input(images, tmp_path):
         lasercell.calibrate_intrinsics(detections.views, board, 640, 480, model="fisheye")
     with pytest.raises(lasercell.InputError, match="corner_ids"):
         lasercell.BoardView("x", np.zeros((3, 2)), [0, 1])
+
+    def stop(stage, fraction):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):  # a callback that raises stops the detection
+        lasercell.detect_boards(images, board, progress=stop)

@@ -34,8 +34,11 @@ def test_the_edge_is_the_clis(cli, kuka2, tmp_path):
         "--poses", kuka2["poses"], "--pose-format", "kuka", "--json", out)
     with open(out, encoding="utf-8") as f:
         theirs = json.load(f)
+    stages = []
     result = lasercell.calibrate_handeye(kuka2["camera"], kuka2["poses"], images=kuka2["images"],
-                                         board=BOARD, pose_format="kuka")
+                                         board=BOARD, pose_format="kuka",
+                                         progress=lambda stage, f: stages.append((stage, f)))
+    assert stages[0] == ("detect", 1 / 28) and stages[-2:] == [("detect", 1.0), ("solve", 1.0)]
     cell = lasercell.FrameGraph.load(cell_path)
     np.testing.assert_allclose(result.flange_from_camera,
                                cell.transform("vision_flange", "sensor"), atol=1e-9)
