@@ -1,7 +1,6 @@
 #include "triangulation/half_sphere_profiles.hpp"
 
 #include "core/error.hpp"
-#include "core/io/file_util.hpp"
 #include "core/provenance.hpp"
 #include "triangulation/profile_io.hpp"
 #include "triangulation/sensor_error_field.hpp"

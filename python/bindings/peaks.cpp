@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "docstrings.hpp"  // generated from the headers' /// comments
 #include "python/bindings/bindings.hpp"
@@ -67,32 +68,26 @@ ResultPtr Detect(const py::array& image, const std::string& estimator, double mi
   return std::make_shared<PeakDetectionResult>(triangulation::DetectPeaks(view, o));
 }
 
+// A read-only (W,) view of one per-column array of the result's profile, kept alive by it.
+auto Column(std::vector<float> triangulation::Profile::*values) {
+  return [values](const py::object& self) {
+    const std::vector<float>& v = self.cast<const PeakDetectionResult&>().profile.*values;
+    return ReadOnlyView(v.data(), v.size(), 1, self);
+  };
+}
+
 }  // namespace
 
 void BindPeaks(py::module_& m) {
   py::class_<PeakDetectionResult, ResultPtr>(m, "PeakDetectionResult",
                                              LC_DOC(triangulation_PeakDetectionResult))
-      .def_property_readonly(
-          "row_px",
-          [](const py::object& self) {
-            const auto& p = self.cast<const PeakDetectionResult&>().profile.row_px;
-            return ReadOnlyView(p.data(), p.size(), 1, self);
-          },
-          "(W,) float32 subpixel peak row per column (pixel centres at integers); NaN = none.")
-      .def_property_readonly(
-          "intensity",
-          [](const py::object& self) {
-            const auto& p = self.cast<const PeakDetectionResult&>().profile.intensity;
-            return ReadOnlyView(p.data(), p.size(), 1, self);
-          },
-          "(W,) peak height above the background / full scale, 0..1.")
-      .def_property_readonly(
-          "width_px",
-          [](const py::object& self) {
-            const auto& p = self.cast<const PeakDetectionResult&>().profile.width_px;
-            return ReadOnlyView(p.data(), p.size(), 1, self);
-          },
-          "(W,) full width at half height, px.")
+      .def_property_readonly("row_px", Column(&triangulation::Profile::row_px),
+                             "(W,) float32 subpixel peak row per column (pixel centres at "
+                             "integers); NaN = none.")
+      .def_property_readonly("intensity", Column(&triangulation::Profile::intensity),
+                             "(W,) peak height above the background / full scale, 0..1.")
+      .def_property_readonly("width_px", Column(&triangulation::Profile::width_px),
+                             "(W,) full width at half height, px.")
       .def_property_readonly(
           "status",
           [](const py::object& self) {
