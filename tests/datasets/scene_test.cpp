@@ -1,10 +1,12 @@
 #include "datasets/scene.hpp"
 
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <thread>
 #include <utility>
 
 #include "core/se3.hpp"
@@ -53,6 +55,20 @@ TEST(Scene, PlaneHitsAreExact) {
   }
   EXPECT_GT(hits, 1500);
   EXPECT_LE(worst, kExactMm);
+}
+
+// Building a scene leaves the process's thread limit alone: Embree's "threads=N" device setting
+// becomes a process-wide TBB limit, which made every later parallel loop of a process that had
+// simulated (a benchmark, a test) run on one thread.
+TEST(Scene, CommittingLeavesTheProcessThreadLimitAlone) {
+  const std::size_t before =
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  Scene scene;
+  scene.Add({"plate", MakeRectangle(Eigen::Isometry3d::Identity(), 100, 100), {}});
+  scene.Commit();
+  EXPECT_EQ(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism),
+            before);
+  EXPECT_GE(before, std::min<std::size_t>(2, std::max(1U, std::thread::hardware_concurrency())));
 }
 
 TEST(Scene, SphereHitsAreExactAlthoughTheMeshIsCoarse) {
