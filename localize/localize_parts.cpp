@@ -1,8 +1,10 @@
 #include "localize/localize_parts.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "core/error.hpp"
 #include "core/format.hpp"
@@ -53,13 +55,20 @@ void RemoveExplained(const registration::PpfModel& model, const Eigen::Isometry3
   const Eigen::Isometry3d scene_from_centered = scene_from_model * model.model_from_centered();
   for (const Eigen::Vector3d& p : model.refinement_points())
     posed.push_back(scene_from_centered * p);
+  // Only points inside the posed model's box grown by `distance` can be explained: the box
+  // test spares the nearest-neighbour query for the rest of the sweep (most of it).
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& p : posed) box.extend(p);
+  box.min().array() -= distance;
+  box.max().array() += distance;
   const registration::KdTree tree(std::move(posed));
   std::vector<std::size_t> keep, near;
   keep.reserve(scene->size());
   registration::Neighbor nearest;
   const double d_sq = distance * distance;
   for (std::size_t i = 0; i < scene->size(); ++i) {
-    if (tree.Nearest(scene->positions[i], &nearest) && nearest.distance_sq <= d_sq) {
+    if (box.contains(scene->positions[i]) && tree.Nearest(scene->positions[i], &nearest) &&
+        nearest.distance_sq <= d_sq) {
       near.push_back(i);
     } else {
       keep.push_back(i);
@@ -234,29 +243,51 @@ PointCloud CropScene(const PointCloud& scene, const std::vector<Eigen::Vector3d>
   return scene.Subset(inside);
 }
 
-// The scene with normals oriented along each point's line of sight; *sight_mean gets the mean
-// direction sensor -> scene (the verification grid's line of sight).
+// The scene with normals oriented along each point's line of sight; *view_direction gets the
+// mean direction sensor -> scene (the verification grid's line of sight). With `thin_cell_mm` > 0
+// the scene is first thinned to one point per cell of that size, the finest verification cell of
+// the parts searched (nothing after this reads more points), and normals are fitted at those
+// points only, each from its neighbourhood in the dense sweep.
 PointCloud WithNormals(const PointCloud& scene, const std::vector<Eigen::Vector3d>& sight,
-                       const LocalizePartsOptions& options, Eigen::Vector3d* view_direction) {
+                       const LocalizePartsOptions& options, double thin_cell_mm,
+                       Eigen::Vector3d* view_direction) {
   registration::NormalOptions normal_options = options.localize.normals;
   normal_options.threads = options.threads;
   normal_options.viewpoint = registration::Viewpoint::AlongDirection(-Eigen::Vector3d::UnitZ());
+  std::vector<std::size_t> at;
+  if (thin_cell_mm > 0.0) at = registration::OnePerCellIndices(scene.positions, thin_cell_mm);
   const registration::NormalEstimationResult normals =
-      registration::EstimateNormals(scene, normal_options, sight);
+      thin_cell_mm > 0.0 ? registration::EstimateNormalsAt(scene, at, normal_options, sight)
+                         : registration::EstimateNormals(scene, normal_options, sight);
   std::vector<std::size_t> keep;
-  keep.reserve(scene.size());
+  std::vector<Eigen::Vector3d> kept_normals;
+  keep.reserve(normals.valid.size());
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < scene.size(); ++i) {
-    if (!normals.valid[i]) continue;
+  for (std::size_t k = 0; k < normals.valid.size(); ++k) {
+    if (!normals.valid[k]) continue;
+    const std::size_t i = thin_cell_mm > 0.0 ? at[k] : k;
     keep.push_back(i);
+    kept_normals.push_back(normals.normals[k]);
     mean += sight.empty() ? Eigen::Vector3d::UnitZ() : sight[i];
   }
   PointCloud out = scene.Subset(keep);
-  out.normals.resize(keep.size());
-  for (std::size_t k = 0; k < keep.size(); ++k) out.normals[k] = normals.normals[keep[k]];
+  out.normals = std::move(kept_normals);
   *view_direction = mean.norm() > 0 ? Eigen::Vector3d(-mean.normalized())
                                     : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());
   return out;
+}
+
+// The finest verification cell of the requested parts, mm (0: one of them verifies on every
+// point, so nothing is thinned).
+double FinestVerificationCell(const std::vector<PartRequest>& requests,
+                              const registration::LocalizeOptions& options) {
+  double cell = std::numeric_limits<double>::infinity();
+  for (const PartRequest& r : requests) {
+    cell =
+        std::min(cell, options.verification_cell_relative *
+                           options.refined_support_distance_relative * r.model->ppf.diameter_mm());
+  }
+  return std::isfinite(cell) ? cell : 0.0;
 }
 
 }  // namespace
@@ -332,7 +363,8 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
   result.timings.roi_ms = MsSince(start);
   const auto normals_start = Clock::now();
   Eigen::Vector3d view_direction;
-  PointCloud remaining = WithNormals(cropped, sight, options, &view_direction);
+  PointCloud remaining = WithNormals(
+      cropped, sight, options, FinestVerificationCell(requests, options.localize), &view_direction);
   result.normal_points = remaining.size();
   result.timings.normals_ms = MsSince(normals_start);
 
@@ -373,6 +405,12 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
       search.timings.clustering_ms += found.timings.clustering_ms;
       search.timings.verification_ms += found.timings.verification_ms;
       search.timings.icp_ms += found.timings.icp_ms;
+      search.timings.preprocess_ms += found.timings.preprocess_ms;
+      search.timings.kdtree_ms += found.timings.kdtree_ms;
+      search.sampled_points += found.sampled_points;
+      search.reference_points += found.reference_points;
+      search.scene_pairs += found.scene_pairs;
+      search.votes_cast += found.votes_cast;
       search.rejected = found.rejected;
       if (options.progress) {
         options.progress(search.part + " #" + std::to_string(k + 1),
@@ -406,10 +444,15 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
                 ? FitAroundGrasp(model, remaining, inst.target_from_part, g, local_icp)
                 : LocalFit{});
       }
+      // The explained points leave the scene for the searches that follow and feed the laser
+      // plane's term; after the last search without that term nobody reads them.
+      const bool searches_follow = k + 1 < request.instances || &request != &requests.back();
       PointCloud explained;
-      RemoveExplained(model.ppf, inst.target_from_part,
-                      options.explained_distance_relative * model.ppf.diameter_mm(), &remaining,
-                      options.laser_plane ? &explained : nullptr);
+      if (searches_follow || options.laser_plane) {
+        RemoveExplained(model.ppf, inst.target_from_part,
+                        options.explained_distance_relative * model.ppf.diameter_mm(), &remaining,
+                        options.laser_plane ? &explained : nullptr);
+      }
       if (options.placement_covariance) {
         inst.covariance_terms.placement = *options.placement_covariance;
       }
@@ -422,6 +465,7 @@ LocalizePartsResult LocalizeParts(const PointCloud& scene,
       }
       JudgeInstance(model, options, local_fits, &inst);
       inst.search_ms = MsSince(search_start);
+      search.judgement_ms += inst.search_ms - found.timings.total_ms;
       result.instances.push_back(std::move(inst));
       ++search.found;
     }

@@ -4,7 +4,9 @@
 //   1. region of interest in the target frame (before anything per point),
 //   2. normals from each point's neighbourhood, oriented along the point's own line of sight
 //      (a moving sensor has no single viewpoint: each profile is seen from the camera centre
-//      at its exposure, SweepResult::frame_from_sensor),
+//      at its exposure, SweepResult::frame_from_sensor), fitted at one point per cell of the
+//      finest verification cell of the parts (LocalizeOptions::verification_cell_relative;
+//      nothing later reads more) from the dense sweep's neighbourhoods,
 //   3. per part, per instance: registration::LocalizeInCloud (PPF, clustering, verification,
 //      ICP) on the points not yet explained; the points an accepted instance explains (within
 //      `explained_distance_relative` x its diameter of the posed model) are removed before the
@@ -120,7 +122,15 @@ struct PartSearch {
   int requested = 0;    ///< Instances asked for.
   int found = 0;        ///< Instances found.
   std::string message;  ///< Why fewer than requested were found ("" when all were).
-  registration::LocalizationTimings timings;                  ///< Summed over this part's searches.
+  registration::LocalizationTimings timings;  ///< Summed over this part's searches.
+  /// Summed over this part's searches: the work that explains the timings.
+  std::size_t sampled_points = 0;    ///< After the voxel grid.
+  std::size_t reference_points = 0;  ///< PPF reference points.
+  std::size_t scene_pairs = 0;       ///< Scene pairs looked up in the model table.
+  std::size_t votes_cast = 0;        ///< Accumulator increments.
+  /// Per found instance after LocalizeInCloud: the grasps' local fits, removing the explained
+  /// points and the laser plane's covariance term, ms.
+  double judgement_ms = 0.0;
   std::vector<registration::LocalizationCandidate> rejected;  ///< Of the last search.
 };
 
@@ -138,7 +148,7 @@ struct LocalizePartsResult {
   std::vector<PartSearch> searches;     ///< One per requested part, in request order.
   std::size_t sweep_points = 0;         ///< In the scene given.
   std::size_t roi_points = 0;           ///< Inside the ROI.
-  std::size_t normal_points = 0;        ///< With a normal (searched).
+  std::size_t normal_points = 0;        ///< Thinned, with a normal (searched).
   LocalizePartsTimings timings;
   /// Every requested instance found.
   bool AllFound() const;

@@ -1,11 +1,13 @@
 #include "registration/filters.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <numeric>
 #include <string>
+#include <unordered_set>
 
 #include "core/error.hpp"
 #include "registration/kdtree.hpp"
@@ -295,6 +297,61 @@ PointCloud VoxelGridDownsample(const PointCloud& cloud, const VoxelGridOptions& 
   }
   if (voxel_of_point) {
     for (std::size_t i = 0; i < n; ++i) (*voxel_of_point)[i] = output_index[voxel[i]];
+  }
+  return out;
+}
+
+std::vector<std::size_t> OnePerCellIndices(const std::vector<Eigen::Vector3d>& points,
+                                           double cell_mm) {
+  if (!(cell_mm > 0.0) || !std::isfinite(cell_mm))
+    throw OptionError("OnePerCellIndices: cell_mm " + std::to_string(cell_mm) + " must be > 0");
+  // Cell coordinates packed in 21 bits each (+-2^20 cells about the origin: +-1 km at 1 mm)
+  // into one 64-bit key, kept in an open-addressing table of twice the points: one pass, no
+  // allocation per point. Coordinates beyond that range fall back to a hash set of triples.
+  constexpr std::int64_t kHalf = std::int64_t{1} << 20;
+  const double inv = 1.0 / cell_mm;
+  std::vector<std::uint64_t> keys(points.size());
+  bool packable = true;
+  for (std::size_t i = 0; i < points.size() && packable; ++i) {
+    std::uint64_t key = 1;  // 0 marks an empty slot
+    for (int a = 0; a < 3; ++a) {
+      const double c = std::floor(points[i][a] * inv);
+      packable = packable && c >= -kHalf && c < kHalf;
+      key = (key << 21) |
+            static_cast<std::uint64_t>(packable ? static_cast<std::int64_t>(c) + kHalf : 0);
+    }
+    keys[i] = key;
+  }
+  std::vector<std::size_t> out;
+  if (packable) {
+    std::size_t size = 16;
+    while (size < 2 * points.size()) size *= 2;
+    std::vector<std::uint64_t> table(size, 0);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      std::size_t slot =
+          static_cast<std::size_t>((keys[i] * 0x9E3779B97F4A7C15ULL) >> 20) & (size - 1);
+      while (table[slot] != 0 && table[slot] != keys[i]) slot = (slot + 1) & (size - 1);
+      if (table[slot] == 0) {
+        table[slot] = keys[i];
+        out.push_back(i);
+      }
+    }
+    return out;
+  }
+  struct KeyHash {
+    std::size_t operator()(const std::array<std::int64_t, 3>& k) const {
+      return static_cast<std::size_t>((static_cast<std::uint64_t>(k[0]) * 73856093ULL) ^
+                                      (static_cast<std::uint64_t>(k[1]) * 19349663ULL) ^
+                                      (static_cast<std::uint64_t>(k[2]) * 83492791ULL));
+    }
+  };
+  std::unordered_set<std::array<std::int64_t, 3>, KeyHash> seen;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d& p = points[i];
+    const std::array<std::int64_t, 3> key{static_cast<std::int64_t>(std::floor(p.x() * inv)),
+                                          static_cast<std::int64_t>(std::floor(p.y() * inv)),
+                                          static_cast<std::int64_t>(std::floor(p.z() * inv))};
+    if (seen.insert(key).second) out.push_back(i);
   }
   return out;
 }

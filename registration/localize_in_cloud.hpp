@@ -2,7 +2,9 @@
 // LocalizeInCloud: the seven localization steps of Skotheim et al. 2012 (section IV) over one
 // scene:
 //   1. region of interest + removal of small connected components (filters.hpp),
-//   2. normals (PCA, toward the sensor) when the scene has none (normals.hpp),
+//   2. normals (PCA, toward the sensor) when the scene has none (normals.hpp): the scene is first
+//      thinned to one point per verification cell (below), the finest set any later step reads,
+//      and the normals are fitted at those points from their neighbourhoods in the dense scene,
 //   3. voxel-grid subsampling at the model's sampling step (filters.hpp),
 //   4. Drost PPF voting (ppf_matcher.hpp),
 //   5. pose clustering (clustering.hpp),
@@ -169,7 +171,7 @@ struct LocalizationResult {
   LocalizationTimings timings;
   std::size_t scene_points = 0;    ///< Input points.
   std::size_t dropped_points = 0;  ///< Non-finite positions/normals or zero normals.
-  std::size_t used_points = 0;     ///< After ROI, filters and normals.
+  std::size_t used_points = 0;     ///< After ROI, filters, normals (and thinning when estimated).
   std::size_t sampled_points = 0;  ///< After the voxel grid.
   std::size_t reference_points = 0;
   std::size_t scene_pairs = 0;  ///< Scene pairs looked up in the model table.

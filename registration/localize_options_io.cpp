@@ -141,6 +141,7 @@ void ReadMatching(yaml::Fields& r, LocalizeOptions* o) {
   s.Read("spread_features", &o->matching.spread_features);
   s.Read("spread_alpha", &o->matching.spread_alpha);
   s.Read("interpolate_alpha", &o->matching.interpolate_alpha);
+  s.Read("max_entries_per_key", &o->matching.max_entries_per_key);
   s.Done();
   yaml::Fields c = r.Sub("clustering");
   c.Read("translation_radius_mm", &o->clustering.translation_radius_mm);

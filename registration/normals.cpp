@@ -59,8 +59,13 @@ void NormalOptions::Check() const {
   viewpoint.Check("NormalOptions.viewpoint");
 }
 
-NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOptions& options,
-                                       std::span<const Eigen::Vector3d> line_of_sight) {
+namespace {
+
+// The normals of the points at[0 .. count) of `cloud` (every point when `at` is null), each from
+// its neighbourhood in the whole cloud; slot k of the result is point at[k].
+NormalEstimationResult EstimateNormalsOf(const PointCloud& cloud, const NormalOptions& options,
+                                         std::span<const Eigen::Vector3d> line_of_sight,
+                                         const std::size_t* at, std::size_t count) {
   options.Check();
   cloud.Validate("EstimateNormals input");
   const std::size_t n = cloud.size();
@@ -68,10 +73,16 @@ NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOpti
     throw InputError("EstimateNormals: line_of_sight has " + std::to_string(line_of_sight.size()) +
                      " vectors for " + std::to_string(n) + " points; give one per point or none");
   }
+  for (std::size_t k = 0; at != nullptr && k < count; ++k) {
+    if (at[k] >= n) {
+      throw InputError("EstimateNormalsAt: index " + std::to_string(at[k]) + " for a cloud of " +
+                       std::to_string(n) + " points");
+    }
+  }
   NormalEstimationResult result;
-  result.normals.assign(n, Eigen::Vector3d::Zero());
-  result.valid.assign(n, 0);
-  result.curvature.assign(n, 0.0F);
+  result.normals.assign(count, Eigen::Vector3d::Zero());
+  result.valid.assign(count, 0);
+  result.curvature.assign(count, 0.0F);
   result.used_grid = options.use_grid_when_organized && cloud.IsOrganized();
 
   KdTree tree;
@@ -91,10 +102,11 @@ NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOpti
                               : std::numeric_limits<double>::infinity();
 
   // Each point's fit only reads the cloud and writes its own slot: thread-count independent.
-  ParallelForChunks(options.threads, n, 512, [&](std::size_t begin, std::size_t end) {
+  ParallelForChunks(options.threads, count, 512, [&](std::size_t begin, std::size_t end) {
     std::vector<Neighbor> hits;
     std::vector<std::uint32_t> grid_hits;
-    for (std::size_t i = begin; i < end; ++i) {
+    for (std::size_t slot = begin; slot < end; ++slot) {
+      const std::size_t i = at == nullptr ? slot : at[slot];
       const Eigen::Vector3d& p = cloud.positions[i];
       Eigen::Vector3d normal;
       float curvature = 0.0F;
@@ -134,13 +146,26 @@ NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOpti
       const Eigen::Vector3d toward = line_of_sight.empty() ? options.viewpoint.TowardSensor(p)
                                                            : Eigen::Vector3d(line_of_sight[i]);
       if (normal.dot(toward) < 0.0) normal = -normal;
-      result.normals[i] = normal;
-      result.valid[i] = 1;
-      result.curvature[i] = curvature;
+      result.normals[slot] = normal;
+      result.valid[slot] = 1;
+      result.curvature[slot] = curvature;
     }
   });
   for (std::uint8_t v : result.valid) result.invalid_count += v ? 0 : 1;
   return result;
+}
+
+}  // namespace
+
+NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOptions& options,
+                                       std::span<const Eigen::Vector3d> line_of_sight) {
+  return EstimateNormalsOf(cloud, options, line_of_sight, nullptr, cloud.size());
+}
+
+NormalEstimationResult EstimateNormalsAt(const PointCloud& cloud, std::span<const std::size_t> at,
+                                         const NormalOptions& options,
+                                         std::span<const Eigen::Vector3d> line_of_sight) {
+  return EstimateNormalsOf(cloud, options, line_of_sight, at.data(), at.size());
 }
 
 PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& options,

@@ -53,6 +53,15 @@ struct NormalEstimationResult {
 NormalEstimationResult EstimateNormals(const PointCloud& cloud, const NormalOptions& options,
                                        std::span<const Eigen::Vector3d> line_of_sight = {});
 
+/// The same fit for the points `at` of `cloud` only, each from its neighbourhood in the whole
+/// cloud (grid or kd-tree, as EstimateNormals): slot k of the result is point at[k]. For work
+/// that needs normals at a thinned subset of a dense scan, at the dense scan's neighbourhoods.
+/// `line_of_sight`, when not empty, has one vector per point of `cloud`. Throws InputError also
+/// for an index out of range.
+NormalEstimationResult EstimateNormalsAt(const PointCloud& cloud, std::span<const std::size_t> at,
+                                         const NormalOptions& options,
+                                         std::span<const Eigen::Vector3d> line_of_sight = {});
+
 /// A copy of `cloud` with normals from EstimateNormals; points without a valid fit are dropped
 /// (their count in *dropped when given).
 PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& options,

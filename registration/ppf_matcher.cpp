@@ -111,6 +111,7 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
     return v;
   });
   const std::uint32_t spread_alpha = options.spread_alpha && alpha_bins > 1 ? 1 : 0;
+  const std::size_t cap = options.max_entries_per_key;
 
   ParallelForChunks(options.threads, refs, 4, [&](std::size_t begin, std::size_t end) {
     Voter& voter = voters.local();
@@ -138,11 +139,21 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
         ++pairs;
         // alpha = phi_s - phi_m (Drost Sec. 3.5, alpha split into a scene and a model part), in
         // 16-bit turns so the wrap to [0, 2 pi) is the natural unsigned overflow.
+        // The plane angle (an atan2) only for a pair whose key holds model pairs.
+        bool any = false;
+        for (int k = 0; k < key_count && !any; ++k) any = !model.Lookup(keys[k]).empty();
+        if (!any) continue;
         const std::uint16_t phi_s = PlaneAngleToTurn16(PairPlaneAngle(rot_s, s_r, s_i));
         for (int k = 0; k < key_count; ++k) {
           const std::span<const PpfPairEntry> entries = model.Lookup(keys[k]);
-          votes += entries.size() << spread_alpha;
-          for (const PpfPairEntry& e : entries) {
+          const std::size_t n = entries.size();
+          // A flooded key votes with every step-th entry only (PpfMatchOptions::
+          // max_entries_per_key); the offset turns with the pair count.
+          const std::size_t step = cap > 0 && n > cap ? (n + cap - 1) / cap : 1;
+          const std::size_t first = step > 1 ? pairs % step : 0;
+          votes += ((n - first + step - 1) / step) << spread_alpha;
+          for (std::size_t i = first; i < n; i += step) {
+            const PpfPairEntry& e = entries[i];
             const std::uint32_t scaled = static_cast<std::uint16_t>(phi_s - e.plane_angle) *
                                          static_cast<std::uint32_t>(alpha_bins);
             const std::uint32_t bin = scaled >> 16;

@@ -42,6 +42,18 @@ struct PpfMatchOptions {
   /// Also vote for the nearer neighbouring alpha bin (alpha quantization robustness). Doubles
   /// the voting time; on the UWA data it made no difference to the success rate.
   bool spread_alpha = false;
+  /// Model entries voted per looked-up key at most (0 = all, the default). A smooth or flat part
+  /// floods a few keys with its coplanar pairs (the seat: up to 24,000 entries under one key,
+  /// 1,560 per lookup on average); they cast nearly every vote and take nearly all the voting
+  /// time. A key holding n > cap entries votes with every s-th entry only, s = ceil(n / cap),
+  /// starting at the scene pair's own offset (its count mod s, so the many pairs of a reference
+  /// use every entry): a feature weighs at most `cap` votes, in the spirit of inverse-frequency
+  /// weighting. Measured (`lasercell bench speed`, BENCHMARKS.md): at 16-64 the seat, rs1, rs22
+  /// and milk keep their poses and the seat's voting is ~20x faster; but the armrest of the
+  /// pallet scene, a thin shell whose evidence lies in its flooded keys, is lost at every cap
+  /// tried (32-256; weighting the kept votes by s, an unbiased estimate of the full vote, loses
+  /// it too), hence off by default: set it per job for parts it is measured on.
+  std::size_t max_entries_per_key = 0;
   /// Place each peak's alpha between bin centres by a parabola through the peak cell and its two
   /// alpha neighbours (vertex of the quadratic through three equally spaced samples, clamped to
   /// the peak's bin), instead of at the bin centre: the accumulator row is a histogram of the

@@ -18,6 +18,9 @@ void AddCalibrationBenchCommand(CLI::App& bench);
 /// Registers `bench table1` under `bench` (bench_table1.cpp).
 void AddTable1BenchCommand(CLI::App& bench);
 
+/// Registers `bench speed` under `bench` (bench_speed.cpp).
+void AddSpeedBenchCommand(CLI::App& bench);
+
 /// Registers `bench stream` under `bench` (bench_stream.cpp).
 void AddStreamBenchCommand(CLI::App& bench);
 /// Registers `bench serve` under `bench` (bench_serve.cpp).

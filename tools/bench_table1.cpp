@@ -6,12 +6,12 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
-#include <string_view>
 
 #include "core/io/file_util.hpp"
 #include "core/progress.hpp"
 #include "datasets/table1_bench.hpp"
 #include "tools/bench.hpp"
+#include "tools/commands.hpp"
 
 namespace lasercell::tools {
 namespace {
@@ -23,11 +23,7 @@ struct Table1Args {
 };
 
 void RunTable1(const Table1Args& args) {
-  const ProgressCallback progress = [](std::string_view stage, double fraction) {
-    std::fprintf(stderr, "\r%-60.*s %5.1f %%", static_cast<int>(stage.size()), stage.data(),
-                 100.0 * fraction);
-    if (fraction >= 1.0) std::fprintf(stderr, "\n");
-  };
+  const ProgressCallback progress = StderrProgress();
   const nlohmann::json j = datasets::RunTable1Bench(args.options, progress);
   const std::string md = datasets::Table1Markdown(j);
   std::printf("%s", md.c_str());

@@ -155,6 +155,7 @@ void AddBenchCommands(CLI::App& app) {
   AddBenchPeaksCommand(*bench);
   AddCalibrationBenchCommand(*bench);
   AddTable1BenchCommand(*bench);
+  AddSpeedBenchCommand(*bench);
   AddStreamBenchCommand(*bench);
   AddServeBenchCommand(*bench);
   AddServeLoadBenchCommand(*bench);

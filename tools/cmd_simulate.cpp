@@ -43,11 +43,7 @@ datasets::SimConfig Config(const SimulateArgs& args) {
 
 ProgressCallback Progress(bool quiet) {
   if (quiet) return {};
-  return [](std::string_view stage, double fraction) {
-    std::fprintf(stderr, "\r%-40.*s %5.1f %%", static_cast<int>(stage.size()), stage.data(),
-                 100.0 * fraction);
-    if (fraction >= 1.0) std::fprintf(stderr, "\n");
-  };
+  return StderrProgress(40);
 }
 
 void AddCommon(CLI::App* cmd, SimulateArgs& args) {

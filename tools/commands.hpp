@@ -5,9 +5,13 @@
 #include <memory>
 #include <string>
 
+#include "core/progress.hpp"
 #include "triangulation/gige_source.hpp"
 
 namespace lasercell::tools {
+/// Progress on stderr: the stage padded to `width` columns and the percentage, rewritten in
+/// place, a new line when a stage completes (tool_util.cpp).
+ProgressCallback StderrProgress(int width = 60);
 void AddCloudCommands(CLI::App& app);         ///< cloud info, cloud convert
 void AddFramesCommands(CLI::App& app);        ///< frames show, frames get
 void AddLocalizeCommand(CLI::App& app);       ///< localize

@@ -100,6 +100,15 @@ TEST_F(ThreeParts, EachPartIsFoundOnceWithItsGraspWithinAMillimetre) {
     for (const char* part : {"seat", "back", "armrest"}) {
       EXPECT_EQ(found[part], 1) << part << ": " << result.Summary();
     }
+    // Each search reports the work behind its time.
+    for (const PartSearch& s : result.parts.searches) {
+      SCOPED_TRACE(s.part);
+      EXPECT_GT(s.sampled_points, s.reference_points);
+      EXPECT_GT(s.reference_points, 0U);
+      EXPECT_GT(s.scene_pairs, s.reference_points);
+      EXPECT_GT(s.votes_cast, s.scene_pairs);  // every search here has flooded keys
+      EXPECT_GE(s.judgement_ms, 0.0);
+    }
     for (const PartInstance& inst : result.parts.instances) {
       SCOPED_TRACE(inst.frame);
       char frame[32];

@@ -3,8 +3,13 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
 #include <numbers>
 #include <random>
+#include <vector>
 
 #include "core/error.hpp"
 #include "core/se3.hpp"
@@ -225,6 +230,36 @@ TEST(VoxelGridTest, RejectsBadOptions) {
   options.voxel_size_mm = 1e-3;
   EXPECT_THAT([&] { VoxelGridDownsample(cloud, options); },
               ::testing::ThrowsMessage<OptionError>(HasSubstr("too small")));
+}
+
+// One point per occupied cell, the first in input order: kept points lie in distinct cells, every
+// input point has one in its own cell (so within sqrt(3) x the cell), indices ascend; a cell that
+// is not positive is refused naming it.
+TEST(OnePerCellTest, KeepsTheFirstPointOfEveryOccupiedCell) {
+  std::mt19937_64 rng(31);
+  std::uniform_real_distribution<double> u(-20.0, 20.0);
+  std::vector<Eigen::Vector3d> points(5000);
+  for (Eigen::Vector3d& p : points) p = {u(rng), u(rng), 0.1 * u(rng)};
+  constexpr double kCell = 3.0;
+  const auto cell_of = [](const Eigen::Vector3d& p) {
+    return std::array<long, 3>{static_cast<long>(std::floor(p.x() / kCell)),
+                               static_cast<long>(std::floor(p.y() / kCell)),
+                               static_cast<long>(std::floor(p.z() / kCell))};
+  };
+  const std::vector<std::size_t> kept = OnePerCellIndices(points, kCell);
+  ASSERT_FALSE(kept.empty());
+  EXPECT_LT(kept.size(), points.size());
+  EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end()));
+  std::map<std::array<long, 3>, std::size_t> first;
+  for (std::size_t i = 0; i < points.size(); ++i) first.emplace(cell_of(points[i]), i);
+  ASSERT_EQ(kept.size(), first.size());
+  for (std::size_t i : kept) EXPECT_EQ(first.at(cell_of(points[i])), i);
+  // Far from the origin (beyond the packed keys' +-2^20 cells) the same cells are found.
+  std::vector<Eigen::Vector3d> far = points;
+  for (Eigen::Vector3d& p : far) p.x() += 1e7 * kCell;
+  EXPECT_EQ(OnePerCellIndices(far, kCell).size(), kept.size());
+  EXPECT_THROW(OnePerCellIndices(points, 0.0), OptionError);
+  EXPECT_TRUE(OnePerCellIndices({}, 1.0).empty());
 }
 
 TEST(VoxelGridTest, EmptyCloudGivesEmptyOutput) {

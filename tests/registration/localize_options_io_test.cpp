@@ -44,7 +44,8 @@ model:
   normals: {k: 9, radius_mm: 0.5, use_grid_when_organized: false, grid_window: 4,
             grid_max_distance_mm: 1.5, min_neighbors: 4}
 matching: {reference_stride: 7, max_reference_points: 900, peaks_per_reference: 4,
-           peak_min_relative: 0.6, min_votes: 5, spread_features: true, spread_alpha: true}
+           peak_min_relative: 0.6, min_votes: 5, spread_features: true, spread_alpha: true,
+           max_entries_per_key: 77}
 clustering: {translation_radius_mm: 12, rotation_threshold_rad: 0.3, max_clusters: 20,
              duplicate_radius_mm: 8, refine_poses: false, refinement_inlier_mm: 22,
              refinement_rounds: 4, refinement_min_members: 9, refinement_tangent_weight: 0.3}
@@ -139,6 +140,7 @@ TEST(ReadLocalizeOptions, EveryKeyReachesItsField) {
   EXPECT_EQ(o.matching.min_votes, 5u);
   EXPECT_TRUE(o.matching.spread_features);
   EXPECT_TRUE(o.matching.spread_alpha);
+  EXPECT_EQ(o.matching.max_entries_per_key, 77u);
   EXPECT_EQ(o.clustering.translation_radius_mm, 12);
   EXPECT_EQ(o.clustering.rotation_threshold_rad, 0.3);
   EXPECT_EQ(o.clustering.max_clusters, 20u);

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <numbers>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -122,6 +123,38 @@ TEST(NormalsTest, PerPointLineOfSightOrientsEachNormal) {
   EXPECT_THAT([&] { EstimateNormals(cloud, NormalOptions{}, wrong); },
               ::testing::ThrowsMessage<InputError>(
                   HasSubstr("line_of_sight has 3 vectors for 100 points")));
+}
+
+// Normals at a subset are the full estimate's at those points, from the same neighbourhoods in
+// the whole cloud: on the grid of an organized sweep and by kd-tree on a plain cloud, with
+// per-point lines of sight; an index out of range is refused.
+TEST(NormalsTest, NormalsAtASubsetEqualTheFullEstimateThere) {
+  PointCloud grid = NoisyPlaneGrid(40, 50, 0.05, 26);
+  std::vector<Eigen::Vector3d> sight(grid.size(), Eigen::Vector3d::UnitZ());
+  for (std::size_t i = 0; i < grid.size(); i += 3) sight[i] = -Eigen::Vector3d::UnitZ();
+  std::mt19937_64 rng(27);
+  PointCloud plain;
+  plain.positions = test::SpherePoints(5000, 40.0, {0, 0, -250}, rng).positions;
+  for (const PointCloud* cloud : {&grid, &plain}) {
+    const bool organized = cloud == &grid;
+    SCOPED_TRACE(organized ? "grid" : "kd-tree");
+    const std::span<const Eigen::Vector3d> los =
+        organized ? std::span<const Eigen::Vector3d>(sight) : std::span<const Eigen::Vector3d>();
+    const NormalEstimationResult full = EstimateNormals(*cloud, NormalOptions{}, los);
+    std::vector<std::size_t> at;
+    for (std::size_t i = 7; i < cloud->size(); i += 11) at.push_back(i);
+    const NormalEstimationResult some = EstimateNormalsAt(*cloud, at, NormalOptions{}, los);
+    ASSERT_EQ(some.normals.size(), at.size());
+    EXPECT_EQ(some.used_grid, organized);
+    for (std::size_t k = 0; k < at.size(); ++k) {
+      ASSERT_EQ(some.valid[k], full.valid[at[k]]) << k;
+      ASSERT_EQ(some.normals[k], full.normals[at[k]]) << k;
+      ASSERT_EQ(some.curvature[k], full.curvature[at[k]]) << k;
+    }
+  }
+  const std::vector<std::size_t> bad = {0, grid.size()};
+  EXPECT_THAT([&] { EstimateNormalsAt(grid, bad, NormalOptions{}); },
+              ::testing::ThrowsMessage<InputError>(HasSubstr("index 2000 for a cloud of 2000")));
 }
 
 TEST(NormalsTest, IdenticalForAnyThreadCount) {

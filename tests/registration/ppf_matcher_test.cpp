@@ -68,6 +68,32 @@ TEST_F(PpfMatcherTest, ReferencePointsAreCapped) {
   EXPECT_EQ(MatchPpf(scene_.tree, scene_.normals, model_, options).reference_points, (n + 4) / 5);
 }
 
+// A key holding more than max_entries_per_key model pairs votes with that many of them at most,
+// so every looked-up pair casts at most `cap` votes; uncapped, the same scene casts more (the
+// cap was active); capped, the best cluster is still the part.
+TEST_F(PpfMatcherTest, FloodedKeysVoteWithAtMostTheCapsEntries) {
+  PpfMatchOptions options;
+  options.threads = 1;
+  options.max_entries_per_key = 0;
+  const PpfMatchResult full = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  constexpr std::size_t kCap = 4;
+  ASSERT_GT(full.votes_cast, kCap * full.scene_pairs) << "no key is flooded: the test is void";
+  options.max_entries_per_key = kCap;
+  const PpfMatchResult capped = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  EXPECT_EQ(capped.scene_pairs, full.scene_pairs);
+  EXPECT_LE(capped.votes_cast, kCap * capped.scene_pairs);
+  options.max_entries_per_key = 16;  // a cap measured on rs1 (bench speed) still finds the part
+  const PpfMatchResult sixteen = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  EXPECT_LT(sixteen.votes_cast, full.votes_cast);
+  PoseClusteringOptions clustering;
+  clustering.translation_radius_mm = clustering.duplicate_radius_mm = 0.1 * model_.diameter_mm();
+  const ClusteringResult clusters = ClusterPoses(sixteen.hypotheses, clustering);
+  ASSERT_FALSE(clusters.clusters.empty());
+  EXPECT_THAT(clusters.clusters[0].scene_from_centered,
+              test::PoseNear(truth_ * model_.model_from_centered(), 2 * model_.angle_step_rad(),
+                             0.1 * model_.diameter_mm()));
+}
+
 TEST_F(PpfMatcherTest, VotesAndClustersFindASyntheticPoseInRealClutter) {
   const PpfMatchResult match = MatchPpf(scene_.tree, scene_.normals, model_);
   EXPECT_EQ(match.reference_points, (scene_.tree.size() + 4) / 5);
