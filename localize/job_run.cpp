@@ -311,6 +311,32 @@ JobResult RunJob(const Job& job, const JobRunOptions& options) {
   return std::move(*result);
 }
 
+nlohmann::json PartSearchJson(const PartSearch& s) {
+  nlohmann::json rejected = nlohmann::json::array();
+  for (const auto& c : s.rejected) rejected.push_back(registration::LocalizationCandidateJson(c));
+  return {{"part", s.part},
+          {"requested", s.requested},
+          {"found", s.found},
+          {"message", s.message},
+          {"rejected_in_last_search", rejected},
+          {"counts",
+           {{"sampled_points", s.sampled_points},
+            {"reference_points", s.reference_points},
+            {"scene_pairs", s.scene_pairs},
+            {"votes_cast", s.votes_cast}}},
+          {"timings_ms",
+           {{"preprocess", s.timings.preprocess_ms},
+            {"normals", s.timings.normals_ms},
+            {"subsample", s.timings.subsample_ms},
+            {"kdtree", s.timings.kdtree_ms},
+            {"matching", s.timings.matching_ms},
+            {"clustering", s.timings.clustering_ms},
+            {"verification", s.timings.verification_ms},
+            {"icp", s.timings.icp_ms},
+            {"judgement", s.judgement_ms},
+            {"total", s.timings.total_ms}}}};
+}
+
 nlohmann::json JobResultJson(const JobResult& r) {
   const std::string& target = r.job.target_frame;
   nlohmann::json j;
@@ -334,23 +360,7 @@ nlohmann::json JobResultJson(const JobResult& r) {
   j["instances"] = nlohmann::json::array();
   for (const PartInstance& i : r.parts.instances) j["instances"].push_back(InstanceJson(i, target));
   j["searches"] = nlohmann::json::array();
-  for (const PartSearch& s : r.parts.searches) {
-    nlohmann::json rejected = nlohmann::json::array();
-    for (const auto& c : s.rejected) rejected.push_back(registration::LocalizationCandidateJson(c));
-    j["searches"].push_back({{"part", s.part},
-                             {"requested", s.requested},
-                             {"found", s.found},
-                             {"message", s.message},
-                             {"rejected_in_last_search", rejected},
-                             {"timings_ms",
-                              {{"normals", s.timings.normals_ms},
-                               {"subsample", s.timings.subsample_ms},
-                               {"matching", s.timings.matching_ms},
-                               {"clustering", s.timings.clustering_ms},
-                               {"verification", s.timings.verification_ms},
-                               {"icp", s.timings.icp_ms},
-                               {"total", s.timings.total_ms}}}});
-  }
+  for (const PartSearch& s : r.parts.searches) j["searches"].push_back(PartSearchJson(s));
   j["models"] = nlohmann::json::array();
   if (r.models) {
     for (const PartModel& m : *r.models) j["models"].push_back(ModelJson(m));

@@ -113,6 +113,12 @@ JobResult RunJob(const Job& job, const JobRunOptions& options = {});
 /// notes; per-stage timings.
 nlohmann::json JobResultJson(const JobResult& result);
 
+/// One entry of the result file's `searches`: the part, requested and found instances, why fewer
+/// were found, the last search's rejected candidates, the work (`counts`: voxel points, reference
+/// points, scene pairs, votes) and the stage times summed over the part's searches (`timings_ms`;
+/// `judgement` is the grasp fits and explained points after each found instance).
+nlohmann::json PartSearchJson(const PartSearch& search);
+
 /// A copy of `cell` with one static edge <target>_from_<part>_<k> per found instance (and its
 /// covariance when valid), so `lasercell frames get` answers where a part lies.
 FrameGraph CellWithInstances(const FrameGraph& cell, const JobResult& result);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "docstrings.hpp"  // generated from the headers' /// comments
+#include "localize/job_run.hpp"
 #include "localize/part_model.hpp"
 #include "python/bindings/bindings.hpp"
 
@@ -78,7 +79,11 @@ void BindPartsResult(py::module_& m) {
       .def_readonly("found", &localize::PartSearch::found, LC_DOC(localize_PartSearch_found))
       .def_readonly("message", &localize::PartSearch::message, LC_DOC(localize_PartSearch_message))
       .def_readonly("rejected", &localize::PartSearch::rejected,
-                    LC_DOC(localize_PartSearch_rejected));
+                    LC_DOC(localize_PartSearch_rejected))
+      .def(
+          "to_dict",
+          [](const localize::PartSearch& s) { return JsonToPython(localize::PartSearchJson(s)); },
+          LC_DOC(localize_PartSearchJson));
   py::class_<LocalizePartsResult, ResultPtr>(m, "LocalizePartsResult",
                                              LC_DOC(localize_LocalizePartsResult))
       .def_readonly("instances", &LocalizePartsResult::instances,

@@ -34,6 +34,13 @@ def test_the_poses_are_the_jobs(job_run):
     assert seat.covariance_valid
     np.testing.assert_allclose(seat.covariance, theirs.covariance, rtol=1e-9, atol=1e-15)
     assert mine.sweep_points == len(sweep.cloud) and mine.searches[0].found == 1
+    # The search's work, as the job's result file reports it: the same counts (deterministic),
+    # every stage timed.
+    search, theirs_search = mine.searches[0].to_dict(), result.to_dict()["searches"][0]
+    assert search["counts"] == theirs_search["counts"]
+    assert search["counts"]["votes_cast"] > search["counts"]["scene_pairs"] > 0
+    assert set(search["timings_ms"]) == set(theirs_search["timings_ms"])
+    assert {"matching", "judgement", "total"} <= set(search["timings_ms"])
     # An ROI around the seat (a list or a tuple) keeps the same pose and fewer points.
     centre = seat.target_from_part[:3, 3]
     boxed = lasercell.localize_parts(sweep.cloud, [runner.models[0]],
