@@ -245,9 +245,9 @@ PointCloud CropScene(const PointCloud& scene, const std::vector<Eigen::Vector3d>
 
 // The scene with normals oriented along each point's line of sight; *view_direction gets the
 // mean direction sensor -> scene (the verification grid's line of sight). With `thin_cell_mm` > 0
-// the scene is first thinned to one point per cell of that size, the finest verification cell of
-// the parts searched (nothing after this reads more points), and normals are fitted at those
-// points only, each from its neighbourhood in the dense sweep.
+// the scene is first thinned to one point per cell of that size (the one nearest the cell's
+// centre), the finest verification cell of the parts searched (nothing after this reads more), and
+// normals are fitted at those points only, each from its neighbourhood in the dense sweep.
 PointCloud WithNormals(const PointCloud& scene, const std::vector<Eigen::Vector3d>& sight,
                        const LocalizePartsOptions& options, double thin_cell_mm,
                        Eigen::Vector3d* view_direction) {
@@ -255,7 +255,10 @@ PointCloud WithNormals(const PointCloud& scene, const std::vector<Eigen::Vector3
   normal_options.threads = options.threads;
   normal_options.viewpoint = registration::Viewpoint::AlongDirection(-Eigen::Vector3d::UnitZ());
   std::vector<std::size_t> at;
-  if (thin_cell_mm > 0.0) at = registration::OnePerCellIndices(scene.positions, thin_cell_mm);
+  if (thin_cell_mm > 0.0) {
+    at = registration::OnePerCellIndices(scene.positions, thin_cell_mm,
+                                         registration::CellPoint::kNearestCentre);
+  }
   const registration::NormalEstimationResult normals =
       thin_cell_mm > 0.0 ? registration::EstimateNormalsAt(scene, at, normal_options, sight)
                          : registration::EstimateNormals(scene, normal_options, sight);

@@ -7,7 +7,7 @@
 #include <numbers>
 #include <numeric>
 #include <string>
-#include <unordered_set>
+#include <unordered_map>
 
 #include "core/error.hpp"
 #include "registration/kdtree.hpp"
@@ -302,57 +302,73 @@ PointCloud VoxelGridDownsample(const PointCloud& cloud, const VoxelGridOptions& 
 }
 
 std::vector<std::size_t> OnePerCellIndices(const std::vector<Eigen::Vector3d>& points,
-                                           double cell_mm) {
+                                           double cell_mm, CellPoint keep) {
   if (!(cell_mm > 0.0) || !std::isfinite(cell_mm))
     throw OptionError("OnePerCellIndices: cell_mm " + std::to_string(cell_mm) + " must be > 0");
   // Cell coordinates packed in 21 bits each (+-2^20 cells about the origin: +-1 km at 1 mm)
   // into one 64-bit key, kept in an open-addressing table of twice the points: one pass, no
-  // allocation per point. Coordinates beyond that range fall back to a hash set of triples.
+  // allocation per point. Coordinates beyond that range fall back to a map of triples.
   constexpr std::int64_t kHalf = std::int64_t{1} << 20;
   const double inv = 1.0 / cell_mm;
-  std::vector<std::uint64_t> keys(points.size());
-  bool packable = true;
-  for (std::size_t i = 0; i < points.size() && packable; ++i) {
-    std::uint64_t key = 1;  // 0 marks an empty slot
-    for (int a = 0; a < 3; ++a) {
-      const double c = std::floor(points[i][a] * inv);
-      packable = packable && c >= -kHalf && c < kHalf;
-      key = (key << 21) |
-            static_cast<std::uint64_t>(packable ? static_cast<std::int64_t>(c) + kHalf : 0);
-    }
-    keys[i] = key;
-  }
+  const auto cell_of = [&](const Eigen::Vector3d& p) {
+    return std::array<std::int64_t, 3>{static_cast<std::int64_t>(std::floor(p.x() * inv)),
+                                       static_cast<std::int64_t>(std::floor(p.y() * inv)),
+                                       static_cast<std::int64_t>(std::floor(p.z() * inv))};
+  };
+  const auto centre_distance_sq = [&](const Eigen::Vector3d& p,
+                                      const std::array<std::int64_t, 3>& c) {
+    return (Eigen::Vector3d(c[0] + 0.5, c[1] + 0.5, c[2] + 0.5) * cell_mm - p).squaredNorm();
+  };
   std::vector<std::size_t> out;
+  std::vector<double> best;  // kNearestCentre: the kept point's distance to its cell's centre
+  // Keeps point i for the cell whose output slot is k (k == out.size(): a new cell).
+  const auto offer = [&](std::size_t k, std::size_t i, const std::array<std::int64_t, 3>& c) {
+    const double d = keep == CellPoint::kNearestCentre ? centre_distance_sq(points[i], c) : 0.0;
+    if (k == out.size()) {
+      out.push_back(i);
+      best.push_back(d);
+    } else if (d < best[k]) {
+      out[k] = i;
+      best[k] = d;
+    }
+  };
+  bool packable = true;
+  for (const Eigen::Vector3d& p : points) {
+    for (std::int64_t c : cell_of(p)) packable = packable && c >= -kHalf && c < kHalf;
+    if (!packable) break;
+  }
   if (packable) {
     std::size_t size = 16;
     while (size < 2 * points.size()) size *= 2;
-    std::vector<std::uint64_t> table(size, 0);
+    std::vector<std::uint64_t> table(size, 0);  // 0 marks an empty slot
+    std::vector<std::uint32_t> output_of(size, 0);
     for (std::size_t i = 0; i < points.size(); ++i) {
-      std::size_t slot =
-          static_cast<std::size_t>((keys[i] * 0x9E3779B97F4A7C15ULL) >> 20) & (size - 1);
-      while (table[slot] != 0 && table[slot] != keys[i]) slot = (slot + 1) & (size - 1);
+      const std::array<std::int64_t, 3> c = cell_of(points[i]);
+      std::uint64_t key = 1;
+      for (std::int64_t v : c) key = (key << 21) | static_cast<std::uint64_t>(v + kHalf);
+      std::size_t slot = static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ULL) >> 20) & (size - 1);
+      while (table[slot] != 0 && table[slot] != key) slot = (slot + 1) & (size - 1);
       if (table[slot] == 0) {
-        table[slot] = keys[i];
-        out.push_back(i);
+        table[slot] = key;
+        output_of[slot] = static_cast<std::uint32_t>(out.size());
       }
+      offer(output_of[slot], i, c);
     }
-    return out;
-  }
-  struct KeyHash {
-    std::size_t operator()(const std::array<std::int64_t, 3>& k) const {
-      return static_cast<std::size_t>((static_cast<std::uint64_t>(k[0]) * 73856093ULL) ^
-                                      (static_cast<std::uint64_t>(k[1]) * 19349663ULL) ^
-                                      (static_cast<std::uint64_t>(k[2]) * 83492791ULL));
+  } else {
+    struct KeyHash {
+      std::size_t operator()(const std::array<std::int64_t, 3>& k) const {
+        return static_cast<std::size_t>((static_cast<std::uint64_t>(k[0]) * 73856093ULL) ^
+                                        (static_cast<std::uint64_t>(k[1]) * 19349663ULL) ^
+                                        (static_cast<std::uint64_t>(k[2]) * 83492791ULL));
+      }
+    };
+    std::unordered_map<std::array<std::int64_t, 3>, std::size_t, KeyHash> output_of;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const std::array<std::int64_t, 3> c = cell_of(points[i]);
+      offer(output_of.emplace(c, out.size()).first->second, i, c);
     }
-  };
-  std::unordered_set<std::array<std::int64_t, 3>, KeyHash> seen;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    const Eigen::Vector3d& p = points[i];
-    const std::array<std::int64_t, 3> key{static_cast<std::int64_t>(std::floor(p.x() * inv)),
-                                          static_cast<std::int64_t>(std::floor(p.y() * inv)),
-                                          static_cast<std::int64_t>(std::floor(p.z() * inv))};
-    if (seen.insert(key).second) out.push_back(i);
   }
+  if (keep == CellPoint::kNearestCentre) std::sort(out.begin(), out.end());
   return out;
 }
 

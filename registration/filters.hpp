@@ -84,11 +84,18 @@ struct VoxelGridOptions {
 PointCloud VoxelGridDownsample(const PointCloud& cloud, const VoxelGridOptions& options,
                                std::vector<std::int32_t>* voxel_of_point = nullptr);
 
-/// Indices of one point per occupied cubic cell of edge `cell_mm` (> 0): the first in input
-/// order, ascending, so deterministic. Every input point has a kept point within sqrt(3) x cell_mm
-/// wherever the cells fall: a spatial thinning that, unlike an index stride, leaves no gaps along
-/// the rows of an organized scan.
+/// Which point of a cell OnePerCellIndices keeps.
+enum class CellPoint {
+  kFirst,          ///< The first in input order.
+  kNearestCentre,  ///< The nearest the cell's centre (ties: the first): no bias toward the side
+                   ///< a scan enters the cells from, for points whose means are taken later.
+};
+
+/// Indices of one point per occupied cubic cell of edge `cell_mm` (> 0), ascending, deterministic.
+/// Every input point has a kept point within sqrt(3) x cell_mm wherever the cells fall: a
+/// spatial thinning that, unlike an index stride, leaves no gaps along the rows of an organized
+/// scan.
 std::vector<std::size_t> OnePerCellIndices(const std::vector<Eigen::Vector3d>& points,
-                                           double cell_mm);
+                                           double cell_mm, CellPoint keep = CellPoint::kFirst);
 
 }  // namespace lasercell::registration

@@ -135,12 +135,15 @@ void Refine(const RefineContext& ctx, std::vector<std::uint32_t> overlap,
   ctx.timings->verification_ms += MillisecondsSince(t);
 }
 
-// The scene thinned to one point per cell of `cell_mm` with normals estimated at those points
-// only, each from its neighbourhood in the dense scene; points without a fit are dropped (counted
-// in *dropped). Nothing after the normals reads more than one point per such cell.
+// The scene thinned to one point per cell of `cell_mm` (the one nearest the cell's centre, so the
+// voxel means built from them are not pulled to the side the scan entered each cell from) with
+// normals estimated at those points only, each from its neighbourhood in the dense scene; points
+// without a fit are dropped (counted in *dropped). Nothing after the normals reads more than one
+// point per such cell.
 PointCloud ThinnedWithNormals(const PointCloud& scene, double cell_mm, const NormalOptions& options,
                               std::size_t* dropped) {
-  const std::vector<std::size_t> at = OnePerCellIndices(scene.positions, cell_mm);
+  const std::vector<std::size_t> at =
+      OnePerCellIndices(scene.positions, cell_mm, CellPoint::kNearestCentre);
   const NormalEstimationResult fit = EstimateNormalsAt(scene, at, options);
   std::vector<std::size_t> keep;
   std::vector<Eigen::Vector3d> normals;

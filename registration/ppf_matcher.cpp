@@ -137,12 +137,12 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
           key_count = model.PairKey(s_r, n_r, s_i, n_i, &keys[0]) ? 1 : 0;
         if (key_count == 0) continue;
         ++pairs;
-        // alpha = phi_s - phi_m (Drost Sec. 3.5, alpha split into a scene and a model part), in
-        // 16-bit turns so the wrap to [0, 2 pi) is the natural unsigned overflow.
         // The plane angle (an atan2) only for a pair whose key holds model pairs.
         bool any = false;
         for (int k = 0; k < key_count && !any; ++k) any = !model.Lookup(keys[k]).empty();
         if (!any) continue;
+        // alpha = phi_s - phi_m (Drost Sec. 3.5, alpha split into a scene and a model part), in
+        // 16-bit turns so the wrap to [0, 2 pi) is the natural unsigned overflow.
         const std::uint16_t phi_s = PlaneAngleToTurn16(PairPlaneAngle(rot_s, s_r, s_i));
         for (int k = 0; k < key_count; ++k) {
           const std::span<const PpfPairEntry> entries = model.Lookup(keys[k]);

@@ -254,10 +254,33 @@ TEST(OnePerCellTest, KeepsTheFirstPointOfEveryOccupiedCell) {
   for (std::size_t i = 0; i < points.size(); ++i) first.emplace(cell_of(points[i]), i);
   ASSERT_EQ(kept.size(), first.size());
   for (std::size_t i : kept) EXPECT_EQ(first.at(cell_of(points[i])), i);
+  // The point nearest each cell's centre instead: one per cell too, ascending, and no other
+  // point of its cell is nearer the centre.
+  const std::vector<std::size_t> central =
+      OnePerCellIndices(points, kCell, CellPoint::kNearestCentre);
+  ASSERT_EQ(central.size(), kept.size());
+  EXPECT_TRUE(std::is_sorted(central.begin(), central.end()));
+  const auto centre_distance = [&](const Eigen::Vector3d& p) {
+    const std::array<long, 3> c = cell_of(p);
+    return (Eigen::Vector3d(c[0] + 0.5, c[1] + 0.5, c[2] + 0.5) * kCell - p).norm();
+  };
+  std::map<std::array<long, 3>, double> nearest;
+  for (const Eigen::Vector3d& p : points) {
+    const auto [it, added] = nearest.emplace(cell_of(p), centre_distance(p));
+    if (!added) it->second = std::min(it->second, centre_distance(p));
+  }
+  std::size_t moved = 0;
+  for (std::size_t k = 0; k < central.size(); ++k) {
+    const Eigen::Vector3d& p = points[central[k]];
+    EXPECT_EQ(centre_distance(p), nearest.at(cell_of(p)));
+    moved += central[k] != kept[k] ? 1 : 0;
+  }
+  EXPECT_GT(moved, 0U);
   // Far from the origin (beyond the packed keys' +-2^20 cells) the same cells are found.
   std::vector<Eigen::Vector3d> far = points;
   for (Eigen::Vector3d& p : far) p.x() += 1e7 * kCell;
   EXPECT_EQ(OnePerCellIndices(far, kCell).size(), kept.size());
+  EXPECT_EQ(OnePerCellIndices(far, kCell, CellPoint::kNearestCentre).size(), kept.size());
   EXPECT_THROW(OnePerCellIndices(points, 0.0), OptionError);
   EXPECT_TRUE(OnePerCellIndices({}, 1.0).empty());
 }
