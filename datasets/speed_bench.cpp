@@ -377,13 +377,15 @@ nlohmann::json RunSpeedBench(const SpeedBenchOptions& options, const ProgressCal
 std::string SpeedMarkdown(const nlohmann::json& result) {
   std::string md;
   char line[512];
-  std::snprintf(line, sizeof line,
-                "#### Where the time goes (`lasercell bench speed --runs %d --placements %d "
-                "--profile %s`)\n\nMedians of %d runs per case and thread count, model prebuilt, "
-                "files parsed before the clock starts; %d core(s). Times in ms.\n\n",
-                result["runs"].get<int>(), result["placements"].get<int>(),
-                result["profile"].get<std::string>().c_str(), result["runs"].get<int>(),
-                result["cores"].get<int>());
+  std::snprintf(
+      line, sizeof line,
+      "#### Where the time goes (`lasercell bench speed --runs %d --placements %d "
+      "--profile %s`)\n\nMedians of %d runs per case and thread count (the seat sweeps: of "
+      "every run of every placement), model prebuilt, files parsed before the clock "
+      "starts; %d core(s). Times in ms.\n\n",
+      result["runs"].get<int>(), result["placements"].get<int>(),
+      result["profile"].get<std::string>().c_str(), result["runs"].get<int>(),
+      result["cores"].get<int>());
   md += line;
   md +=
       "| case | threads | points | roi | normals | voxel | kd-tree | voting | clustering | "
