@@ -16,6 +16,7 @@
 #include "registration/kdtree.hpp"
 #include "registration/localize_in_cloud.hpp"
 #include "registration/normals.hpp"
+#include "registration/ppf_matcher.hpp"
 #include "registration/ppf_model.hpp"
 
 namespace {
@@ -143,6 +144,53 @@ void BM_NormalsRs1(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(EstimateNormals(scene, options).invalid_count);
 }
 BENCHMARK(BM_NormalsRs1)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// Thinning to one point per cell (arg: cell in tenths of a mm; the verification cell of the
+// parasaurolophus is ~1.9 mm), as the localizers do before fitting normals.
+void BM_OnePerCellRs1(benchmark::State& state) {
+  REQUIRE_UWA(state);
+  const double cell = static_cast<double>(state.range(0)) / 10.0;
+  std::size_t out = 0;
+  for (auto _ : state)
+    out = OnePerCellIndices(UwaData().scene.positions, cell, CellPoint::kNearestCentre).size();
+  state.counters["points_out"] = static_cast<double>(out);
+}
+BENCHMARK(BM_OnePerCellRs1)->Arg(19)->Arg(125)->Unit(benchmark::kMillisecond);
+
+// Normals at the thinned points only, from the dense neighbourhoods (WithNormalsAtCells), as a
+// scene without normals gets them; arg = cell in tenths of a mm. Compare with BM_NormalsRs1/1.
+void BM_NormalsAtCellsRs1(benchmark::State& state) {
+  REQUIRE_UWA(state);
+  PointCloud scene;
+  scene.positions = UwaData().scene.positions;
+  NormalOptions options;
+  options.threads = 1;
+  const double cell = static_cast<double>(state.range(0)) / 10.0;
+  std::size_t out = 0;
+  for (auto _ : state) out = WithNormalsAtCells(scene, cell, options).cloud.size();
+  state.counters["points_out"] = static_cast<double>(out);
+}
+BENCHMARK(BM_NormalsAtCellsRs1)->Arg(19)->Unit(benchmark::kMillisecond);
+
+// The voting alone on rs1's voxel grid (model: 0.04 x diameter), single thread; arg 0 = plain
+// Drost voting, 1 = PpfMatchOptions::unique_votes. Counters: the work behind the time.
+void BM_MatchPpfRs1(benchmark::State& state) {
+  REQUIRE_UWA(state);
+  static const PpfModel model = PpfModel::Build(UwaData().model);
+  VoxelGridOptions voxel;
+  voxel.voxel_size_mm = model.sampling_step_mm();
+  const PointCloud sampled = VoxelGridDownsample(UwaData().scene, voxel);
+  const KdTree tree(sampled.positions);
+  PpfMatchOptions options;
+  options.threads = 1;
+  options.unique_votes = state.range(0) != 0;
+  PpfMatchResult result;
+  for (auto _ : state) result = MatchPpf(tree, sampled.normals, model, options);
+  state.counters["scene_pairs"] = static_cast<double>(result.scene_pairs);
+  state.counters["votes"] = static_cast<double>(result.votes_cast);
+  state.counters["hypotheses"] = static_cast<double>(result.hypotheses.size());
+}
+BENCHMARK(BM_MatchPpfRs1)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -6,9 +6,11 @@
 //       triangulated with the simulated sensor's true camera and laser plane in the sensor frame
 //       at t0 and localized the way a job localizes (localize::LocalizeParts: ROI, normals along
 //       each point's line of sight, the search, the grasp's local fit) with the seat's part file;
-//   (b) real unorganized and organized scans: UWA rs1 and rs22 with the parasaurolophus, PCL's
-//       Stanford bunny view bun0 in bun4 and PCL's milk carton in its Kinect scene, through
-//       registration::LocalizeInCloud at its defaults (what `lasercell localize` runs);
+//   (b) real unorganized and organized scans: UWA rs1 and rs22 with the parasaurolophus, rs1
+//       thinned to every 3rd point (38k) without its normals (a ~40k-point unorganized scan whose
+//       normals are estimated), PCL's Stanford bunny view bun0 in bun4 and PCL's milk carton in
+//       its Kinect scene, through registration::LocalizeInCloud at its defaults (what
+//       `lasercell localize` runs);
 //   (c) a sweep-size series: the same seat sweep simulated with more or fewer profiles.
 // Every case runs `runs` times per thread count with the model prebuilt and the files parsed
 // before the clock starts; the tables give medians. Each case's answer is checked against its

@@ -254,30 +254,13 @@ PointCloud WithNormals(const PointCloud& scene, const std::vector<Eigen::Vector3
   registration::NormalOptions normal_options = options.localize.normals;
   normal_options.threads = options.threads;
   normal_options.viewpoint = registration::Viewpoint::AlongDirection(-Eigen::Vector3d::UnitZ());
-  std::vector<std::size_t> at;
-  if (thin_cell_mm > 0.0) {
-    at = registration::OnePerCellIndices(scene.positions, thin_cell_mm,
-                                         registration::CellPoint::kNearestCentre);
-  }
-  const registration::NormalEstimationResult normals =
-      thin_cell_mm > 0.0 ? registration::EstimateNormalsAt(scene, at, normal_options, sight)
-                         : registration::EstimateNormals(scene, normal_options, sight);
-  std::vector<std::size_t> keep;
-  std::vector<Eigen::Vector3d> kept_normals;
-  keep.reserve(normals.valid.size());
+  registration::CloudWithNormals fitted =
+      registration::WithNormalsAtCells(scene, thin_cell_mm, normal_options, sight);
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (std::size_t k = 0; k < normals.valid.size(); ++k) {
-    if (!normals.valid[k]) continue;
-    const std::size_t i = thin_cell_mm > 0.0 ? at[k] : k;
-    keep.push_back(i);
-    kept_normals.push_back(normals.normals[k]);
-    mean += sight.empty() ? Eigen::Vector3d::UnitZ() : sight[i];
-  }
-  PointCloud out = scene.Subset(keep);
-  out.normals = std::move(kept_normals);
+  for (std::size_t i : fitted.kept) mean += sight.empty() ? Eigen::Vector3d::UnitZ() : sight[i];
   *view_direction = mean.norm() > 0 ? Eigen::Vector3d(-mean.normalized())
                                     : Eigen::Vector3d(-Eigen::Vector3d::UnitZ());
-  return out;
+  return std::move(fitted.cloud);
 }
 
 // The finest verification cell of the requested parts, mm (0: one of them verifies on every

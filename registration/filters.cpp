@@ -332,10 +332,21 @@ std::vector<std::size_t> OnePerCellIndices(const std::vector<Eigen::Vector3d>& p
       best[k] = d;
     }
   };
+  // The packed keys fit when the bounding box's cells do (cell_of is monotonic per axis).
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!points[i].allFinite()) {
+      throw InputError("OnePerCellIndices: point " + std::to_string(i) +
+                       " is not finite; drop invalid points first");
+    }
+    lo = lo.cwiseMin(points[i]);
+    hi = hi.cwiseMax(points[i]);
+  }
   bool packable = true;
-  for (const Eigen::Vector3d& p : points) {
-    for (std::int64_t c : cell_of(p)) packable = packable && c >= -kHalf && c < kHalf;
-    if (!packable) break;
+  if (!points.empty()) {
+    for (std::int64_t c : cell_of(lo)) packable = packable && c >= -kHalf;
+    for (std::int64_t c : cell_of(hi)) packable = packable && c < kHalf;
   }
   if (packable) {
     std::size_t size = 16;

@@ -94,7 +94,7 @@ enum class CellPoint {
 /// Indices of one point per occupied cubic cell of edge `cell_mm` (> 0), ascending, deterministic.
 /// Every input point has a kept point within sqrt(3) x cell_mm wherever the cells fall: a
 /// spatial thinning that, unlike an index stride, leaves no gaps along the rows of an organized
-/// scan.
+/// scan. Throws OptionError for a bad cell, InputError for a non-finite point.
 std::vector<std::size_t> OnePerCellIndices(const std::vector<Eigen::Vector3d>& points,
                                            double cell_mm, CellPoint keep = CellPoint::kFirst);
 

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <cstdint>
 #include <iomanip>
+#include <limits>
+#include <numeric>
 #include <sstream>
 
 #include "core/error.hpp"
@@ -135,38 +137,21 @@ void Refine(const RefineContext& ctx, std::vector<std::uint32_t> overlap,
   ctx.timings->verification_ms += MillisecondsSince(t);
 }
 
-// The scene thinned to one point per cell of `cell_mm` (the one nearest the cell's centre, so the
-// voxel means built from them are not pulled to the side the scan entered each cell from) with
-// normals estimated at those points only, each from its neighbourhood in the dense scene; points
-// without a fit are dropped (counted in *dropped). Nothing after the normals reads more than one
-// point per such cell.
-PointCloud ThinnedWithNormals(const PointCloud& scene, double cell_mm, const NormalOptions& options,
-                              std::size_t* dropped) {
-  const std::vector<std::size_t> at =
-      OnePerCellIndices(scene.positions, cell_mm, CellPoint::kNearestCentre);
-  const NormalEstimationResult fit = EstimateNormalsAt(scene, at, options);
-  std::vector<std::size_t> keep;
-  std::vector<Eigen::Vector3d> normals;
-  keep.reserve(at.size());
-  normals.reserve(at.size());
-  for (std::size_t k = 0; k < at.size(); ++k) {
-    if (!fit.valid[k]) continue;
-    keep.push_back(at[k]);
-    normals.push_back(fit.normals[k]);
-  }
-  *dropped += fit.invalid_count;
-  PointCloud out = scene.Subset(keep);
-  out.normals = std::move(normals);
-  return out;
-}
+// The dense scene kept for normals that are fitted later, at the voxel-grid points only
+// (LocalizeOptions::scene_normals_at_samples).
+struct DenseScene {
+  bool pending = false;               // normals still to be fitted
+  PointCloud cloud;                   // cleaned, cropped, filtered; every point
+  std::vector<std::size_t> index_of;  // point of the thinned scene -> point of `cloud`
+};
 
 // Steps 1-2: clean, region of interest, small clusters (Skotheim IV-A), normals toward the
-// sensor (IV-B). With `thin_cell_mm` > 0 a scene whose normals are estimated is first thinned to
-// one point per cell of that size (the verification's cell, so the verification still sees one
-// point per cell, now the most central one) and normals are fitted there only, from the dense
-// neighbourhoods: the simulated seat sweep needs them at 128k of its 319k points.
+// sensor (IV-B). With `thin_cell_mm` > 0 a scene whose normals are estimated is thinned to one
+// point per cell of that size, the most central one (the verification's cell: nothing later reads
+// more). Its normals are then either left to MatchAndCluster, which fits them at the voxel-grid
+// points only (*dense keeps what it needs), or fitted here at every thinned point.
 PointCloud PreprocessScene(const PointCloud& scene_in, const LocalizeOptions& options,
-                           double thin_cell_mm, LocalizationResult* result) {
+                           double thin_cell_mm, LocalizationResult* result, DenseScene* dense) {
   auto t = Clock::now();
   PointCloud scene = CleanScene(scene_in, &result->dropped_points);
   if (options.use_roi) scene = CropBox(scene, options.roi, options.roi_from_scene);
@@ -177,12 +162,22 @@ PointCloud PreprocessScene(const PointCloud& scene_in, const LocalizeOptions& op
 
   t = Clock::now();
   if (!scene.empty()) {
-    if ((!scene.HasNormals() || options.recompute_normals) && thin_cell_mm > 0.0) {
-      scene = ThinnedWithNormals(scene, thin_cell_mm, options.normals, &result->dropped_points);
+    if ((!scene.HasNormals() || options.recompute_normals) && options.scene_normals_at_samples) {
+      dense->pending = true;
+      if (thin_cell_mm > 0.0) {
+        dense->index_of =
+            OnePerCellIndices(scene.positions, thin_cell_mm, CellPoint::kNearestCentre);
+      } else {
+        dense->index_of.resize(scene.size());
+        std::iota(dense->index_of.begin(), dense->index_of.end(), std::size_t{0});
+      }
+      dense->cloud = std::move(scene);
+      scene = dense->cloud.Subset(dense->index_of);
+      scene.normals.clear();
     } else if (!scene.HasNormals() || options.recompute_normals) {
-      std::size_t dropped = 0;
-      scene = WithEstimatedNormals(scene, options.normals, &dropped);
-      result->dropped_points += dropped;
+      CloudWithNormals fitted = WithNormalsAtCells(scene, thin_cell_mm, options.normals);
+      result->dropped_points += fitted.dropped;
+      scene = std::move(fitted.cloud);
     } else if (options.orient_normals) {
       OrientNormalsTowardViewpoint(&scene, options.viewpoint);
     }
@@ -193,10 +188,47 @@ PointCloud PreprocessScene(const PointCloud& scene_in, const LocalizeOptions& op
   return scene;
 }
 
+// The voxel grid of a scene without normals, with a normal fitted per voxel at the scene point
+// nearest its centroid, from that point's neighbourhood in the dense scene; voxels whose fit
+// fails are dropped. The fit's time is added to *normals_ms.
+PointCloud SamplesWithNormals(const PointCloud& scene, const DenseScene& dense,
+                              const VoxelGridOptions& voxel, const NormalOptions& options,
+                              double* normals_ms) {
+  std::vector<std::int32_t> voxel_of;
+  PointCloud grid = VoxelGridDownsample(scene, voxel, &voxel_of);
+  std::vector<double> best(grid.size(), std::numeric_limits<double>::infinity());
+  std::vector<std::size_t> at(grid.size(), 0);
+  for (std::size_t i = 0; i < scene.size(); ++i) {
+    if (voxel_of[i] < 0) continue;
+    const auto v = static_cast<std::size_t>(voxel_of[i]);
+    const double d = (scene.positions[i] - grid.positions[v]).squaredNorm();
+    if (d < best[v]) {
+      best[v] = d;
+      at[v] = dense.index_of[i];
+    }
+  }
+  const auto t = Clock::now();
+  const NormalEstimationResult fit = EstimateNormalsAt(dense.cloud, at, options);
+  *normals_ms += MillisecondsSince(t);
+  std::vector<std::size_t> keep;
+  keep.reserve(grid.size());
+  std::vector<Eigen::Vector3d> normals;
+  normals.reserve(grid.size());
+  for (std::size_t v = 0; v < grid.size(); ++v) {
+    if (!fit.valid[v]) continue;
+    keep.push_back(v);
+    normals.push_back(fit.normals[v]);
+  }
+  PointCloud out = grid.Subset(keep);
+  out.normals = std::move(normals);
+  return out;
+}
+
 // Steps 3-5: voxel grid at the model's sampling step (IV-C), PPF voting (IV-D, Drost 2010),
 // pose clustering (IV-E).
-ClusteringResult MatchAndCluster(const PointCloud& scene, const PpfModel& model,
-                                 const LocalizeOptions& options, LocalizationResult* result) {
+ClusteringResult MatchAndCluster(const PointCloud& scene, const DenseScene& dense,
+                                 const PpfModel& model, const LocalizeOptions& options,
+                                 LocalizationResult* result) {
   auto t = Clock::now();
   VoxelGridOptions voxel;
   voxel.voxel_size_mm = options.scene_sampling_step_mm > 0.0 ? options.scene_sampling_step_mm
@@ -205,9 +237,13 @@ ClusteringResult MatchAndCluster(const PointCloud& scene, const PpfModel& model,
                           ? VoxelNormalMode::kAverage
                           : options.scene_normal_mode;
   voxel.normal_split_angle_rad = options.scene_normal_split_angle_rad;
-  PointCloud sampled = VoxelGridDownsample(scene, voxel);
+  double fit_ms = 0.0;
+  PointCloud sampled = dense.pending
+                           ? SamplesWithNormals(scene, dense, voxel, options.normals, &fit_ms)
+                           : VoxelGridDownsample(scene, voxel);
   result->sampled_points = sampled.size();
-  result->timings.subsample_ms = MillisecondsSince(t);
+  result->timings.normals_ms += fit_ms;
+  result->timings.subsample_ms = MillisecondsSince(t) - fit_ms;
   ReportProgress(options.progress, "subsample", 1.0);
 
   t = Clock::now();
@@ -568,7 +604,8 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
   // Steps 1-2: preprocessing and normals.
   const double refined_support_mm = options.refined_support_distance_relative * model.diameter_mm();
   const double thin_cell_mm = options.verification_cell_relative * refined_support_mm;
-  const PointCloud scene = PreprocessScene(scene_in, options, thin_cell_mm, &result);
+  DenseScene dense;
+  const PointCloud scene = PreprocessScene(scene_in, options, thin_cell_mm, &result, &dense);
   if (scene.size() < 3) {
     result.message = "fewer than 3 scene points left after cleaning, ROI and filters";
     result.timings.total_ms = MillisecondsSince(start);
@@ -576,7 +613,8 @@ LocalizationResult LocalizeInCloud(const PointCloud& scene_in, const PpfModel& m
   }
 
   // Steps 3-5: subsampling, voting, clustering.
-  const ClusteringResult clustering = MatchAndCluster(scene, model, options, &result);
+  const ClusteringResult clustering = MatchAndCluster(scene, dense, model, options, &result);
+  dense = DenseScene{};  // not read again
 
   // Steps 6-7 verify and refine against the scene thinned to one point per cell of a fraction of
   // the refined support distance.

@@ -55,6 +55,13 @@ struct LocalizeOptions {
   bool recompute_normals = false;  ///< Estimate normals even when the scene has them.
   bool orient_normals = true;      ///< Flip given scene normals to face the viewpoint.
   NormalOptions normals;           ///< For estimation (viewpoint and threads are overridden).
+  /// A scene whose normals are estimated gets them only where they are read: at its voxel-grid
+  /// points (step 3), one fit per voxel at the scene point nearest the voxel's centroid, from
+  /// that point's neighbourhood in the dense scene (Drost's voting reads no other normal;
+  /// verification and ICP use the model's). false: a fit at every point of the verification
+  /// thinning, averaged per voxel and split by scene_normal_split_angle_rad, which keeps apart
+  /// the two faces of a wall thinner than a voxel when a sweep sees both; ~25x the fits.
+  bool scene_normals_at_samples = true;
 
   // Step 3: subsampling.
   double scene_sampling_step_mm = 0.0;  ///< Scene voxel size, mm; 0 = the model's sampling step.

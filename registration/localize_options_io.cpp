@@ -123,6 +123,7 @@ void ReadPreprocessing(yaml::Fields& r, LocalizeOptions* o) {
   cf.Read("grid_window", &o->cluster_filter.grid_window);
   cf.Done();
   r.Read("recompute_normals", &o->recompute_normals);
+  r.Read("scene_normals_at_samples", &o->scene_normals_at_samples);
   r.Read("orient_normals", &o->orient_normals);
   ReadNormals(r, "normals", &o->normals);
   r.Read("scene_sampling_step_mm", &o->scene_sampling_step_mm);
@@ -142,6 +143,7 @@ void ReadMatching(yaml::Fields& r, LocalizeOptions* o) {
   s.Read("spread_alpha", &o->matching.spread_alpha);
   s.Read("interpolate_alpha", &o->matching.interpolate_alpha);
   s.Read("max_entries_per_key", &o->matching.max_entries_per_key);
+  s.Read("unique_votes", &o->matching.unique_votes);
   s.Done();
   yaml::Fields c = r.Sub("clustering");
   c.Read("translation_radius_mm", &o->clustering.translation_radius_mm);

@@ -6,6 +6,7 @@
 
 #include "core/error.hpp"
 #include "core/parallel.hpp"
+#include "registration/filters.hpp"
 #include "registration/kdtree.hpp"
 
 namespace lasercell::registration {
@@ -168,19 +169,33 @@ NormalEstimationResult EstimateNormalsAt(const PointCloud& cloud, std::span<cons
   return EstimateNormalsOf(cloud, options, line_of_sight, at.data(), at.size());
 }
 
+CloudWithNormals WithNormalsAtCells(const PointCloud& cloud, double cell_mm,
+                                    const NormalOptions& options,
+                                    std::span<const Eigen::Vector3d> line_of_sight) {
+  std::vector<std::size_t> at;
+  if (cell_mm > 0.0) at = OnePerCellIndices(cloud.positions, cell_mm, CellPoint::kNearestCentre);
+  NormalEstimationResult fit = cell_mm > 0.0 ? EstimateNormalsAt(cloud, at, options, line_of_sight)
+                                             : EstimateNormals(cloud, options, line_of_sight);
+  CloudWithNormals out;
+  out.kept.reserve(fit.valid.size());
+  std::vector<Eigen::Vector3d> normals;
+  normals.reserve(fit.valid.size());
+  for (std::size_t k = 0; k < fit.valid.size(); ++k) {
+    if (!fit.valid[k]) continue;
+    out.kept.push_back(cell_mm > 0.0 ? at[k] : k);
+    normals.push_back(fit.normals[k]);
+  }
+  out.dropped = fit.invalid_count;
+  out.cloud = cloud.Subset(out.kept);
+  out.cloud.normals = std::move(normals);
+  return out;
+}
+
 PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& options,
                                 std::size_t* dropped) {
-  NormalEstimationResult normals = EstimateNormals(cloud, options);
-  std::vector<std::size_t> keep;
-  keep.reserve(cloud.size());
-  for (std::size_t i = 0; i < cloud.size(); ++i) {
-    if (normals.valid[i]) keep.push_back(i);
-  }
-  PointCloud out = cloud;
-  out.normals = std::move(normals.normals);
-  if (dropped) *dropped = cloud.size() - keep.size();
-  if (keep.size() == cloud.size()) return out;
-  return out.Subset(keep);
+  CloudWithNormals out = WithNormalsAtCells(cloud, 0.0, options);
+  if (dropped) *dropped = out.dropped;
+  return std::move(out.cloud);
 }
 
 std::vector<Eigen::Vector3d> MeshVertexNormals(const TriangleMesh& mesh) {

@@ -62,6 +62,23 @@ NormalEstimationResult EstimateNormalsAt(const PointCloud& cloud, std::span<cons
                                          const NormalOptions& options,
                                          std::span<const Eigen::Vector3d> line_of_sight = {});
 
+/// A cloud with normals fitted where later work reads them (WithNormalsAtCells).
+struct CloudWithNormals {
+  PointCloud cloud;               ///< The kept points with their unit normals.
+  std::vector<std::size_t> kept;  ///< Index in the input cloud of each kept point.
+  std::size_t dropped = 0;        ///< Points whose fit failed (not kept).
+};
+
+/// Normals where they are read: with `cell_mm` > 0 the cloud is first thinned to one point per
+/// cell of that size, the one nearest the cell's centre (OnePerCellIndices with
+/// CellPoint::kNearestCentre, so the means taken later are not pulled to the side a scan entered
+/// each cell from), and normals are fitted at those points only, each from its neighbourhood in
+/// the whole cloud (EstimateNormalsAt); with 0, at every point (EstimateNormals). Points without
+/// a valid fit are dropped. `line_of_sight` as for EstimateNormals. Throws as those do.
+CloudWithNormals WithNormalsAtCells(const PointCloud& cloud, double cell_mm,
+                                    const NormalOptions& options,
+                                    std::span<const Eigen::Vector3d> line_of_sight = {});
+
 /// A copy of `cloud` with normals from EstimateNormals; points without a valid fit are dropped
 /// (their count in *dropped when given).
 PointCloud WithEstimatedNormals(const PointCloud& cloud, const NormalOptions& options,

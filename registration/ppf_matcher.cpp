@@ -14,6 +14,10 @@ namespace {
 struct Voter {
   std::vector<std::uint32_t> accumulator;
   std::vector<Neighbor> hits;
+  // PpfMatchOptions::unique_votes: per key, a bit per scene alpha bin already voted, and the keys
+  // set for this reference (cleared before the next).
+  std::vector<std::uint64_t> voted;
+  std::vector<std::uint32_t> voted_keys;
 };
 
 // Sub-bin offset of an accumulator peak along alpha, in bins within [-0.5, 0.5]: the vertex of
@@ -66,6 +70,56 @@ int SpreadFeatureKeys(const PpfModel& model, const PpfFeature& f, std::uint32_t 
   return count;
 }
 
+// The accumulator's maxima of one scene reference point s_r = scene[r] as poses: the best
+// peaks_per_reference cells (ties by lower cell index) with at least min_votes and
+// peak_min_relative of the best, each turned into
+//   scene_from_centered = T(s_r)^-1 R_x(alpha) T(m_r)   (Drost eq. 2-3),
+// alpha at the bin centre or at the vertex of the parabola through the peak and its neighbours
+// (options.interpolate_alpha). `rot_s` is RotationNormalToX of the reference's normal.
+void AccumulatorPeaks(const std::uint32_t* acc, std::size_t cells, const PpfModel& model,
+                      const PpfMatchOptions& options, const Eigen::Matrix3d& rot_s,
+                      const Eigen::Vector3d& s_r, std::size_t r, std::vector<PoseHypothesis>* out) {
+  const std::size_t alpha_bins = static_cast<std::size_t>(model.alpha_bins());
+  const std::size_t keep = options.peaks_per_reference;
+  std::uint32_t best_cell[16];
+  std::uint32_t best_votes[16];
+  std::size_t found = 0;
+  const std::uint32_t floor_votes = options.min_votes;
+  for (std::size_t cell = 0; cell < cells; ++cell) {
+    const std::uint32_t v = acc[cell];
+    if (v < floor_votes || (found == keep && v <= best_votes[found - 1])) continue;
+    std::size_t pos = found < keep ? found++ : keep - 1;
+    while (pos > 0 && best_votes[pos - 1] < v) {
+      best_votes[pos] = best_votes[pos - 1];
+      best_cell[pos] = best_cell[pos - 1];
+      --pos;
+    }
+    best_votes[pos] = v;
+    best_cell[pos] = static_cast<std::uint32_t>(cell);
+  }
+  for (std::size_t p = 0; p < found; ++p) {
+    const std::uint32_t cell = best_cell[p];
+    const double v = best_votes[p];
+    if (v < options.peak_min_relative * best_votes[0]) break;
+    PoseHypothesis h;
+    h.votes = v;
+    h.scene_reference = static_cast<std::uint32_t>(r);
+    h.model_reference = static_cast<std::uint32_t>(cell / alpha_bins);
+    h.alpha_bin = static_cast<std::int32_t>(cell % alpha_bins);
+    const double alpha = (h.alpha_bin + 0.5 +
+                          (options.interpolate_alpha ? AlphaOffset(acc, cell, alpha_bins) : 0.0)) *
+                         model.alpha_step_rad();
+    h.alpha_rad = alpha;
+    const Eigen::Vector3d& m_r = model.points()[h.model_reference];
+    const Eigen::Matrix3d rot =
+        rot_s.transpose() * Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+        RotationNormalToX(model.normals()[h.model_reference]);
+    h.scene_from_centered.linear() = rot;
+    h.scene_from_centered.translation() = s_r - rot * m_r;
+    out->push_back(h);
+  }
+}
+
 }  // namespace
 
 void PpfMatchOptions::Check() const {
@@ -101,13 +155,16 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
   if (refs == 0 || model.points().empty()) return result;
 
   const std::size_t alpha_bins = static_cast<std::size_t>(model.alpha_bins());
-  const double alpha_step = model.alpha_step_rad();
   const double radius = model.max_pair_distance_mm();
   std::vector<std::vector<PoseHypothesis>> per_reference(refs);
   std::vector<std::size_t> pairs_of(refs, 0), votes_of(refs, 0);
+  const bool unique = options.unique_votes && alpha_bins <= 64;
+  const std::size_t key_space = static_cast<std::size_t>(model.distance_bins()) *
+                                model.angle_bins() * model.angle_bins() * model.angle_bins();
   WorkerLocal<Voter> voters([&] {
     Voter v;
     v.accumulator.assign(model.points().size() * alpha_bins, 0);
+    if (unique) v.voted.assign(key_space, 0);
     return v;
   });
   const std::uint32_t spread_alpha = options.spread_alpha && alpha_bins > 1 ? 1 : 0;
@@ -144,7 +201,15 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
         // alpha = phi_s - phi_m (Drost Sec. 3.5, alpha split into a scene and a model part), in
         // 16-bit turns so the wrap to [0, 2 pi) is the natural unsigned overflow.
         const std::uint16_t phi_s = PlaneAngleToTurn16(PairPlaneAngle(rot_s, s_r, s_i));
+        const std::uint64_t phi_bit = std::uint64_t{1}
+                                      << ((static_cast<std::uint32_t>(phi_s) * alpha_bins) >> 16);
         for (int k = 0; k < key_count; ++k) {
+          if (unique) {
+            std::uint64_t& voted = voter.voted[keys[k]];
+            if (voted & phi_bit) continue;  // the same votes were cast by an earlier pair
+            if (voted == 0) voter.voted_keys.push_back(keys[k]);
+            voted |= phi_bit;
+          }
           const std::span<const PpfPairEntry> entries = model.Lookup(keys[k]);
           const std::size_t n = entries.size();
           // A flooded key votes with every step-th entry only (PpfMatchOptions::
@@ -171,50 +236,10 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
       }
       pairs_of[ref] = pairs;
       votes_of[ref] = votes;
+      for (std::uint32_t key : voter.voted_keys) voter.voted[key] = 0;
+      voter.voted_keys.clear();
 
-      // Accumulator maxima: the best peaks_per_reference cells, ties by lower cell index.
-      const std::size_t keep = options.peaks_per_reference;
-      std::uint32_t best_cell[16];
-      std::uint32_t best_votes[16];
-      std::size_t found = 0;
-      const std::uint32_t floor_votes = options.min_votes;
-      for (std::size_t cell = 0; cell < cells; ++cell) {
-        const std::uint32_t v = acc[cell];
-        if (v < floor_votes || (found == keep && v <= best_votes[found - 1])) continue;
-        std::size_t pos = found < keep ? found++ : keep - 1;
-        while (pos > 0 && best_votes[pos - 1] < v) {
-          best_votes[pos] = best_votes[pos - 1];
-          best_cell[pos] = best_cell[pos - 1];
-          --pos;
-        }
-        best_votes[pos] = v;
-        best_cell[pos] = static_cast<std::uint32_t>(cell);
-      }
-      for (std::size_t p = 0; p < found; ++p) {
-        const std::uint32_t cell = best_cell[p];
-        const double v = best_votes[p];
-        if (v < options.peak_min_relative * best_votes[0]) break;
-        PoseHypothesis h;
-        h.votes = v;
-        h.scene_reference = static_cast<std::uint32_t>(r);
-        h.model_reference = static_cast<std::uint32_t>(cell / alpha_bins);
-        h.alpha_bin = static_cast<std::int32_t>(cell % alpha_bins);
-        // scene_from_centered = T(s_r)^-1 R_x(alpha) T(m_r), alpha at the bin centre or at the
-        // vertex of the parabola through the peak and its neighbours (options.interpolate_alpha).
-        const double alpha =
-            (h.alpha_bin + 0.5 +
-             (options.interpolate_alpha ? AlphaOffset(acc, cell, alpha_bins) : 0.0)) *
-            alpha_step;
-        h.alpha_rad = alpha;
-        const Eigen::Vector3d& m_r = model.points()[h.model_reference];
-        const Eigen::Matrix3d rot =
-            rot_s.transpose() *
-            Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitX()).toRotationMatrix() *
-            RotationNormalToX(model.normals()[h.model_reference]);
-        h.scene_from_centered.linear() = rot;
-        h.scene_from_centered.translation() = s_r - rot * m_r;
-        per_reference[ref].push_back(h);
-      }
+      AccumulatorPeaks(acc, cells, model, options, rot_s, s_r, r, &per_reference[ref]);
     }
   });
 

@@ -54,6 +54,13 @@ struct PpfMatchOptions {
   /// tried (32-256; weighting the kept votes by s, an unbiased estimate of the full vote, loses
   /// it too), hence off by default: set it per job for parts it is measured on.
   std::size_t max_entries_per_key = 0;
+  /// One vote per (feature key, scene plane-angle bin) per reference point (Hinterstoisser et al.
+  /// 2016, Sec. 3.3): a second scene pair of the same reference with the same key and a scene
+  /// angle phi_s in the same alpha bin would cast the very same votes again, so it is skipped.
+  /// Flat regions, whose many coplanar pairs share a few keys, no longer outvote the part's
+  /// distinctive pairs, and their repeated votes are not cast at all. Needs alpha_bins <= 64
+  /// (one bit per bin); a finer alpha quantization votes every pair.
+  bool unique_votes = false;
   /// Place each peak's alpha between bin centres by a parabola through the peak cell and its two
   /// alpha neighbours (vertex of the quadratic through three equally spaced samples, clamped to
   /// the peak's bin), instead of at the bin centre: the accumulator row is a histogram of the

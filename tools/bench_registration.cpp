@@ -213,47 +213,61 @@ std::vector<BenchRow> RunOpenCvPpf(const PointCloud& model, const PointCloud& sc
                                    const OpenCvBenchOptions& options) {
   cv::setNumThreads(options.threads == 0 ? -1 : options.threads);
   const cv::Mat model_mat = ToCvMat(model), scene_mat = ToCvMat(scene);
-  cv::ppf_match_3d::PPF3DDetector detector(options.relative_sampling_step,
-                                           options.relative_distance_step);
-  auto start = Clock::now();
-  detector.trainModel(model_mat);
-  const double train_ms = MsSince(start);
+  // Trained min(runs, 5) times like lasercell's model (median); the last detector is used.
+  std::unique_ptr<cv::ppf_match_3d::PPF3DDetector> detector;
+  std::vector<double> train_ms;
+  for (int i = 0; i < std::min(options.runs, 5); ++i) {
+    detector = std::make_unique<cv::ppf_match_3d::PPF3DDetector>(options.relative_sampling_step,
+                                                                 options.relative_distance_step);
+    const auto start = Clock::now();
+    detector->trainModel(model_mat);
+    train_ms.push_back(MsSince(start));
+  }
 
   std::vector<BenchRow> rows;
   for (double step : options.scene_sample_steps) {
-    const std::string label = "OpenCV PPF 1/" + Format("%.0f", 1.0 / step);
-    BenchRow coarse{label, "", train_ms, -1.0, -1.0, -1.0, -1.0, {}};
-    coarse.note = Format("PPF3DDetector(%.3g, %.3g), ", options.relative_sampling_step,
-                         options.relative_distance_step) +
-                  Format("match(scene, 1/%.0f, %.3g), trained once", 1.0 / step,
-                         options.relative_scene_distance);
-    std::vector<cv::ppf_match_3d::Pose3DPtr> results;
-    start = Clock::now();
-    const double cpu_start = CpuMs();
-    detector.match(scene_mat, results, step, options.relative_scene_distance);
-    coarse.match_ms = MsSince(start);
-    coarse.total_ms = coarse.match_ms;
-    coarse.total_cpu_ms = CpuMs() - cpu_start;
-    for (const auto& r : results) coarse.poses.push_back(FromCv(r->pose));
-
+    const std::string label = options.label + " 1/" + Format("%.0f", 1.0 / step);
+    BenchRow coarse{label, "", Median(train_ms), -1.0, -1.0, -1.0, -1.0, {}};
+    coarse.note =
+        Format("PPF3DDetector(%.3g, %.3g), ", options.relative_sampling_step,
+               options.relative_distance_step) +
+        Format("match(scene, 1/%.0f, %.3g); ", 1.0 / step, options.relative_scene_distance) +
+        Format("medians of %.0f runs (training: of %.0f)", options.runs,
+               static_cast<double>(train_ms.size()));
     BenchRow refined = coarse;
     refined.method = label + " + ICP";
     refined.note = "+ cv::ppf_match_3d::ICP(100, 0.005, 2.5, 8) on the top " +
                    std::to_string(options.icp_poses) + " poses (model: all points)";
-    std::vector<cv::ppf_match_3d::Pose3DPtr> top(
-        results.begin(),
-        results.begin() + static_cast<std::ptrdiff_t>(std::min(options.icp_poses, results.size())));
-    refined.poses.clear();
-    if (!top.empty()) {
+    std::vector<double> match_ms, match_cpu, icp_ms, icp_cpu;
+    for (int run = 0; run < options.runs; ++run) {
+      std::vector<cv::ppf_match_3d::Pose3DPtr> results;
+      auto start = Clock::now();
+      double cpu_start = CpuMs();
+      detector->match(scene_mat, results, step, options.relative_scene_distance);
+      match_ms.push_back(MsSince(start));
+      match_cpu.push_back(CpuMs() - cpu_start);
+      coarse.poses.clear();
+      for (const auto& r : results) coarse.poses.push_back(FromCv(r->pose));
+      // registerModelToScene refines the poses in place: each run gets its own copies.
+      std::vector<cv::ppf_match_3d::Pose3DPtr> top;
+      for (std::size_t k = 0; k < std::min(options.icp_poses, results.size()); ++k)
+        top.push_back(results[k]->clone());
+      refined.poses.clear();
+      if (top.empty()) continue;
       cv::ppf_match_3d::ICP icp(100, 0.005f, 2.5f, 8);
       start = Clock::now();
-      const double icp_cpu_start = CpuMs();
+      cpu_start = CpuMs();
       icp.registerModelToScene(model_mat, scene_mat, top);
-      refined.icp_ms = MsSince(start);
-      refined.total_cpu_ms += CpuMs() - icp_cpu_start;
+      icp_ms.push_back(MsSince(start));
+      icp_cpu.push_back(CpuMs() - cpu_start);
       for (const auto& r : top) refined.poses.push_back(FromCv(r->pose));
     }
+    coarse.match_ms = coarse.total_ms = Median(match_ms);
+    coarse.total_cpu_ms = Median(match_cpu);
+    refined.match_ms = coarse.match_ms;
+    refined.icp_ms = icp_ms.empty() ? -1.0 : Median(icp_ms);
     refined.total_ms = refined.match_ms + std::max(0.0, refined.icp_ms);
+    refined.total_cpu_ms = coarse.total_cpu_ms + (icp_cpu.empty() ? 0.0 : Median(icp_cpu));
     rows.push_back(std::move(coarse));
     rows.push_back(std::move(refined));
   }
@@ -267,18 +281,25 @@ std::vector<BenchRow> RunPclPpf(const PointCloud& model, const PointCloud& scene
   const PclCloud::Ptr model_full = ToPcl(model.positions, model.normals);
   const PclCloud::Ptr scene_full = ToPcl(scene.positions, scene.normals);
 
-  // Offline: voxel grid, every ordered pair's feature (PPFEstimation), the hash map.
-  auto start = Clock::now();
-  const PclCloud::Ptr model_sampled = VoxelSubsample(model_full, options.sampling_step_mm);
-  pcl::PPFEstimation<pcl::PointNormal, pcl::PointNormal, pcl::PPFSignature> estimation;
-  estimation.setInputCloud(model_sampled);
-  estimation.setInputNormals(model_sampled);
-  auto features = std::make_shared<pcl::PointCloud<pcl::PPFSignature>>();
-  estimation.compute(*features);
-  auto search = std::make_shared<pcl::PPFHashMapSearch>(
-      static_cast<float>(options.angle_step_rad), static_cast<float>(options.distance_step_mm));
-  search->setInputFeatureCloud(features);
-  const double build_ms = MsSince(start);
+  // Offline, min(runs, 5) times like lasercell's model (median): voxel grid, every ordered pair's
+  // feature (PPFEstimation), the hash map.
+  PclCloud::Ptr model_sampled;
+  std::shared_ptr<pcl::PointCloud<pcl::PPFSignature>> features;
+  std::shared_ptr<pcl::PPFHashMapSearch> search;
+  std::vector<double> build_ms;
+  for (int i = 0; i < std::min(options.runs, 5); ++i) {
+    const auto start = Clock::now();
+    model_sampled = VoxelSubsample(model_full, options.sampling_step_mm);
+    pcl::PPFEstimation<pcl::PointNormal, pcl::PointNormal, pcl::PPFSignature> estimation;
+    estimation.setInputCloud(model_sampled);
+    estimation.setInputNormals(model_sampled);
+    features = std::make_shared<pcl::PointCloud<pcl::PPFSignature>>();
+    estimation.compute(*features);
+    search = std::make_shared<pcl::PPFHashMapSearch>(static_cast<float>(options.angle_step_rad),
+                                                     static_cast<float>(options.distance_step_mm));
+    search->setInputFeatureCloud(features);
+    build_ms.push_back(MsSince(start));
+  }
 
   // How many model pairs a key returns (pcl#5288 reported one; PCL 1.13 stores a multimap).
   std::size_t looked_up = 0, returned = 0;
@@ -291,55 +312,65 @@ std::vector<BenchRow> RunPclPpf(const PointCloud& model, const PointCloud& scene
     returned += found.size();
   }
 
-  // Online: scene voxel grid, PPFRegistration (votes, clustering), then point-to-plane ICP.
-  start = Clock::now();
-  const double cpu_start = CpuMs();
-  const PclCloud::Ptr scene_sampled = VoxelSubsample(scene_full, options.sampling_step_mm);
-  pcl::PPFRegistration<pcl::PointNormal, pcl::PointNormal> registration;
-  registration.setSceneReferencePointSamplingRate(options.reference_stride);
-  registration.setPositionClusteringThreshold(static_cast<float>(options.cluster_translation_mm));
-  registration.setRotationClusteringThreshold(static_cast<float>(options.cluster_rotation_rad));
-  registration.setSearchMethod(search);
-  registration.setInputSource(model_sampled);
-  registration.setInputTarget(scene_sampled);
-  PclCloud aligned;
-  registration.align(aligned);
-  const double match_ms = MsSince(start);
-  const double match_cpu_ms = CpuMs() - cpu_start;
-
-  BenchRow coarse{"PCL PPFRegistration", "", build_ms, match_ms, -1.0, match_ms, match_cpu_ms, {}};
-  std::ostringstream note;
-  note << "voxel " << Format("%.1f", options.sampling_step_mm) << " mm: " << model_sampled->size()
-       << " model / " << scene_sampled->size() << " scene points, stride "
-       << options.reference_stride << "; "
-       << Format("%.2f",
-                 looked_up ? static_cast<double>(returned) / static_cast<double>(looked_up) : 0.0)
-       << " model pairs per looked-up key";
-  coarse.note = note.str();
-  if (registration.hasConverged())
-    coarse.poses.push_back(FromPcl(registration.getFinalTransformation()));
-
+  // Online, `runs` times: scene voxel grid, PPFRegistration (votes, clustering), then
+  // point-to-plane ICP from its pose.
+  BenchRow coarse{"PCL PPFRegistration", "", Median(build_ms), -1.0, -1.0, -1.0, -1.0, {}};
   BenchRow refined = coarse;
   refined.method = "PCL PPFRegistration + ICP";
-  refined.note =
-      "+ IterativeClosestPointWithNormals (point-to-plane), model (all points) -> "
-      "scene (all points), " +
-      Format("max distance %.1f mm, <= %.0f iterations", options.icp_max_distance_mm,
-             options.icp_iterations);
-  refined.poses.clear();
-  if (!coarse.poses.empty()) {
+  std::vector<double> match_ms, match_cpu, icp_ms, icp_cpu;
+  std::size_t scene_points = 0;
+  int iterations = 0;
+  for (int run = 0; run < options.runs; ++run) {
+    auto start = Clock::now();
+    double cpu_start = CpuMs();
+    const PclCloud::Ptr scene_sampled = VoxelSubsample(scene_full, options.sampling_step_mm);
+    pcl::PPFRegistration<pcl::PointNormal, pcl::PointNormal> registration;
+    registration.setSceneReferencePointSamplingRate(options.reference_stride);
+    registration.setPositionClusteringThreshold(static_cast<float>(options.cluster_translation_mm));
+    registration.setRotationClusteringThreshold(static_cast<float>(options.cluster_rotation_rad));
+    registration.setSearchMethod(search);
+    registration.setInputSource(model_sampled);
+    registration.setInputTarget(scene_sampled);
+    PclCloud aligned;
+    registration.align(aligned);
+    match_ms.push_back(MsSince(start));
+    match_cpu.push_back(CpuMs() - cpu_start);
+    scene_points = scene_sampled->size();
+    coarse.poses.clear();
+    refined.poses.clear();
+    if (!registration.hasConverged()) continue;
+    coarse.poses.push_back(FromPcl(registration.getFinalTransformation()));
     start = Clock::now();
-    const double icp_cpu_start = CpuMs();
+    cpu_start = CpuMs();
     PclIcp icp(options.icp_max_distance_mm, options.icp_iterations);
     icp.setInputSource(model_full);
     icp.setInputTarget(scene_full);
     icp.align(aligned, ToPcl(coarse.poses.front()));
-    refined.icp_ms = MsSince(start);
-    refined.total_cpu_ms += CpuMs() - icp_cpu_start;
+    icp_ms.push_back(MsSince(start));
+    icp_cpu.push_back(CpuMs() - cpu_start);
     refined.poses.push_back(FromPcl(icp.getFinalTransformation()));
-    refined.note += ", " + std::to_string(icp.Iterations()) + " iterations run";
+    iterations = icp.Iterations();
   }
+  coarse.match_ms = coarse.total_ms = refined.match_ms = Median(match_ms);
+  coarse.total_cpu_ms = Median(match_cpu);
+  refined.icp_ms = icp_ms.empty() ? -1.0 : Median(icp_ms);
   refined.total_ms = refined.match_ms + std::max(0.0, refined.icp_ms);
+  refined.total_cpu_ms = coarse.total_cpu_ms + (icp_cpu.empty() ? 0.0 : Median(icp_cpu));
+
+  std::ostringstream note;
+  note << "voxel " << Format("%.1f", options.sampling_step_mm) << " mm: " << model_sampled->size()
+       << " model / " << scene_points << " scene points, stride " << options.reference_stride
+       << "; "
+       << Format("%.2f",
+                 looked_up ? static_cast<double>(returned) / static_cast<double>(looked_up) : 0.0)
+       << " model pairs per looked-up key; medians of " << options.runs << " runs (build: of "
+       << build_ms.size() << ")";
+  coarse.note = note.str();
+  refined.note =
+      "+ IterativeClosestPointWithNormals (point-to-plane), model (all points) -> "
+      "scene (all points), " +
+      Format("max distance %.1f mm, <= %.0f iterations, %.0f iterations run (last run)",
+             options.icp_max_distance_mm, options.icp_iterations, iterations);
   return {coarse, refined};
 }
 
@@ -433,6 +464,23 @@ nlohmann::json RunIcpComparison(const registration::PpfModel& model, const Point
   row("lasercell AlignIcp (point-to-plane, Tukey)", ours_ms, ours_it, ours_rms);
   if (pcl)
     row("PCL IterativeClosestPointWithNormals (point-to-plane LLS)", pcl_ms, pcl_it, pcl_rms);
+  // Time per iteration: the median over the starts of each run's ms / iterations.
+  auto per_iteration = [](const std::vector<double>& ms, const std::vector<double>& it) {
+    std::vector<double> v;
+    for (std::size_t k = 0; k < ms.size(); ++k) v.push_back(ms[k] / std::max(1.0, it[k]));
+    return Median(v);
+  };
+  const double ours_per = per_iteration(ours_ms, ours_it);
+  out[0]["median_ms_per_iteration"] = ours_per;
+  std::printf("\nPer iteration (median over the starts of ms / iterations): lasercell %.2f ms",
+              ours_per);
+  if (pcl) {
+    const double pcl_per = per_iteration(pcl_ms, pcl_it);
+    out[1]["median_ms_per_iteration"] = pcl_per;
+    std::printf(", PCL %.2f ms (%.1fx); whole runs %.1fx", pcl_per, pcl_per / ours_per,
+                Median(pcl_ms) / Median(ours_ms));
+  }
+  std::printf("\n");
   return out;
 }
 

@@ -58,10 +58,12 @@ struct OpenCvBenchOptions {
   std::vector<double> scene_sample_steps = {0.1, 0.025};  ///< relativeSceneSampleStep values.
   std::size_t icp_poses = 2;  ///< Top poses refined by ICP (the sample: 2).
   int threads = 1;            ///< cv::setNumThreads; 0 = OpenCV's default.
+  int runs = 20;  ///< Match and ICP runs (medians); trained min(runs, 5) times (median).
+  std::string label = "OpenCV PPF";  ///< Row label, followed by " 1/<scene step>".
 };
 
-/// Two rows per scene sample step: the detector's ranked poses, then the same after ICP. The
-/// training time is in build_ms of every row (trained once).
+/// Two rows per scene sample step: the detector's ranked poses (last run), then the same after
+/// ICP; times are medians over `runs`. The training time is in build_ms of every row.
 std::vector<BenchRow> RunOpenCvPpf(const PointCloud& model, const PointCloud& scene,
                                    const OpenCvBenchOptions& options);
 
@@ -75,11 +77,12 @@ struct PclBenchOptions {
   double cluster_rotation_rad = 0.419;   ///< setRotationClusteringThreshold.
   double icp_max_distance_mm = 10.0;     ///< ICP max correspondence distance.
   int icp_iterations = 30;               ///< ICP max iterations.
+  int runs = 20;  ///< Match and ICP runs (medians); the model is built min(runs, 5) times.
 };
 
 /// Two rows: PPFRegistration's pose, then pcl::IterativeClosestPointWithNormals (point-to-plane;
-/// source: the whole model, target: the whole scene) from it. `note` of the first row says how
-/// many model pairs the hash map returns per looked-up key.
+/// source: the whole model, target: the whole scene) from it; medians over `runs`. `note` of the
+/// first row says how many model pairs the hash map returns per looked-up key.
 std::vector<BenchRow> RunPclPpf(const PointCloud& model, const PointCloud& scene,
                                 const PclBenchOptions& options);
 

@@ -52,11 +52,23 @@ void RunRegistrationBench(const RegistrationBenchArgs& args) {
   std::vector<BenchRow> rows = RunLasercell(model_cloud, scene, {args.runs, args.threads}, &model);
   const double diameter = model.diameter_mm();
   if (!args.skip_opencv) {
-    std::fprintf(stderr, "bench: OpenCV PPF3DDetector training (quadratic; about a minute)...\n");
+    std::fprintf(stderr,
+                 "bench: OpenCV PPF3DDetector, trained up to 5 times (quadratic; minutes)...\n");
     OpenCvBenchOptions o;
     o.scene_sample_steps = args.opencv_sampling;
     o.threads = args.threads;
+    o.runs = args.runs;
     for (BenchRow& r : RunOpenCvPpf(model_cloud, scene, o)) rows.push_back(std::move(r));
+    // The same detector at lasercell's sampling: model and scene voxel 0.04 x diameter, distance
+    // step 0.05 x diameter, every 5th scene point a reference (relativeSceneSampleStep 1/5).
+    registration::LocalizeOptions defaults;
+    OpenCvBenchOptions ours = o;
+    ours.label = "OpenCV PPF at lasercell's sampling";
+    ours.relative_sampling_step = model.sampling_step_mm() / diameter;
+    ours.relative_distance_step = model.distance_step_mm() / diameter;
+    ours.relative_scene_distance = ours.relative_sampling_step;
+    ours.scene_sample_steps = {1.0 / static_cast<double>(defaults.matching.reference_stride)};
+    for (BenchRow& r : RunOpenCvPpf(model_cloud, scene, ours)) rows.push_back(std::move(r));
   }
   if (!args.skip_pcl) {
     std::fprintf(stderr, "bench: PCL PPFRegistration...\n");
@@ -70,6 +82,7 @@ void RunRegistrationBench(const RegistrationBenchArgs& args) {
     o.cluster_rotation_rad = defaults.clustering.rotation_threshold_rad;
     o.icp_max_distance_mm = defaults.icp_max_distance_relative * diameter;
     o.icp_iterations = defaults.icp.max_iterations;
+    o.runs = args.runs;
     for (BenchRow& r : RunPclPpf(model_cloud, scene, o)) rows.push_back(std::move(r));
   }
 
@@ -115,7 +128,8 @@ void AddBenchCommands(CLI::App& app) {
   reg->add_option("--reference", args->reference,
                   "Reference scene_from_model (16 numbers, '#' comments)")
       ->capture_default_str();
-  reg->add_option("--runs", args->runs, "lasercell runs (median reported)")
+  reg->add_option("--runs", args->runs,
+                  "Runs of every method (medians; model builds and trainings: min(runs, 5))")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   reg->add_option("--threads", args->threads, "Threads for lasercell and OpenCV (0 = all cores)")

@@ -64,7 +64,7 @@ TEST(SpeedBench, AShortRunTimesEveryCaseAndFindsTheParts) {
   o.shared_data_dir = shared_data::SharedDataRoot();
   const nlohmann::json j = RunSpeedBench(o);
   EXPECT_EQ(j["format"], "lasercell.bench_speed");
-  ASSERT_EQ(j["cases"].size(), 5U) << j.dump(1);  // seat, rs1, rs22, bunny, milk
+  ASSERT_EQ(j["cases"].size(), 6U) << j.dump(1);  // seat, rs1, rs1 thinned, rs22, bunny, milk
   EXPECT_TRUE(j["skipped"].empty());
   const std::size_t cap = registration::PpfMatchOptions{}.max_entries_per_key;
   for (const nlohmann::json& c : j["cases"]) {

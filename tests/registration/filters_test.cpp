@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <random>
@@ -283,6 +284,10 @@ TEST(OnePerCellTest, KeepsTheFirstPointOfEveryOccupiedCell) {
   EXPECT_EQ(OnePerCellIndices(far, kCell, CellPoint::kNearestCentre).size(), kept.size());
   EXPECT_THROW(OnePerCellIndices(points, 0.0), OptionError);
   EXPECT_TRUE(OnePerCellIndices({}, 1.0).empty());
+  std::vector<Eigen::Vector3d> with_nan = points;
+  with_nan[3].y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THAT([&] { OnePerCellIndices(with_nan, kCell); },
+              ::testing::ThrowsMessage<InputError>(::testing::HasSubstr("point 3 is not finite")));
 }
 
 TEST(VoxelGridTest, EmptyCloudGivesEmptyOutput) {

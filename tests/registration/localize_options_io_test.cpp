@@ -25,6 +25,7 @@ roi:
 remove_small_clusters: true
 cluster_filter: {radius_mm: 3.5, min_cluster_size: 77, use_grid_when_organized: false, grid_window: 2}
 recompute_normals: true
+scene_normals_at_samples: false
 orient_normals: false
 normals: {k: 17, radius_mm: 1.5, use_grid_when_organized: false, grid_window: 3,
           grid_max_distance_mm: 2.5, min_neighbors: 5}
@@ -45,6 +46,7 @@ model:
             grid_max_distance_mm: 1.5, min_neighbors: 4}
 matching: {reference_stride: 7, max_reference_points: 900, peaks_per_reference: 4,
            peak_min_relative: 0.6, min_votes: 5, spread_features: true, spread_alpha: true,
+           unique_votes: true,
            max_entries_per_key: 77}
 clustering: {translation_radius_mm: 12, rotation_threshold_rad: 0.3, max_clusters: 20,
              duplicate_radius_mm: 8, refine_poses: false, refinement_inlier_mm: 22,
@@ -105,6 +107,7 @@ TEST(ReadLocalizeOptions, EveryKeyReachesItsField) {
   EXPECT_FALSE(o.cluster_filter.use_grid_when_organized);
   EXPECT_EQ(o.cluster_filter.grid_window, 2);
   EXPECT_TRUE(o.recompute_normals);
+  EXPECT_FALSE(o.scene_normals_at_samples);
   EXPECT_FALSE(o.orient_normals);
   EXPECT_EQ(o.normals.k, 17u);
   EXPECT_EQ(o.normals.radius_mm, 1.5);
@@ -141,6 +144,7 @@ TEST(ReadLocalizeOptions, EveryKeyReachesItsField) {
   EXPECT_TRUE(o.matching.spread_features);
   EXPECT_TRUE(o.matching.spread_alpha);
   EXPECT_EQ(o.matching.max_entries_per_key, 77u);
+  EXPECT_TRUE(o.matching.unique_votes);
   EXPECT_EQ(o.clustering.translation_radius_mm, 12);
   EXPECT_EQ(o.clustering.rotation_threshold_rad, 0.3);
   EXPECT_EQ(o.clustering.max_clusters, 20u);

@@ -13,6 +13,7 @@
 
 #include "core/error.hpp"
 #include "core/io/point_cloud_io.hpp"
+#include "registration/filters.hpp"
 #include "registration_test_util.hpp"
 
 namespace lasercell::registration {
@@ -155,6 +156,37 @@ TEST(NormalsTest, NormalsAtASubsetEqualTheFullEstimateThere) {
   const std::vector<std::size_t> bad = {0, grid.size()};
   EXPECT_THAT([&] { EstimateNormalsAt(grid, bad, NormalOptions{}); },
               ::testing::ThrowsMessage<InputError>(HasSubstr("index 2000 for a cloud of 2000")));
+}
+
+// WithNormalsAtCells keeps one point per cell, the one nearest its centre, with the normal
+// EstimateNormalsAt fits there (points without a valid fit are skipped and counted); cell 0
+// fits every point, as WithEstimatedNormals does.
+TEST(NormalsTest, NormalsAtCellsAreTheFitsAtTheCellPoints) {
+  PointCloud grid = NoisyPlaneGrid(40, 50, 0.05, 28);
+  std::vector<Eigen::Vector3d> sight(grid.size(), Eigen::Vector3d::UnitZ());
+  const double cell = 3.0;
+  const CloudWithNormals thinned = WithNormalsAtCells(grid, cell, NormalOptions{}, sight);
+  const std::vector<std::size_t> at =
+      OnePerCellIndices(grid.positions, cell, CellPoint::kNearestCentre);
+  const NormalEstimationResult fit = EstimateNormalsAt(grid, at, NormalOptions{}, sight);
+  ASSERT_LT(at.size(), grid.size() / 2);
+  ASSERT_EQ(thinned.kept.size() + thinned.dropped, at.size());
+  ASSERT_EQ(thinned.cloud.size(), thinned.kept.size());
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < at.size(); ++j) {
+    if (!fit.valid[j]) continue;
+    ASSERT_EQ(thinned.kept[k], at[j]);
+    EXPECT_EQ(thinned.cloud.positions[k], grid.positions[at[j]]);
+    EXPECT_EQ(thinned.cloud.normals[k], fit.normals[j]);
+    ++k;
+  }
+  const CloudWithNormals every = WithNormalsAtCells(grid, 0.0, NormalOptions{});
+  std::size_t dropped = 0;
+  const PointCloud same = WithEstimatedNormals(grid, NormalOptions{}, &dropped);
+  EXPECT_EQ(every.cloud.positions, same.positions);
+  EXPECT_EQ(every.cloud.normals, same.normals);
+  EXPECT_EQ(every.dropped, dropped);
+  EXPECT_EQ(every.kept.size() + every.dropped, grid.size());
 }
 
 TEST(NormalsTest, IdenticalForAnyThreadCount) {

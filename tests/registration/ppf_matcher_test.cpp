@@ -44,6 +44,18 @@ class PpfMatcherTest : public ::testing::Test {
     scene_ = Sample(test::SyntheticRs1Scan({truth_}, 0.3, rng), model_.sampling_step_mm());
   }
 
+  // The best cluster of the hypotheses is the part: within the clustering radius (0.1 x the
+  // diameter) and two angle steps of the truth. (ICP refines it later; only the voting is tested.)
+  void ExpectBestClusterIsThePart(const std::vector<PoseHypothesis>& hypotheses) const {
+    PoseClusteringOptions clustering;
+    clustering.translation_radius_mm = clustering.duplicate_radius_mm = 0.1 * model_.diameter_mm();
+    const ClusteringResult clusters = ClusterPoses(hypotheses, clustering);
+    ASSERT_FALSE(clusters.clusters.empty());
+    EXPECT_THAT(clusters.clusters[0].scene_from_centered,
+                test::PoseNear(truth_ * model_.model_from_centered(), 2 * model_.angle_step_rad(),
+                               0.1 * model_.diameter_mm()));
+  }
+
   PpfModel model_;
   Eigen::Isometry3d truth_;
   SampledScene scene_;
@@ -85,13 +97,28 @@ TEST_F(PpfMatcherTest, FloodedKeysVoteWithAtMostTheCapsEntries) {
   options.max_entries_per_key = 16;  // a cap measured on rs1 (bench speed) still finds the part
   const PpfMatchResult sixteen = MatchPpf(scene_.tree, scene_.normals, model_, options);
   EXPECT_LT(sixteen.votes_cast, full.votes_cast);
-  PoseClusteringOptions clustering;
-  clustering.translation_radius_mm = clustering.duplicate_radius_mm = 0.1 * model_.diameter_mm();
-  const ClusteringResult clusters = ClusterPoses(sixteen.hypotheses, clustering);
-  ASSERT_FALSE(clusters.clusters.empty());
-  EXPECT_THAT(clusters.clusters[0].scene_from_centered,
-              test::PoseNear(truth_ * model_.model_from_centered(), 2 * model_.angle_step_rad(),
-                             0.1 * model_.diameter_mm()));
+  ExpectBestClusterIsThePart(sixteen.hypotheses);
+}
+
+// unique_votes casts each (key, scene alpha bin) of a reference once: the same pairs are looked
+// up, fewer votes are cast, and the best cluster is still the part.
+TEST_F(PpfMatcherTest, UniqueVotesSkipRepeatedKeysAndStillFindThePart) {
+  PpfMatchOptions options;
+  options.threads = 1;
+  const PpfMatchResult plain = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  options.unique_votes = true;
+  const PpfMatchResult unique = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  EXPECT_EQ(unique.scene_pairs, plain.scene_pairs);
+  EXPECT_LT(unique.votes_cast, plain.votes_cast);
+  EXPECT_GT(unique.votes_cast, plain.votes_cast / 4);  // repeats, not most of the evidence
+  ExpectBestClusterIsThePart(unique.hypotheses);
+  // Identical for any thread count, like the plain voting.
+  options.threads = 2;
+  const PpfMatchResult two = MatchPpf(scene_.tree, scene_.normals, model_, options);
+  ASSERT_EQ(two.hypotheses.size(), unique.hypotheses.size());
+  EXPECT_EQ(two.votes_cast, unique.votes_cast);
+  for (std::size_t i = 0; i < two.hypotheses.size(); ++i)
+    ASSERT_EQ(two.hypotheses[i].votes, unique.hypotheses[i].votes);
 }
 
 TEST_F(PpfMatcherTest, VotesAndClustersFindASyntheticPoseInRealClutter) {
