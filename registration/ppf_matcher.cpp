@@ -201,8 +201,10 @@ PpfMatchResult MatchPpf(const KdTree& scene_tree, std::span<const Eigen::Vector3
         // alpha = phi_s - phi_m (Drost Sec. 3.5, alpha split into a scene and a model part), in
         // 16-bit turns so the wrap to [0, 2 pi) is the natural unsigned overflow.
         const std::uint16_t phi_s = PlaneAngleToTurn16(PairPlaneAngle(rot_s, s_r, s_i));
-        const std::uint64_t phi_bit = std::uint64_t{1}
-                                      << ((static_cast<std::uint32_t>(phi_s) * alpha_bins) >> 16);
+        // unique_votes: this pair's scene alpha bin as a bit (alpha_bins <= 64 when unique).
+        const std::uint64_t phi_bit =
+            unique ? std::uint64_t{1} << ((static_cast<std::uint32_t>(phi_s) * alpha_bins) >> 16)
+                   : 0;
         for (int k = 0; k < key_count; ++k) {
           if (unique) {
             std::uint64_t& voted = voter.voted[keys[k]];

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -119,6 +120,27 @@ TEST_F(PpfMatcherTest, UniqueVotesSkipRepeatedKeysAndStillFindThePart) {
   EXPECT_EQ(two.votes_cast, unique.votes_cast);
   for (std::size_t i = 0; i < two.hypotheses.size(); ++i)
     ASSERT_EQ(two.hypotheses[i].votes, unique.hypotheses[i].votes);
+}
+
+// With more than 64 alpha bins (one bit each does not fit) unique_votes votes every pair, as
+// its documentation says: the same votes as the plain voting, and no bit shifted past 63 (the
+// sanitizer build aborts on that shift).
+TEST_F(PpfMatcherTest, UniqueVotesWithMoreThan64AlphaBinsVoteEveryPair) {
+  PpfModelOptions fine;
+  fine.angle_step_rad = std::numbers::pi / 40.0;  // 80 alpha bins
+  fine.sampling_step_relative = 0.08;             // a small model keeps the test quick
+  const PpfModel model = PpfModel::Build(*test::UwaModel(), fine);
+  ASSERT_GT(model.alpha_bins(), 64);
+  std::mt19937_64 rng(72);
+  const SampledScene scene =
+      Sample(test::SyntheticRs1Scan({truth_}, 0.3, rng), model.sampling_step_mm());
+  PpfMatchOptions options;
+  options.threads = 1;
+  const PpfMatchResult plain = MatchPpf(scene.tree, scene.normals, model, options);
+  options.unique_votes = true;
+  const PpfMatchResult unique = MatchPpf(scene.tree, scene.normals, model, options);
+  EXPECT_GT(plain.votes_cast, 0U);
+  EXPECT_EQ(unique.votes_cast, plain.votes_cast);
 }
 
 TEST_F(PpfMatcherTest, VotesAndClustersFindASyntheticPoseInRealClutter) {
